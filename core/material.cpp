@@ -1,0 +1,209 @@
+#include "core/material.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+// Debian's libtomlplusplus-dev ships a compiled shared library, but its headers default to
+// header-only mode (TOML_HEADER_ONLY=1) unless the build passes the flags from tomlplusplus.pc or
+// the tomlplusplus::tomlplusplus CMake target (-DTOML_HEADER_ONLY=0 -DTOML_SHARED_LIB=1). Default
+// to the compiled library so that a plain `-ltomlplusplus` link works and the parser is not
+// re-instantiated in this translation unit; a build that sets the flags itself wins.
+#ifndef TOML_HEADER_ONLY
+#define TOML_HEADER_ONLY 0
+#ifndef TOML_SHARED_LIB
+#define TOML_SHARED_LIB 1
+#endif
+#endif
+#include <toml++/toml.h>
+
+#include "core/elasticity.hpp"
+#include "core/error.hpp"
+
+namespace plydem {
+namespace {
+
+// Six significant digits: enough to recognise the value the user gave.
+std::string format_number(double value) {
+  std::ostringstream out;
+  out.precision(6);
+  out << value;
+  return out.str();
+}
+
+// fmt, not operator+: GCC 12 at -O2 reports a false -Wrestrict on "'" + std::string + "'".
+std::string in_quotes(std::string_view text) {
+  return fmt::format("'{}'", text);
+}
+
+void require_finite_positive(const Material& material, const char* key, double value,
+                             const char* unit) {
+  require(std::isfinite(value) && value > 0, "material " + in_quotes(material.name) + ": " + key +
+                                                 " must be finite and positive, got " +
+                                                 format_number(value) + " " + unit);
+}
+
+void require_finite(const Material& material, const char* key, double value) {
+  require(std::isfinite(value), "material " + in_quotes(material.name) + ": " + key +
+                                    " must be finite, got " + format_number(value));
+}
+
+// Paper Table 1 (E-Glass/MY750), read with ERRATA §2: the fifth constant is nu12 = nu13.
+Material eglass_my750() {
+  Material m;
+  m.name = "eglass-my750";
+  m.E1 = 45.6e9;
+  m.E2 = 16.2e9;
+  m.G12 = 5.83e9;
+  m.nu12 = 0.278;
+  m.nu23 = 0.4;
+  m.density = 2000.0;
+  return m;
+}
+
+std::string builtin_list() {
+  std::string list;
+  for (const auto& name : builtin_material_names()) {
+    if (!list.empty()) list += ", ";
+    list += name;
+  }
+  return list;
+}
+
+constexpr std::string_view kNumberKeys[] = {"E1", "E2", "G12", "nu12", "nu23", "density"};
+
+bool is_known_key(std::string_view key) {
+  if (key == "name") return true;
+  for (auto known : kNumberKeys) {
+    if (key == known) return true;
+  }
+  return false;
+}
+
+std::string known_keys_list() {
+  std::string list = "name";
+  for (auto known : kNumberKeys) list += ", " + std::string(known);
+  return list;
+}
+
+// A required or optional number; TOML integers are accepted (E1 = 45600000000 is a fine modulus).
+std::optional<double> read_number(const toml::table& table, std::string_view key,
+                                  const std::string& file, bool required) {
+  const toml::node* node = table.get(key);
+  if (node == nullptr) {
+    require(!required, "material file " + in_quotes(file) + ": missing key " + in_quotes(key));
+    return std::nullopt;
+  }
+  if (const auto* value = node->as_floating_point()) return value->get();
+  if (const auto* value = node->as_integer()) return static_cast<double>(value->get());
+  std::ostringstream type;
+  type << node->type();
+  throw Error("material file " + in_quotes(file) + ": key " + in_quotes(key) +
+              " must be a number, got a " + type.str());
+}
+
+Material parse_material_file(const std::string& file) {
+  toml::table table;
+  try {
+    table = toml::parse_file(file);
+  } catch (const toml::parse_error& e) {
+    const auto& where = e.source().begin;
+    throw Error("material file " + in_quotes(file) + ": TOML syntax error at line " +
+                std::to_string(where.line) + ", column " + std::to_string(where.column) + ": " +
+                std::string(e.description()));
+  }
+
+  // Unknown keys are errors, not warnings: a typo such as "nu21" for "nu12" would otherwise leave
+  // the intended constant missing or, worse, silently use a different one.
+  for (const auto& [key, node] : table) {
+    require(is_known_key(key.str()), "material file " + in_quotes(file) + ": unknown key " +
+                                         in_quotes(key.str()) + " (expected " + known_keys_list() +
+                                         ")");
+  }
+
+  Material m;
+  const toml::node* name = table.get("name");
+  require(name != nullptr, "material file " + in_quotes(file) + ": missing key 'name'");
+  const auto* name_string = name->as_string();
+  require(name_string != nullptr,
+          "material file " + in_quotes(file) + ": key 'name' must be a string");
+  m.name = name_string->get();
+
+  m.E1 = *read_number(table, "E1", file, true);
+  m.E2 = *read_number(table, "E2", file, true);
+  m.G12 = *read_number(table, "G12", file, true);
+  m.nu12 = *read_number(table, "nu12", file, true);
+  m.nu23 = *read_number(table, "nu23", file, true);
+  if (auto density = read_number(table, "density", file, false)) m.density = *density;
+  return m;
+}
+
+}  // namespace
+
+void validate(const Material& material) {
+  require_finite_positive(material, "E1", material.E1, "Pa");
+  require_finite_positive(material, "E2", material.E2, "Pa");
+  require_finite_positive(material, "G12", material.G12, "Pa");
+  require_finite(material, "nu12", material.nu12);
+  require_finite(material, "nu23", material.nu23);
+  require_finite_positive(material, "density", material.density, "kg/m^3");
+
+  // Scaled by E2 so the test sees numbers of order one; positive definiteness is scale-free.
+  if (is_positive_definite(compliance_3d(material) * material.E2)) return;
+
+  std::string constants =
+      "(E1=" + format_number(material.E1) + ", E2=" + format_number(material.E2) +
+      ", G12=" + format_number(material.G12) + ", nu12=" + format_number(material.nu12) +
+      ", nu23=" + format_number(material.nu23) + ")";
+  // With E1, E2, G12 > 0 the compliance is positive definite iff -1 < nu23 < 1 (transverse block
+  // and G23 > 0) and delta = 1 - nu23 - 2 nu12^2 E2/E1 > 0 (the determinant; eq. (23)'s delta).
+  std::string hint;
+  if (!(material.nu23 > -1.0 && material.nu23 < 1.0)) {
+    hint = "check nu23 (must satisfy -1 < nu23 < 1)";
+  } else {
+    const double bound = material.E1 / material.E2 * (1.0 - material.nu23) / 2.0;
+    hint = "check nu12 (must satisfy nu12^2 < E1/E2 * (1-nu23)/2 = " + format_number(bound) +
+           ", i.e. |nu12| < " + format_number(std::sqrt(bound)) + ")";
+  }
+  throw Error("material " + in_quotes(material.name) +
+              ": the 3D compliance is not positive definite " + constants +
+              ": no elastic solid has these constants; " + hint);
+}
+
+std::vector<std::string> builtin_material_names() {
+  return {"eglass-my750"};
+}
+
+Material load_material(const std::string& name_or_file) {
+  // A built-in name wins over a file of the same name in the working directory.
+  if (name_or_file == "eglass-my750") {
+    Material m = eglass_my750();
+    validate(m);
+    return m;
+  }
+
+  std::error_code ec;
+  const std::filesystem::path path(name_or_file);
+  if (!std::filesystem::exists(path, ec)) {
+    throw Error("unknown material " + in_quotes(name_or_file) + ": not a built-in (" +
+                builtin_list() + ") and no such file");
+  }
+  require(std::filesystem::is_regular_file(path, ec),
+          "material file " + in_quotes(name_or_file) + ": not a regular file");
+
+  Material m = parse_material_file(name_or_file);
+  try {
+    validate(m);
+  } catch (const Error& e) {
+    throw Error("material file " + in_quotes(name_or_file) + ": " + e.what());
+  }
+  return m;
+}
+
+}  // namespace plydem
