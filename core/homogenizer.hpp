@@ -1,0 +1,60 @@
+#pragma once
+/// \file
+/// Effective stiffness of a periodic unit cell of bonded particles.
+///  - affine: every particle follows the macroscopic strain and none rotates: eq. (5) with each
+///    bond counted once (ERRATA §2);
+///  - relaxed: the engine's own kinematics. Particle spins and sublattice shifts are internal
+///    degrees of freedom that settle to minimum energy under a macroscopic strain; they are
+///    condensed out statically (ERRATA §3). Built from contacts/parallel_bond.hpp, the same bond
+///    law the kernel integrates.
+/// Voigt order (11, 22, 33, 23, 13, 12) with engineering shear strains.
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "core/elasticity.hpp"
+
+namespace plydem {
+
+/// A periodic cell: basis particles, lattice vectors, bonds to (images of) basis particles.
+struct UnitCell {
+  /// Columns are the lattice vectors. For a layer the third vector is unused (no periodicity
+  /// across the thickness): set it to the thickness direction.
+  Eigen::Matrix3d lattice_vectors = Eigen::Matrix3d::Identity();
+  std::vector<Eigen::Vector3d> basis;  ///< particle positions in the cell [m]
+  std::vector<double> radius;          ///< [m]
+  double volume = 0;                   ///< cell volume [m^3] (area x thickness for a layer)
+  struct Bond {
+    int first = 0;
+    int second = 0;
+    Eigen::Vector3i image = Eigen::Vector3i::Zero();  ///< cell of `second`, in lattice vectors
+    int family = 0;
+  };
+  std::vector<Bond> bonds;  ///< each bond once
+  int family_count = 0;
+
+  /// Branch vector of bond b, first -> second (image included).
+  Eigen::Vector3d branch(int b) const;
+};
+
+/// Stiffness of one bond family.
+struct FamilyStiffness {
+  double normal = 0;    ///< k_n [N/m]
+  double shear = 0;     ///< k_s [N/m]
+  double bending = 0;   ///< k_b [N m/rad]
+  double twisting = 0;  ///< k_t [N m/rad]
+};
+
+/// Affine stiffness, eq. (5): particles follow the strain, no particle rotates.
+Matrix6d affine_stiffness(const UnitCell& cell, const std::vector<FamilyStiffness>& families);
+/// Relaxed stiffness: spins and sublattice shifts condensed out at minimum energy.
+Matrix6d relaxed_stiffness(const UnitCell& cell, const std::vector<FamilyStiffness>& families);
+
+/// The in-plane (xx, yy, xy) block of a 6x6 stiffness, for a layer with no bonds across its
+/// thickness (whose sigma_zz is zero by construction: plane stress).
+Eigen::Matrix3d in_plane_block(const Matrix6d& stiffness);
+
+/// Relative error |A - B|_F / |B|_F.
+double relative_difference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b);
+
+}  // namespace plydem

@@ -1,0 +1,162 @@
+#include "strategies/hex2d.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/boundary_cells.hpp"
+#include "core/calibration.hpp"
+#include "core/elasticity.hpp"
+#include "core/error.hpp"
+#include "core/registry.hpp"
+#include "packings/hexagonal_layer.hpp"
+
+namespace plydem {
+namespace {
+
+// Bending and twisting of a circular parallel bond of radius R carrying contact stiffnesses
+// k_n = A kbar_n, k_s = A kbar_s (eqs. 1-2): k_b = kbar_n I = k_n R^2/4, k_t = kbar_s J = k_s
+// R^2/2. They resist relative rotation of neighbours (non-uniform fields); a uniform strain of a
+// one-particle lattice never loads them, so they do not enter the calibration.
+FamilyStiffnessRule parallel_bond_rule(double bond_radius) {
+  return [bond_radius](double normal, double shear) {
+    const double r2 = bond_radius * bond_radius;
+    return FamilyStiffness{normal, shear, normal * r2 / 4.0, shear * r2 / 2.0};
+  };
+}
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+}  // namespace
+
+std::array<FamilyStiffness, 3> hexagonal_springs_eq27(const Eigen::Matrix3d& c, double thickness) {
+  const double s3 = std::sqrt(3.0);
+  const double c11 = c(0, 0), c22 = c(1, 1), c12 = c(0, 1), c16 = c(0, 2), c26 = c(1, 2),
+               c66 = c(2, 2);
+  const double d = thickness;
+  std::array<FamilyStiffness, 3> k{};
+  // eq. (27), corrected: k_n2,3 use C12 + C22, not C11 + C22 (ERRATA §2).
+  k[0].normal = s3 / 6.0 * (3 * c11 + 2 * c12 - c22) * d;
+  k[1].normal = s3 / 3.0 * (c12 + c22 + s3 * c16 + s3 * c26) * d;
+  k[2].normal = s3 / 3.0 * (c12 + c22 - s3 * c16 - s3 * c26) * d;
+  k[0].shear = 2.0 * s3 / 3.0 * (3 * c66 - c22) * d;
+  k[1].shear = s3 / 3.0 * (c22 - 3 * c12 + 3 * s3 * c16 - s3 * c26) * d;
+  k[2].shear = s3 / 3.0 * (c22 - 3 * c12 - 3 * s3 * c16 + s3 * c26) * d;
+  return k;
+}
+
+std::string Hex2dStrategy::description() const {
+  return "extended 2D hexagonal layer (paper Sec. 3.3): 6 neighbours, family 1 along the fibre, "
+         "corrected eq. (27) then relaxed calibration";
+}
+
+Calibration Hex2dStrategy::calibrate(const Material& material, double ply_angle,
+                                     double thickness) const {
+  validate(material);
+  require(std::isfinite(ply_angle), "ply angle is not finite");
+  require(std::isfinite(thickness) && thickness > 0,
+          fmt::format("ply thickness must be positive, got {} m", thickness));
+  Calibration cal;
+  cal.method = "hex2d: corrected eq. (27), relaxed on the unit cell";
+  cal.lattice_angle = ply_angle;  // family 1 along the fibre
+  cal.target = rotate_reduced_stiffness(reduced_stiffness(material), ply_angle);
+  // In the lattice frame the target is the ply's own Q whatever the ply angle.
+  const Eigen::Matrix3d target_lattice = rotate_reduced_stiffness(cal.target, -cal.lattice_angle);
+  const HexagonalLayer lattice_frame(1.0, 0.0);  // stiffness is independent of the spacing
+  const UnitCell cell = lattice_frame.unit_cell(thickness);
+  const FamilyStiffnessRule rule = parallel_bond_rule(0.5);
+  const auto start = hexagonal_springs_eq27(target_lattice, thickness);
+  std::vector<FamilyStiffness> start_families;
+  for (const FamilyStiffness& k : start) start_families.push_back(rule(k.normal, k.shear));
+  const std::string ply =
+      fmt::format("material '{}' at {:.4g} deg", material.name, ply_angle / kDegree);
+  // eq. (27) in the lattice frame: k_s1 >= 0 needs 3 C66 >= C22, k_s2,3 >= 0 need C22 >= 3 C12.
+  const std::string limits = fmt::format(
+      "a hexagonal layer needs 3*C66 >= C22 and C22 >= 3*C12 in the fibre frame; here C66 = "
+      "{:.4g}, "
+      "C22 = {:.4g}, C12 = {:.4g} GPa",
+      target_lattice(2, 2) * 1e-9, target_lattice(1, 1) * 1e-9, target_lattice(0, 1) * 1e-9);
+  RelaxedCalibration relaxed;
+  try {
+    relaxed = calibrate_relaxed_layer(cell, target_lattice, start_families, rule);
+  } catch (const Error& e) {
+    throw Error(fmt::format("hex2d cannot represent {} with a stable lattice ({}); {}", ply,
+                            e.what(), limits));
+  }
+
+  const char* names[3] = {"1 (0 deg, fibre)", "2 (+60 deg)", "3 (+120 deg)"};
+  for (int f = 0; f < 3; ++f) {
+    const FamilyStiffness& k = relaxed.families[f];
+    require(
+        k.normal > 0 && k.shear >= 0,
+        fmt::format("hex2d cannot represent {} with a stable lattice: bond family {} would need "
+                    "k_n = {:.4g} N/m, k_s = {:.4g} N/m (negative stiffness); {}",
+                    ply, names[f], k.normal, k.shear, limits));
+    cal.families.push_back({names[f], cal.lattice_angle + f * std::numbers::pi / 3.0, k});
+  }
+  require(
+      relaxed.relative_error < 1e-9,
+      fmt::format("hex2d: the relaxed calibration of {} did not converge (relative error {:.3g} "
+                  "after {} iterations)",
+                  ply, relaxed.relative_error, relaxed.iterations));
+  cal.affine = rotate_reduced_stiffness(in_plane_block(affine_stiffness(cell, relaxed.families)),
+                                        cal.lattice_angle);
+  cal.relaxed = rotate_reduced_stiffness(relaxed.relaxed, cal.lattice_angle);
+  cal.relaxed_error = relative_difference(cal.relaxed, cal.target);
+  return cal;
+}
+
+Model Hex2dStrategy::build(const CouponSpec& coupon) const {
+  coupon.validate();
+  const Calibration cal = calibrate(coupon.material, coupon.ply_angle, coupon.thickness);
+  const HexagonalLayer layer(coupon.particle_diameter, cal.lattice_angle);
+  const PositionArray position = layer.fill_rectangle(coupon.length, coupon.width);
+  const int n = static_cast<int>(position.rows());
+  require(n >= 2, "the coupon holds fewer than two particles");
+
+  Model model;
+  model.thickness = coupon.thickness;
+  model.description =
+      fmt::format("hex2d layer, ply angle {:.4g} deg, {} particles", coupon.ply_angle / kDegree, n);
+  Particles& p = model.particles;
+  p.resize(n);
+  p.reference_position = position;
+  const double radius = 0.5 * coupon.particle_diameter;
+  const double volume = layer.cell_area() * coupon.thickness;
+  const double mass = coupon.material.density * volume;
+  p.radius.setConstant(radius);
+  p.volume.setConstant(volume);
+  p.mass.setConstant(mass);
+  p.moment_of_inertia.setConstant(0.4 * mass * radius * radius);  // solid sphere
+
+  const HexagonalLayer::Graph graph = layer.bond_graph(position);
+  Bonds& bonds = model.bonds;
+  bonds.resize(static_cast<int>(graph.pairs.size()));
+  // The springs scale with the bond radius only through bending and twisting.
+  const FamilyStiffnessRule rule = parallel_bond_rule(radius);
+  for (int b = 0; b < bonds.size(); ++b) {
+    bonds.first(b) = graph.pairs[b].first;
+    bonds.second(b) = graph.pairs[b].second;
+    bonds.family(b) = graph.family[b];
+    const FamilyStiffness& k = cal.families[graph.family[b]].stiffness;
+    const FamilyStiffness full = rule(k.normal, k.shear);
+    bonds.normal_stiffness(b) = full.normal;
+    bonds.shear_stiffness(b) = full.shear;
+    bonds.bending_stiffness(b) = full.bending;
+    bonds.twisting_stiffness(b) = full.twisting;
+    set_bond_geometry(p, bonds, b);
+  }
+  if (coupon.complete_boundary_cells) {
+    complete_boundary_cells(p, bonds, HexagonalLayer::kFamilyCount, 2);
+  }
+  model.check_consistency();
+  return model;
+}
+
+void register_hex2d(Registry& registry) {
+  registry.add("hex2d", Hex2dStrategy().description(),
+               [] { return std::make_unique<Hex2dStrategy>(); });
+}
+
+}  // namespace plydem

@@ -1,0 +1,29 @@
+#pragma once
+/// \file
+/// Hex2D, the paper's "extended 2D hexagonal" strategy (Sec. 3.3): one hexagonal layer per ply in
+/// the x-y plane, six neighbours, plane stress. The lattice is turned with the ply so that bond
+/// family 1 lies along the fibre (ERRATA §2: this keeps shear springs non-negative at any angle).
+/// Bond stiffnesses start from the corrected eq. (27), which is exact for the affine lattice sum,
+/// and are then re-solved on the relaxed unit cell so that the model with freely spinning particles
+/// has the target stiffness (ERRATA §3).
+
+#include <array>
+
+#include "core/strategy.hpp"
+
+namespace plydem {
+
+/// Corrected eq. (27): the six springs (k_n, k_s of families 1..3 at 0, +60, +120 deg from the
+/// lattice x axis) of a hexagonal layer whose affine lattice sum equals the plane-stress
+/// stiffness `c` (expressed in the lattice frame) for a layer of thickness `thickness`.
+std::array<FamilyStiffness, 3> hexagonal_springs_eq27(const Eigen::Matrix3d& c, double thickness);
+
+class Hex2dStrategy : public Strategy {
+ public:
+  std::string description() const override;
+  Calibration calibrate(const Material& material, double ply_angle,
+                        double thickness) const override;
+  Model build(const CouponSpec& coupon) const override;
+};
+
+}  // namespace plydem
