@@ -1,0 +1,185 @@
+// plydem: particle models of FRP composite laminae, from the command line.
+//
+// Sample runs:
+//   plydem                                   # the paper's 0 deg E-glass/MY750 lamina, Hex2D
+//   plydem tension --strategy hex2d --angle 30 --json
+//   plydem tension --material my_ply.toml --angle 0 --grips clamped
+//   plydem strategies                        # registered strategies
+//   plydem materials                         # built-in materials
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <iostream>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "core/material.hpp"
+#include "core/registry.hpp"
+#include "experiments/report.hpp"
+#include "experiments/tension_test.hpp"
+
+namespace {
+
+struct TensionOptions {
+  std::string strategy = "hex2d";
+  std::string material = "eglass-my750";
+  double angle_deg = 0;
+  double length_mm = 10, width_mm = 0.83, thickness_mm = 0.2, diameter_mm = 0.05;
+  double grip_mm = 0;
+  double gauge_fraction = 0.5;
+  double target_strain = 1e-3;
+  int stages = 2;
+  long ramp_cycles = 2000;
+  long cycles = 0;
+  long max_cycles = 5'000'000;
+  double tolerance = 1e-5;
+  double damping = 0.7;
+  double safety = 0.8;
+  double grip_velocity_mm_s = 0;
+  std::string grips = "free";
+  bool json = false;
+  bool raw_edges = false;
+};
+
+void add_tension_options(CLI::App& app, TensionOptions& o) {
+  app.add_option("--strategy", o.strategy, "packing strategy (see `plydem strategies`)")
+      ->capture_default_str();
+  app.add_option("--material", o.material,
+                 "built-in material name or a TOML file with name, E1, E2, G12, nu12, nu23 (Pa)")
+      ->capture_default_str();
+  app.add_option("--angle", o.angle_deg, "ply (fibre) angle from the loading axis x [deg]")
+      ->capture_default_str();
+  app.add_option("--length-mm", o.length_mm, "coupon length along x [mm]")->capture_default_str();
+  app.add_option("--width-mm", o.width_mm, "coupon width along y [mm]")->capture_default_str();
+  app.add_option("--thickness-mm", o.thickness_mm, "ply thickness delta [mm]")
+      ->capture_default_str();
+  app.add_option("--diameter-mm", o.diameter_mm, "particle diameter [mm]")->capture_default_str();
+  app.add_option("--grip-mm", o.grip_mm, "grip length at each end [mm]; 0 = two diameters")
+      ->capture_default_str();
+  app.add_option("--gauge-fraction", o.gauge_fraction, "central fraction of the length measured")
+      ->capture_default_str();
+  app.add_option("--target-strain", o.target_strain, "nominal strain at the last load stage")
+      ->capture_default_str();
+  app.add_option("--stages", o.stages, "load stages (points of the stress-strain fit)")
+      ->capture_default_str();
+  app.add_option("--ramp-cycles", o.ramp_cycles, "cycles to move the grips through one stage")
+      ->capture_default_str();
+  app.add_option("--cycles", o.cycles,
+                 "fixed-cycle mode: move the grips for exactly N cycles (paper: 200000); 0 = stop "
+                 "when quasi-static")
+      ->capture_default_str();
+  app.add_option("--max-cycles", o.max_cycles, "give up after this many cycles per coupon")
+      ->capture_default_str();
+  app.add_option("--tolerance", o.tolerance,
+                 "quasi-static when mean unbalanced force / mean bond force falls below this")
+      ->capture_default_str();
+  app.add_option("--damping", o.damping, "PFC local damping coefficient")->capture_default_str();
+  app.add_option("--safety", o.safety, "time step as a fraction of the critical time step")
+      ->capture_default_str();
+  app.add_option("--grip-velocity-mm-s", o.grip_velocity_mm_s,
+                 "grip velocity [mm/s]; 0 = derived from --ramp-cycles")
+      ->capture_default_str();
+  app.add_option("--grips", o.grips, "free (uniaxial stress) or clamped (ends held laterally)")
+      ->check(CLI::IsMember({"free", "clamped"}))
+      ->capture_default_str();
+  app.add_flag("--raw-edges", o.raw_edges,
+               "do not complete the boundary cells of free edges (edge bonds keep bulk stiffness)");
+  app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
+}
+
+plydem::TensionSettings to_settings(const TensionOptions& o) {
+  constexpr double mm = 1e-3;
+  plydem::TensionSettings s;
+  s.strategy = o.strategy;
+  plydem::require(std::isfinite(o.angle_deg), "--angle is not a finite number");
+  s.coupon.material = plydem::load_material(o.material);
+  s.coupon.ply_angle = o.angle_deg * std::numbers::pi / 180.0;
+  s.coupon.length = o.length_mm * mm;
+  s.coupon.width = o.width_mm * mm;
+  s.coupon.thickness = o.thickness_mm * mm;
+  s.coupon.particle_diameter = o.diameter_mm * mm;
+  s.coupon.complete_boundary_cells = !o.raw_edges;
+  s.grip_length = o.grip_mm * mm;
+  s.gauge_fraction = o.gauge_fraction;
+  s.target_strain = o.target_strain;
+  s.load_stages = o.stages;
+  s.ramp_cycles = o.ramp_cycles;
+  s.fixed_cycles = o.cycles;
+  s.max_cycles = o.max_cycles;
+  s.tolerance = o.tolerance;
+  s.grip_velocity = o.grip_velocity_mm_s * mm;
+  s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
+  s.explicit_settings.local_damping = o.damping;
+  s.explicit_settings.safety_factor = o.safety;
+  // Unknown strategies fail here, before any work.
+  plydem::default_registry().create(s.strategy);
+  return s;
+}
+
+int run_tension(const TensionOptions& o) {
+  const plydem::TensionSettings settings = to_settings(o);
+  plydem::TensionTest test(settings);
+  test.on_progress([](const plydem::TensionProgress& p) {
+    spdlog::info("{}: {} cycles, unbalanced-force ratio {:.3g}", p.phase, p.cycles, p.ratio);
+  });
+  const plydem::TensionResult result = test.run();
+  if (o.json) {
+    std::cout << plydem::tension_json(result, settings).dump(2) << "\n";
+  } else {
+    std::cout << plydem::format_tension_table(result, settings);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "plydem: particle (DEM and lattice) models of fibre-reinforced composite laminae.\n"
+      "With no command it runs the paper's 0 deg E-glass/MY750 lamina with the Hex2D strategy\n"
+      "and prints E1, E2, nu12, nu21 beside classical lamination theory."};
+  app.require_subcommand(0, 1);
+  spdlog::set_pattern("[%H:%M:%S] %v");
+
+  TensionOptions defaults;
+  TensionOptions tension_options;
+  CLI::App* tension = app.add_subcommand(
+      "tension", "virtual uniaxial tension test of one ply: Ex, Ey, nu_xy, nu_yx beside CLT");
+  add_tension_options(*tension, tension_options);
+  CLI::App* strategies = app.add_subcommand("strategies", "list the registered strategies");
+  CLI::App* materials = app.add_subcommand("materials", "list the built-in materials");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (*strategies) {
+      const plydem::Registry& registry = plydem::default_registry();
+      for (const std::string& name : registry.names()) {
+        std::cout << fmt::format("{:<10} {}\n", name, registry.description(name));
+      }
+      return 0;
+    }
+    if (*materials) {
+      for (const std::string& name : plydem::builtin_material_names()) {
+        const plydem::Material m = plydem::load_material(name);
+        std::cout << fmt::format(
+            "{:<14} E1 {:g} GPa, E2 {:g} GPa, G12 {:g} GPa, nu12 {:g}, nu23 {:g}, density {:g} "
+            "kg/m^3\n",
+            m.name, m.E1 * 1e-9, m.E2 * 1e-9, m.G12 * 1e-9, m.nu12, m.nu23, m.density);
+      }
+      return 0;
+    }
+    return run_tension(*tension ? tension_options : defaults);
+  } catch (const plydem::Error& e) {
+    std::cerr << "plydem: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "plydem: internal error: " << e.what() << "\n";
+    return 3;
+  }
+}

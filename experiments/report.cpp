@@ -1,0 +1,121 @@
+#include "experiments/report.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace plydem {
+namespace {
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+const char* grips_name(GripCondition g) {
+  return g == GripCondition::kFree ? "free" : "clamped";
+}
+
+nlohmann::json constants_json(const InPlaneConstants& c) {
+  return {{"Ex", c.Ex},
+          {"Ey", c.Ey},
+          {"nu_xy", c.nu_xy},
+          {"nu_yx", c.nu_yx},
+          {"shear_coupling_x", c.shear_coupling_x}};
+}
+
+nlohmann::json pull_json(const PullResult& r) {
+  return {{"ply_angle_deg", r.ply_angle / kDegree},
+          {"modulus", r.modulus},
+          {"poisson", r.poisson},
+          {"shear_coupling", r.shear_coupling},
+          {"fit_r_squared", r.fit_r_squared},
+          {"particles", r.particles},
+          {"bonds", r.bonds},
+          {"cycles", r.cycles},
+          {"final_unbalanced_ratio", r.final_ratio},
+          {"time_step", r.time_step},
+          {"grip_velocity", r.grip_velocity},
+          {"cross_section", r.cross_section},
+          {"wall_seconds", r.wall_seconds},
+          {"strain", r.strain},
+          {"lateral_strain", r.lateral_strain},
+          {"shear_strain", r.shear_strain},
+          {"stress", r.stress}};
+}
+
+}  // namespace
+
+std::string format_tension_table(const TensionResult& r, const TensionSettings& s) {
+  const bool zero = std::abs(r.ply_angle) < 1e-12;
+  struct Row {
+    std::string name;
+    double dem, clt, scale;
+    bool modulus;
+  };
+  const Row rows[] = {
+      {zero ? "E1  (Ex)" : "Ex", r.dem.Ex, r.theory.Ex, 1e-9, true},
+      {zero ? "E2  (Ey)" : "Ey", r.dem.Ey, r.theory.Ey, 1e-9, true},
+      {zero ? "nu12 (nu_xy)" : "nu_xy", r.dem.nu_xy, r.theory.nu_xy, 1, false},
+      {zero ? "nu21 (nu_yx)" : "nu_yx", r.dem.nu_yx, r.theory.nu_yx, 1, false},
+  };
+  std::string out;
+  out +=
+      fmt::format("plydem tension test: strategy {}, material {}, ply angle {:g} deg, grips {}\n",
+                  r.strategy, r.material.name, r.ply_angle / kDegree, grips_name(s.grips));
+  out += fmt::format("coupon {:g} mm x {:g} mm x {:g} mm, particle diameter {:g} mm\n\n",
+                     s.coupon.length * 1e3, s.coupon.width * 1e3, s.coupon.thickness * 1e3,
+                     s.coupon.particle_diameter * 1e3);
+  out += fmt::format("{:<14} {:>12} {:>12} {:>10}\n", "", "DEM", "CLT", "rel. error");
+  for (const Row& row : rows) {
+    const std::string unit = row.modulus ? " GPa" : "";
+    const int digits = row.modulus ? 3 : 4;
+    out += fmt::format("{:<14} {:>12} {:>12} {:>+9.3f}%\n", row.name,
+                       fmt::format("{:.{}f}{}", row.dem * row.scale, digits, unit),
+                       fmt::format("{:.{}f}{}", row.clt * row.scale, digits, unit),
+                       100.0 * (row.dem - row.clt) / row.clt);
+  }
+  out += fmt::format("{:<14} {:>12.4f} {:>12.4f}\n", "g_xy/e_x", r.dem.shear_coupling_x,
+                     r.theory.shear_coupling_x);
+  out += fmt::format("\nreciprocity nu_yx*Ex / (nu_xy*Ey) = {:.5f}\n",
+                     r.dem.nu_yx * r.dem.Ex / (r.dem.nu_xy * r.dem.Ey));
+  for (const PullResult* pull : {&r.along_x, &r.along_y}) {
+    out += fmt::format(
+        "coupon at {:>6.1f} deg: {} particles, {} bonds, {} cycles (dt {:.3g} s), "
+        "unbalanced ratio {:.2g}, {:.2f} s\n",
+        pull->ply_angle / kDegree, pull->particles, pull->bonds, pull->cycles, pull->time_step,
+        pull->final_ratio, pull->wall_seconds);
+  }
+  out += fmt::format("calibration: {}; relaxed stiffness vs target: {:.2e} relative\n",
+                     r.calibration.method, r.calibration.relaxed_error);
+  out += fmt::format("wall time {:.2f} s\n", r.wall_seconds);
+  return out;
+}
+
+nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
+  nlohmann::json families = nlohmann::json::array();
+  for (const FamilyCalibration& f : r.calibration.families) {
+    families.push_back({{"family", f.label},
+                        {"direction_deg", f.direction / kDegree},
+                        {"normal_stiffness", f.stiffness.normal},
+                        {"shear_stiffness", f.stiffness.shear}});
+  }
+  nlohmann::json j = constants_json(r.dem);
+  j["theory"] = constants_json(r.theory);
+  j["particles"] = r.along_x.particles;
+  j["bonds"] = r.along_x.bonds;
+  j["wall_seconds"] = r.wall_seconds;
+  j["strategy"] = r.strategy;
+  j["material"] = r.material.name;
+  j["angle_deg"] = r.ply_angle / kDegree;
+  j["solver"] = "explicit";
+  j["grips"] = grips_name(s.grips);
+  j["units"] = "SI (Pa, m, s)";
+  j["loading_x"] = pull_json(r.along_x);
+  j["loading_y"] = pull_json(r.along_y);
+  j["calibration"] = {{"method", r.calibration.method},
+                      {"lattice_angle_deg", r.calibration.lattice_angle / kDegree},
+                      {"families", families},
+                      {"relaxed_relative_error", r.calibration.relaxed_error}};
+  return j;
+}
+
+}  // namespace plydem

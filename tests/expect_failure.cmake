@@ -1,0 +1,10 @@
+# Runs COMMAND (a ;-list), expects a non-zero exit and output matching EXPECT (a regex).
+execute_process(COMMAND ${COMMAND} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+set(all "${out}${err}")
+if(rc EQUAL 0)
+  message(FATAL_ERROR "expected a non-zero exit, got 0. Output:\n${all}")
+endif()
+if(NOT all MATCHES "${EXPECT}")
+  message(FATAL_ERROR "output does not match '${EXPECT}':\n${all}")
+endif()
+message(STATUS "exit ${rc}, message: ${all}")
