@@ -1,5 +1,7 @@
 #include "core/elasticity.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -9,12 +11,7 @@
 namespace plydem {
 namespace {
 
-std::string format_number(double value) {
-  std::ostringstream out;
-  out.precision(6);
-  out << value;
-  return out.str();
-}
+std::string format_number(double value) { return fmt::format("{:.6g}", value); }
 
 // Stress transformation from global (x, y) to ply axes (1, 2) for a fibre at `angle`
 // counter-clockwise from +x, Voigt (xx, yy, xy) with tensor shear stress: sigma_12 = T sigma_xy.

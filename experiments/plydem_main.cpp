@@ -7,6 +7,7 @@
 //   plydem strategies                        # registered strategies
 //   plydem materials                         # built-in materials
 #include <fmt/format.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
@@ -141,6 +142,8 @@ int main(int argc, char** argv) {
       "With no command it runs the paper's 0 deg E-glass/MY750 lamina with the Hex2D strategy\n"
       "and prints E1, E2, nu12, nu21 beside classical lamination theory."};
   app.require_subcommand(0, 1);
+  // Progress and warnings go to stderr: stdout carries only the table or the JSON object.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("plydem"));
   spdlog::set_pattern("[%H:%M:%S] %v");
 
   TensionOptions defaults;

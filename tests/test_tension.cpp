@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "core/material.hpp"
 #include "experiments/tension_test.hpp"
@@ -51,4 +52,20 @@ TEST_CASE("reciprocity within 1% once the coupon is two paper widths wide") {
   CHECK(std::abs(r.dem.nu_yx * r.dem.Ex / (r.dem.nu_xy * r.dem.Ey) - 1) < 0.01);
   const Clt clt = clt_of(r.material);
   CHECK(std::abs(r.dem.Ey / clt.E2 - 1) < 0.006);
+}
+
+TEST_CASE("a small coupon runs the whole test path: both loadings, fits, clean stage points") {
+  // Small enough for the sanitizer build; its 1.2 x 0.4 mm coupon keeps a larger edge effect.
+  TensionSettings settings;
+  settings.coupon.material = load_material("eglass-my750");
+  settings.coupon.length = 1.2e-3;
+  settings.coupon.width = 0.4e-3;
+  const TensionResult r = TensionTest(settings).run();
+  const Clt clt = clt_of(r.material);
+  CHECK(std::abs(r.dem.Ex / clt.E1 - 1) < 0.02);
+  CHECK(std::abs(r.dem.Ey / clt.E2 - 1) < 0.05);
+  CHECK(std::abs(r.dem.nu_xy - clt.nu12) < 0.01);
+  CHECK(r.along_x.strain.size() == 3);  // origin and two stages
+  CHECK(r.along_x.final_ratio <= settings.tolerance);
+  CHECK(r.along_y.ply_angle == doctest::Approx(-std::numbers::pi / 2));
 }
