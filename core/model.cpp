@@ -39,8 +39,9 @@ void set_bond_geometry(const Particles& particles, Bonds& bonds, int b) {
           .matrix()
           .transpose();
   const double length = branch.norm();
-  require(length > 0,
-          fmt::format("bond {} joins particles {} and {} at the same position", b, i, j));
+  if (!(length > 0)) {
+    throw Error(fmt::format("bond {} joins particles {} and {} at the same position", b, i, j));
+  }
   bonds.normal.row(b) = (branch / length).transpose().array();
   bonds.length(b) = length;
   const double gap = length - particles.radius(i) - particles.radius(j);
@@ -60,14 +61,14 @@ void Model::check_consistency() const {
               p.ply.size() == n && p.group.size() == n,
           "particle arrays differ in size");
   for (int i = 0; i < n; ++i) {
-    require(p.reference_position.row(i).isFinite().all(),
-            fmt::format("particle {} has a non-finite position", i));
-    require(std::isfinite(p.mass(i)) && p.mass(i) > 0,
-            fmt::format("particle {} has a non-positive mass {}", i, p.mass(i)));
-    require(std::isfinite(p.moment_of_inertia(i)) && p.moment_of_inertia(i) > 0,
-            fmt::format("particle {} has a non-positive moment of inertia", i));
-    require(std::isfinite(p.radius(i)) && p.radius(i) > 0,
-            fmt::format("particle {} has a non-positive radius", i));
+    if (!(p.reference_position.row(i).isFinite().all()))
+      throw Error(fmt::format("particle {} has a non-finite position", i));
+    if (!(std::isfinite(p.mass(i)) && p.mass(i) > 0))
+      throw Error(fmt::format("particle {} has a non-positive mass {}", i, p.mass(i)));
+    if (!(std::isfinite(p.moment_of_inertia(i)) && p.moment_of_inertia(i) > 0))
+      throw Error(fmt::format("particle {} has a non-positive moment of inertia", i));
+    if (!(std::isfinite(p.radius(i)) && p.radius(i) > 0))
+      throw Error(fmt::format("particle {} has a non-positive radius", i));
   }
   const Bonds& b = bonds;
   const int m = b.size();
@@ -79,22 +80,24 @@ void Model::check_consistency() const {
   std::set<std::pair<int, int>> seen;
   for (int k = 0; k < m; ++k) {
     const int i = b.first(k), j = b.second(k);
-    require(i >= 0 && i < n && j >= 0 && j < n,
-            fmt::format("bond {} refers to a missing particle ({}, {})", k, i, j));
-    require(i != j, fmt::format("bond {} joins particle {} to itself", k, i));
-    require(seen.insert({std::min(i, j), std::max(i, j)}).second,
-            fmt::format("bond {} duplicates another bond between particles {} and {}", k, i, j));
+    if (!(i >= 0 && i < n && j >= 0 && j < n))
+      throw Error(fmt::format("bond {} refers to a missing particle ({}, {})", k, i, j));
+    if (!(i != j)) throw Error(fmt::format("bond {} joins particle {} to itself", k, i));
+    if (!(seen.insert({std::min(i, j), std::max(i, j)}).second))
+      throw Error(
+          fmt::format("bond {} duplicates another bond between particles {} and {}", k, i, j));
     for (double s : {b.normal_stiffness(k), b.shear_stiffness(k), b.bending_stiffness(k),
                      b.twisting_stiffness(k)}) {
-      require(std::isfinite(s) && s >= 0,
-              fmt::format("bond {} has a negative or non-finite stiffness {}: the calibration "
-                          "produced an unstable lattice",
-                          k, s));
+      if (!(std::isfinite(s) && s >= 0))
+        throw Error(
+            fmt::format("bond {} has a negative or non-finite stiffness {}: the calibration "
+                        "produced an unstable lattice",
+                        k, s));
     }
-    require(std::isfinite(b.length(k)) && b.length(k) > 0,
-            fmt::format("bond {} has a non-positive length", k));
-    require(std::abs(b.normal.row(k).matrix().norm() - 1.0) < 1e-12,
-            fmt::format("bond {} has a normal that is not a unit vector", k));
+    if (!(std::isfinite(b.length(k)) && b.length(k) > 0))
+      throw Error(fmt::format("bond {} has a non-positive length", k));
+    if (!(std::abs(b.normal.row(k).matrix().norm() - 1.0) < 1e-12))
+      throw Error(fmt::format("bond {} has a normal that is not a unit vector", k));
   }
 }
 
