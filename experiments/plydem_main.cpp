@@ -40,6 +40,7 @@ struct TensionOptions {
   double safety = 0.8;
   double grip_velocity_mm_s = 0;
   std::string grips = "free";
+  std::string solver = "explicit";
   bool json = false;
   bool raw_edges = false;
 };
@@ -85,6 +86,10 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
   app.add_option("--grips", o.grips, "free (uniaxial stress) or clamped (ends held laterally)")
       ->check(CLI::IsMember({"free", "clamped"}))
       ->capture_default_str();
+  app.add_option("--solver", o.solver,
+                 "explicit (damped dynamics to quasi-static) or static (one sparse linear solve)")
+      ->check(CLI::IsMember({"explicit", "static"}))
+      ->capture_default_str();
   app.add_flag("--raw-edges", o.raw_edges,
                "do not complete the boundary cells of free edges (edge bonds keep bulk stiffness)");
   app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
@@ -111,6 +116,8 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
   s.max_cycles = o.max_cycles;
   s.tolerance = o.tolerance;
   s.grip_velocity = o.grip_velocity_mm_s * mm;
+  s.solver =
+      o.solver == "static" ? plydem::TensionSolver::kStatic : plydem::TensionSolver::kExplicit;
   s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
   s.explicit_settings.local_damping = o.damping;
   s.explicit_settings.safety_factor = o.safety;

@@ -106,7 +106,7 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
   j["strategy"] = r.strategy;
   j["material"] = r.material.name;
   j["angle_deg"] = r.ply_angle / kDegree;
-  j["solver"] = "explicit";
+  j["solver"] = s.solver == TensionSolver::kStatic ? "static" : "explicit";
   j["grips"] = grips_name(s.grips);
   j["units"] = "SI (Pa, m, s)";
   j["loading_x"] = pull_json(r.along_x);

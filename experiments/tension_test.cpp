@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/measurements.hpp"
 #include "core/registry.hpp"
+#include "core/static_solver.hpp"
 
 namespace plydem {
 namespace {
@@ -164,7 +165,37 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   };
 
   std::vector<double> exx, eyy, gxy, sigma;
-  if (s.fixed_cycles > 0) {
+  if (s.solver == TensionSolver::kStatic) {
+    // The model is linear: one solve at the target strain, fitted through the unloaded origin.
+    DofConstraints constraints(p.size());
+    const bool clamped = s.grips == GripCondition::kClamped;
+    for (int i = 0; i < p.size(); ++i) {
+      const int g = p.group(i);
+      if (g == static_cast<int>(BoundaryGroup::kFree)) continue;
+      const double sign = g == static_cast<int>(BoundaryGroup::kRightGrip) ? 1.0 : -1.0;
+      constraints.fix(i, Dof::kUx, sign * total_grip_travel);
+      constraints.fix(i, Dof::kUz);
+      constraints.fix(i, Dof::kThetaX);
+      constraints.fix(i, Dof::kThetaY);
+      if (clamped) {
+        constraints.fix(i, Dof::kUy);
+        constraints.fix(i, Dof::kThetaZ);
+      }
+    }
+    StaticSettings static_settings;
+    static_settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
+    const StaticResult solved = solve_static(model, constraints, static_settings);
+    exx = {0.0};
+    eyy = {0.0};
+    gxy = {0.0};
+    sigma = {0.0};
+    const Sample smp = sample(p);
+    exx.push_back(smp.strain.exx);
+    eyy.push_back(smp.strain.eyy);
+    gxy.push_back(smp.strain.gamma_xy);
+    sigma.push_back(smp.stress);
+    result.final_ratio = solved.relative_residual;
+  } else if (s.fixed_cycles > 0) {
     const double v = s.grip_velocity > 0
                          ? s.grip_velocity
                          : total_grip_travel / (static_cast<double>(s.fixed_cycles) * dt);

@@ -30,6 +30,9 @@
 namespace plydem {
 
 enum class GripCondition { kFree, kClamped };
+/// explicit: damped central differences to quasi-static (above); static: one sparse linear solve
+/// of the same bonds with the grips displaced to the target strain (core/static_solver.hpp).
+enum class TensionSolver { kExplicit, kStatic };
 
 struct TensionSettings {
   std::string strategy = "hex2d";
@@ -46,6 +49,7 @@ struct TensionSettings {
   long max_cycles = 5'000'000;  ///< per coupon; exceeding it is an error
   long fixed_cycles = 0;        ///< > 0: the paper's fixed-cycle mode
   GripCondition grips = GripCondition::kFree;
+  TensionSolver solver = TensionSolver::kExplicit;
   ExplicitSettings explicit_settings;
 
   /// Throws plydem::Error naming the first bad setting.

@@ -21,11 +21,21 @@ Clt clt_of(const Material& m) {
   return {m.E1, m.E2, m.nu12, m.nu12 * m.E2 / m.E1};
 }
 
-TensionResult run_default(double width) {
+TensionResult run_default(double width, TensionSolver solver = TensionSolver::kExplicit) {
   TensionSettings settings;
   settings.coupon.material = load_material("eglass-my750");
   settings.coupon.width = width;
+  settings.solver = solver;
   return TensionTest(settings).run();
+}
+
+// Static and explicit runs of the same coupon measure the same constants.
+void check_solvers_agree(const TensionResult& explicit_run, const TensionResult& static_run) {
+  CHECK(std::abs(static_run.dem.Ex / explicit_run.dem.Ex - 1) < 0.005);
+  CHECK(std::abs(static_run.dem.Ey / explicit_run.dem.Ey - 1) < 0.005);
+  CHECK(std::abs(static_run.dem.nu_xy / explicit_run.dem.nu_xy - 1) < 0.005);
+  CHECK(std::abs(static_run.dem.nu_yx / explicit_run.dem.nu_yx - 1) < 0.005);
+  CHECK(static_run.along_x.cycles == 0);
 }
 
 }  // namespace
@@ -45,6 +55,7 @@ TEST_CASE("the paper's 0 deg E-glass lamina: E1, E2 within 1%, nu12, nu21 within
   CHECK(std::abs(r.dem.shear_coupling_x) < 0.005);
   CHECK(r.along_x.fit_r_squared > 0.999999);
   CHECK(r.along_x.final_ratio <= 1e-5);
+  check_solvers_agree(r, run_default(0.83e-3, TensionSolver::kStatic));
 }
 
 TEST_CASE("reciprocity within 1% once the coupon is two paper widths wide") {
@@ -68,4 +79,6 @@ TEST_CASE("a small coupon runs the whole test path: both loadings, fits, clean s
   CHECK(r.along_x.strain.size() == 3);  // origin and two stages
   CHECK(r.along_x.final_ratio <= settings.tolerance);
   CHECK(r.along_y.ply_angle == doctest::Approx(-std::numbers::pi / 2));
+  settings.solver = TensionSolver::kStatic;
+  check_solvers_agree(r, TensionTest(settings).run());
 }
