@@ -40,7 +40,7 @@ BondParameters cell_bond(const UnitCell& cell, int b, const FamilyStiffness& k) 
   const UnitCell::Bond& bond = cell.bonds[b];
   const Eigen::Vector3d branch = cell.branch(b);
   const double length = branch.norm();
-  require(length > 0, fmt::format("unit-cell bond {} has zero length", b));
+  if (!(length > 0)) throw Error(fmt::format("unit-cell bond {} has zero length", b));
   const double gap = length - cell.radius[bond.first] - cell.radius[bond.second];
   BondParameters p;
   p.normal = branch / length;
@@ -66,9 +66,11 @@ Eigen::MatrixXd cell_hessian(const UnitCell& cell, const std::vector<FamilyStiff
   Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(size, size);
   for (int b = 0; b < static_cast<int>(cell.bonds.size()); ++b) {
     const UnitCell::Bond& bond = cell.bonds[b];
-    require(bond.first >= 0 && bond.first < n && bond.second >= 0 && bond.second < n &&
-                bond.family >= 0 && bond.family < cell.family_count,
-            fmt::format("unit-cell bond {} refers to a missing particle or family", b));
+    // Messages are formatted only on failure: the calibration evaluates cells many times.
+    if (!(bond.first >= 0 && bond.first < n && bond.second >= 0 && bond.second < n &&
+          bond.family >= 0 && bond.family < cell.family_count)) {
+      throw Error(fmt::format("unit-cell bond {} refers to a missing particle or family", b));
+    }
     const Matrix12d k = parallel_bond_stiffness(cell_bond(cell, b, families[bond.family]));
     // Bond dofs (u_i, theta_i, u_j, theta_j) as a linear map of z: u = E x + fluctuation.
     Eigen::MatrixXd map = Eigen::MatrixXd::Zero(12, size);
