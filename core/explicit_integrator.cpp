@@ -35,8 +35,7 @@ double critical_time_step(const Model& model) {
   return 2.0 / std::sqrt(lambda_max);
 }
 
-ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& settings)
-    : model_(model), settings_(settings) {
+void validate(const ExplicitSettings& settings) {
   require(std::isfinite(settings.local_damping) && settings.local_damping >= 0 &&
               settings.local_damping < 1,
           fmt::format("local damping must lie in [0, 1), got {}", settings.local_damping));
@@ -46,6 +45,11 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
       fmt::format("time-step safety factor must lie in (0, 1], got {}", settings.safety_factor));
   require(std::isfinite(settings.time_step) && settings.time_step >= 0,
           fmt::format("time step must be >= 0 (0 = automatic), got {}", settings.time_step));
+}
+
+ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& settings)
+    : model_(model), settings_(settings) {
+  validate(settings);
   model.check_consistency();
   const double critical = critical_time_step(model);
   if (settings.time_step > 0) {

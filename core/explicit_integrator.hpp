@@ -22,6 +22,9 @@ struct ExplicitSettings {
   double time_step = 0;
 };
 
+/// Throws plydem::Error naming the first setting out of range.
+void validate(const ExplicitSettings& settings);
+
 /// Velocities imposed on every particle of a boundary group. A component whose `fix_*` flag is
 /// false stays free.
 struct PrescribedMotion {
@@ -48,7 +51,7 @@ double critical_time_step(const Model& model);
 
 class ExplicitIntegrator {
  public:
-  /// Validates settings (damping in [0, 1), safety factor in (0, 1], time step >= 0, finite).
+  /// Validates the settings (validate() above) and the model.
   ExplicitIntegrator(Model& model, const ExplicitSettings& settings);
 
   /// Replaces the prescribed motions. A particle in a listed group has the given components fixed.

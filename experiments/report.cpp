@@ -78,11 +78,14 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
   out += fmt::format("\nreciprocity nu_yx*Ex / (nu_xy*Ey) = {:.5f}\n",
                      r.dem.nu_yx * r.dem.Ex / (r.dem.nu_xy * r.dem.Ey));
   for (const PullResult* pull : {&r.along_x, &r.along_y}) {
-    out += fmt::format(
-        "coupon at {:>6.1f} deg: {} particles, {} bonds, {} cycles (dt {:.3g} s), "
-        "unbalanced ratio {:.2g}, {:.2f} s\n",
-        pull->ply_angle / kDegree, pull->particles, pull->bonds, pull->cycles, pull->time_step,
-        pull->final_ratio, pull->wall_seconds);
+    const std::string run =
+        s.solver == TensionSolver::kStatic
+            ? fmt::format("static solve, relative residual {:.2g}", pull->final_ratio)
+            : fmt::format("{} cycles (dt {:.3g} s), unbalanced ratio {:.2g}", pull->cycles,
+                          pull->time_step, pull->final_ratio);
+    out += fmt::format("coupon at {:>6.1f} deg: {} particles, {} bonds, {}, {:.2f} s\n",
+                       pull->ply_angle / kDegree, pull->particles, pull->bonds, run,
+                       pull->wall_seconds);
   }
   out += fmt::format("calibration: {}; relaxed stiffness vs target: {:.2e} relative\n",
                      r.calibration.method, r.calibration.relaxed_error);

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
@@ -44,6 +45,7 @@ void TensionSettings::validate() const {
           fmt::format("quasi-static tolerance must lie in (0, 1), got {}", tolerance));
   require(max_cycles >= 1, "max cycles must be >= 1");
   require(fixed_cycles >= 0, "fixed cycles must be >= 0");
+  plydem::validate(explicit_settings);  // checked even when a static solve will not use them
 }
 
 TensionTest::TensionTest(TensionSettings settings) : settings_(std::move(settings)) {
@@ -122,8 +124,10 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   const double area = cross_section_area(p, x_mid - gauge_half, x_mid + gauge_half,
                                          std::min(4.0 * spec.particle_diameter, 0.25 * gauge_half));
 
-  ExplicitIntegrator integrator(model, s.explicit_settings);
-  const double dt = integrator.time_step();
+  // Only explicit runs need the integrator (and its critical time step over every bond).
+  std::optional<ExplicitIntegrator> integrator;
+  if (s.solver == TensionSolver::kExplicit) integrator.emplace(model, s.explicit_settings);
+  const double dt = integrator ? integrator->time_step() : 0.0;
   auto grips_moving = [&](double velocity) {
     PrescribedMotion motion[2];
     motion[0].group = BoundaryGroup::kLeftGrip;
@@ -135,7 +139,7 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
       m.fix_velocity = {true, clamped, true};
       m.fix_angular_velocity = {true, true, clamped};
     }
-    integrator.set_prescribed_motions({motion[0], motion[1]});
+    integrator->set_prescribed_motions({motion[0], motion[1]});
   };
   auto sample = [&](const Particles& state) {
     double left_force = 0, right_force = 0;
@@ -159,12 +163,20 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   auto last_report = Clock::now();
   auto report = [&](const char* phase, const CycleReport& cycle) {
     if (progress_ && seconds_since(last_report) > 2.0) {
-      progress_({phase, integrator.cycles(), cycle.unbalanced_force_ratio});
+      progress_({phase, integrator->cycles(), cycle.unbalanced_force_ratio});
       last_report = Clock::now();
     }
   };
 
-  std::vector<double> exx, eyy, gxy, sigma;
+  // Each stage point goes straight into the result; staged and static runs start from the
+  // unloaded origin, which is an exact equilibrium point.
+  auto record = [&](const Sample& smp) {
+    result.strain.push_back(smp.strain.exx);
+    result.lateral_strain.push_back(smp.strain.eyy);
+    result.shear_strain.push_back(smp.strain.gamma_xy);
+    result.stress.push_back(smp.stress);
+  };
+  if (s.fixed_cycles == 0 || s.solver == TensionSolver::kStatic) record(Sample{});
   if (s.solver == TensionSolver::kStatic) {
     // The model is linear: one solve at the target strain, fitted through the unloaded origin.
     DofConstraints constraints(p.size());
@@ -185,15 +197,7 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
     StaticSettings static_settings;
     static_settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
     const StaticResult solved = solve_static(model, constraints, static_settings);
-    exx = {0.0};
-    eyy = {0.0};
-    gxy = {0.0};
-    sigma = {0.0};
-    const Sample smp = sample(p);
-    exx.push_back(smp.strain.exx);
-    eyy.push_back(smp.strain.eyy);
-    gxy.push_back(smp.strain.gamma_xy);
-    sigma.push_back(smp.stress);
+    record(sample(p));
     result.final_ratio = solved.relative_residual;
   } else if (s.fixed_cycles > 0) {
     const double v = s.grip_velocity > 0
@@ -204,25 +208,17 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
     const long every = std::max(1L, s.fixed_cycles / 100);
     CycleReport cycle;
     for (long c = 1; c <= s.fixed_cycles; ++c) {
-      cycle = integrator.cycle();
+      cycle = integrator->cycle();
       report("loading", cycle);
       // Forces in p.force belong to the state before this cycle's update: sample both together.
       if (c % every == 0 && c > s.fixed_cycles / 2) {
         Particles before = p;
         before.displacement -= dt * before.velocity;
-        const Sample smp = sample(before);
-        exx.push_back(smp.strain.exx);
-        eyy.push_back(smp.strain.eyy);
-        gxy.push_back(smp.strain.gamma_xy);
-        sigma.push_back(smp.stress);
+        record(sample(before));
       }
     }
     result.final_ratio = cycle.unbalanced_force_ratio;
   } else {
-    exx = {0.0};
-    eyy = {0.0};
-    gxy = {0.0};
-    sigma = {0.0};
     const double stage_travel = total_grip_travel / s.load_stages;
     const double v = s.grip_velocity > 0 ? s.grip_velocity
                                          : stage_travel / (static_cast<double>(s.ramp_cycles) * dt);
@@ -230,40 +226,32 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
     const long ramp = std::max(1L, std::lround(stage_travel / (v * dt)));
     for (int stage = 1; stage <= s.load_stages; ++stage) {
       grips_moving(v);
-      for (long c = 0; c < ramp; ++c) report("loading", integrator.cycle());
+      for (long c = 0; c < ramp; ++c) report("loading", integrator->cycle());
       grips_moving(0.0);
-      CycleReport cycle = integrator.cycle();
+      CycleReport cycle = integrator->cycle();
       while (cycle.unbalanced_force_ratio > s.tolerance) {
         // Not require(): this runs every cycle, and the message is needed only on failure.
-        if (integrator.cycles() >= s.max_cycles) {
+        if (integrator->cycles() >= s.max_cycles) {
           throw Error(fmt::format(
               "the tension test did not reach a quasi-static state within {} cycles "
               "(unbalanced-force ratio {:.3g} > tolerance {:.3g}); raise --max-cycles or the "
               "tolerance",
               s.max_cycles, cycle.unbalanced_force_ratio, s.tolerance));
         }
-        cycle = integrator.cycle();
+        cycle = integrator->cycle();
         report("relaxing", cycle);
       }
       result.final_ratio = cycle.unbalanced_force_ratio;
       compute_bond_forces(p, model.bonds);
-      const Sample smp = sample(p);
-      exx.push_back(smp.strain.exx);
-      eyy.push_back(smp.strain.eyy);
-      gxy.push_back(smp.strain.gamma_xy);
-      sigma.push_back(smp.stress);
+      record(sample(p));
     }
   }
-  const LinearFit stress_fit = linear_fit(exx, sigma);
+  const LinearFit stress_fit = linear_fit(result.strain, result.stress);
   result.modulus = stress_fit.slope;
   result.fit_r_squared = stress_fit.r_squared;
-  result.poisson = -linear_fit(exx, eyy).slope;
-  result.shear_coupling = linear_fit(exx, gxy).slope;
-  result.strain = exx;
-  result.lateral_strain = eyy;
-  result.shear_strain = gxy;
-  result.stress = sigma;
-  result.cycles = integrator.cycles();
+  result.poisson = -linear_fit(result.strain, result.lateral_strain).slope;
+  result.shear_coupling = linear_fit(result.strain, result.shear_strain).slope;
+  result.cycles = integrator ? integrator->cycles() : 0;
   result.wall_seconds = seconds_since(start);
   require(std::isfinite(result.modulus) && result.modulus > 0,
           fmt::format("the tension test measured a non-positive modulus {} Pa", result.modulus));
