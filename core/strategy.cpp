@@ -24,4 +24,14 @@ void CouponSpec::validate() const {
                       length * 1e3, width * 1e3, particle_diameter * 1e3));
 }
 
+void Strategy::set_option(const std::string& name, double value) {
+  std::string known;
+  for (const StrategyOption& option : options()) {
+    known += known.empty() ? option.name : fmt::format(", {}", option.name);
+  }
+  throw Error(fmt::format("this strategy has no option '{}' (value {}); {}", name, value,
+                          known.empty() ? std::string("it takes no options")
+                                        : fmt::format("its options: {}", known)));
+}
+
 }  // namespace plydem

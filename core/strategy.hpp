@@ -49,9 +49,22 @@ struct Calibration {
   double relaxed_error = 0;                           ///< |relaxed - target|_F / |target|_F
 };
 
+/// A strategy-specific parameter (hcp's layer spacing, lattice's seed), with its current value.
+/// Set from the command line with `--strategy-option NAME=VALUE`.
+struct StrategyOption {
+  std::string name;
+  double value = 0;
+  std::string description;  ///< one line, with the unit
+};
+
 class Strategy {
  public:
   virtual ~Strategy() = default;
+  /// The options this strategy takes, with their current values; none by default.
+  virtual std::vector<StrategyOption> options() const { return {}; }
+  /// Sets an option. Throws plydem::Error naming an unknown option (and listing the known ones)
+  /// or a value out of range. The default knows no options.
+  virtual void set_option(const std::string& name, double value);
   /// One line for `plydem strategies`.
   virtual std::string description() const = 0;
   /// Bond stiffnesses for a ply of `material` at `ply_angle` with thickness `thickness`. Throws
