@@ -77,22 +77,29 @@ Calibration Hex2dStrategy::calibrate(const Material& material, double ply_angle,
       "{:.4g}, "
       "C22 = {:.4g}, C12 = {:.4g} GPa",
       target_lattice(2, 2) * 1e-9, target_lattice(1, 1) * 1e-9, target_lattice(0, 1) * 1e-9);
+  // Unreachable targets (negative springs, an unstable cell) are refused with the nearest
+  // stiffness non-negative springs can give.
+  auto refuse = [&](const std::string& why) {
+    const RelaxedCalibration nearest =
+        nearest_non_negative_layer(cell, target_lattice, start_families, rule);
+    return Error(
+        fmt::format("hex2d cannot represent {} with a stable lattice ({}): {} (fibre frame); {}",
+                    ply, why, describe_unreachable(nearest.relaxed, target_lattice), limits));
+  };
   RelaxedCalibration relaxed;
   try {
     relaxed = calibrate_relaxed_layer(cell, target_lattice, start_families, rule);
   } catch (const Error& e) {
-    throw Error(fmt::format("hex2d cannot represent {} with a stable lattice ({}); {}", ply,
-                            e.what(), limits));
+    throw refuse(e.what());
   }
 
   const char* names[3] = {"1 (0 deg, fibre)", "2 (+60 deg)", "3 (+120 deg)"};
   for (int f = 0; f < 3; ++f) {
     const FamilyStiffness& k = relaxed.families[f];
-    require(
-        k.normal > 0 && k.shear >= 0,
-        fmt::format("hex2d cannot represent {} with a stable lattice: bond family {} would need "
-                    "k_n = {:.4g} N/m, k_s = {:.4g} N/m (negative stiffness); {}",
-                    ply, names[f], k.normal, k.shear, limits));
+    if (!(k.normal > 0 && k.shear >= 0)) {
+      throw refuse(fmt::format("bond family {} would need k_n = {:.4g} N/m, k_s = {:.4g} N/m",
+                               names[f], k.normal, k.shear));
+    }
     cal.families.push_back({names[f], cal.lattice_angle + f * std::numbers::pi / 3.0, k});
   }
   require(
