@@ -2,10 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include "core/boundary_cells.hpp"
 #include "core/calibration.hpp"
@@ -36,6 +38,12 @@ const char* family_name(int family) {
   return names[family];
 }
 
+bool all_non_negative(const std::array<FamilyStiffness, 4>& k) {
+  for (const FamilyStiffness& f : k)
+    if (!(f.normal >= 0 && f.shear >= 0)) return false;
+  return true;
+}
+
 std::vector<FamilyStiffness> with_rule(const std::array<FamilyStiffness, 4>& springs,
                                        const FamilyStiffnessRule& rule) {
   std::vector<FamilyStiffness> families;
@@ -43,60 +51,64 @@ std::vector<FamilyStiffness> with_rule(const std::array<FamilyStiffness, 4>& spr
   return families;
 }
 
-// The condition on the lattice-frame stiffness that each eq. (33) spring's sign stands for.
-std::string negative_springs(const std::array<FamilyStiffness, 4>& k, const Eigen::Matrix3d& c) {
-  const double gpa = 1e-9;
-  const double c11 = c(0, 0) * gpa, c22 = c(1, 1) * gpa, c12 = c(0, 1) * gpa,
-               c16 = 0.5 * (c(0, 2) + c(1, 2)) * gpa, c66 = c(2, 2) * gpa;
+// The springs of the printed eq. (33) that are negative, for square-paper's refusal.
+std::string negative_springs(const std::array<FamilyStiffness, 4>& k) {
   std::string out;
-  auto add = [&out](const std::string& text) { out += out.empty() ? text : "; " + text; };
-  if (k[0].normal < 0)
-    add(
-        fmt::format("k_n {} = {:.4g} N/m < 0, it needs 3 C11 + C12 >= 4 C66 (C11 = {:.4g}, C12 = "
-                    "{:.4g}, C66 = {:.4g} GPa)",
-                    family_name(0), k[0].normal, c11, c12, c66));
-  if (k[1].normal < 0)
-    add(
-        fmt::format("k_n {} = {:.4g} N/m < 0, it needs 3 C22 + C12 >= 4 C66 (C22 = {:.4g}, C12 = "
-                    "{:.4g}, C66 = {:.4g} GPa)",
-                    family_name(1), k[1].normal, c22, c12, c66));
-  for (int f = 2; f < 4; ++f) {
-    if (k[f].normal < 0)
-      add(
-          fmt::format("k_n {} = {:.4g} N/m < 0, it needs C12 + 2 C66 {} 3 C16 >= 0 (C12 = {:.4g}, "
-                      "C66 = {:.4g}, C16 = {:.4g} GPa)",
-                      family_name(f), k[f].normal, f == 2 ? '+' : '-', c12, c66, c16));
+  for (int f = 0; f < SquareLayer::kFamilyCount; ++f) {
+    if (k[f].normal < 0) {
+      out += fmt::format("{}k_n {} = {:.4g} N/m", out.empty() ? "" : ", ", family_name(f),
+                         k[f].normal);
+    }
   }
-  if (k[0].shear < 0)
-    add(
-        fmt::format("k_s = {:.4g} N/m < 0, it needs C66 >= C12 (C66 = {:.4g} GPa < C12 = {:.4g} "
-                    "GPa; C66 - C12 = G12 - Q12 at any orientation)",
-                    k[0].shear, c66, c12));
+  if (k[0].shear < 0) {
+    out += fmt::format("{}k_s = {:.4g} N/m (C66 < C12)", out.empty() ? "" : ", ", k[0].shear);
+  }
   return out;
 }
 
-bool all_non_negative(const std::array<FamilyStiffness, 4>& k) {
-  for (const FamilyStiffness& f : k)
-    if (!(f.normal >= 0 && f.shear >= 0)) return false;
-  return true;
+// The conditions of square_springs_non_negative that `c` (lattice frame) violates, in words.
+std::string violated_conditions(const Eigen::Matrix3d& c) {
+  const double gpa = 1e-9;
+  const double c11 = c(0, 0), c22 = c(1, 1), c12 = c(0, 1), c66 = c(2, 2);
+  const double c16 = std::abs(0.5 * (c(0, 2) + c(1, 2)));
+  struct Condition {
+    const char* text;
+    double margin;
+  };
+  const Condition conditions[] = {{"C66 >= C12", c66 - c12},
+                                  {"C11 >= C12", c11 - c12},
+                                  {"C22 >= C12", c22 - c12},
+                                  {"C66 >= |C16|", c66 - c16},
+                                  {"C11 + C12 >= 2 |C16|", c11 + c12 - 2 * c16},
+                                  {"C22 + C12 >= 2 |C16|", c22 + c12 - 2 * c16}};
+  std::string out;
+  for (const Condition& condition : conditions) {
+    if (condition.margin < 0) {
+      out += fmt::format("{}{}", out.empty() ? "" : ", ", condition.text);
+    }
+  }
+  return fmt::format(
+      "it needs {} (here C11 = {:.4g}, C22 = {:.4g}, C12 = {:.4g}, C16 = {:.4g}, "
+      "C66 = {:.4g} GPa)",
+      out, c11 * gpa, c22 * gpa, c12 * gpa, c16 * gpa, c66 * gpa);
 }
 
 // The stiffness (in the frame of `target`) nearest to `target` in the Frobenius norm that a
-// square layer with one shared k_s and non-negative springs reaches when its x axis lies at
-// `lattice_angle` in that frame. Non-negative least squares over (k_nx, k_ny, k_n+, k_n-, k_s):
-// the optimum is the unconstrained least-squares solution on its own support, so trying every
-// support (32) finds it. One shared k_s relaxes nothing, so the affine sum is the model's.
+// square layer with non-negative springs reaches when its x axis lies at `lattice_angle` in that
+// frame. Non-negative least squares over the springs of square_springs_non_negative's family
+// (k_nx, k_ny, k_n+, k_n-, axial k_s, diagonal k_s), which relaxes nothing: the optimum is the
+// unconstrained least-squares solution on its own support, so trying every support (64) finds it.
 Eigen::Matrix3d nearest_achievable(const Eigen::Matrix3d& target, double lattice_angle,
                                    double thickness) {
   const UnitCell cell = SquareLayer(1.0, lattice_angle).unit_cell(thickness);
-  constexpr int kParameters = 5;
+  constexpr int kParameters = 6;
   Eigen::Matrix<double, 9, kParameters> columns;
   for (int p = 0; p < kParameters; ++p) {
     std::vector<FamilyStiffness> k(SquareLayer::kFamilyCount);
     if (p < 4) {
       k[p].normal = 1.0;
     } else {
-      for (FamilyStiffness& f : k) f.shear = 1.0;
+      k[2 * (p - 4)].shear = k[2 * (p - 4) + 1].shear = 1.0;  // axial, then diagonal pair
     }
     const Eigen::Matrix3d c = in_plane_block(affine_stiffness(cell, k));
     columns.col(p) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(c.data());
@@ -122,16 +134,6 @@ Eigen::Matrix3d nearest_achievable(const Eigen::Matrix3d& target, double lattice
     }
   }
   return Eigen::Map<const Eigen::Matrix3d>(best_fit.data());
-}
-
-std::string stiffness_text(const Eigen::Matrix3d& c) {
-  const double gpa = 1e-9;
-  std::string text = fmt::format("C11 = {:.4g}, C22 = {:.4g}, C12 = {:.4g}, C66 = {:.4g}",
-                                 c(0, 0) * gpa, c(1, 1) * gpa, c(0, 1) * gpa, c(2, 2) * gpa);
-  if (std::abs(c(0, 2)) + std::abs(c(1, 2)) > 1e-9 * c.norm()) {
-    text += fmt::format(", C16 = {:.4g}, C26 = {:.4g}", c(0, 2) * gpa, c(1, 2) * gpa);
-  }
-  return text + " GPa";
 }
 
 void check_ply(const Material& material, double ply_angle, double thickness) {
@@ -233,6 +235,32 @@ std::array<FamilyStiffness, 4> square_springs_eq33_as_printed(const Eigen::Matri
   return k;
 }
 
+std::optional<std::array<FamilyStiffness, 4>> square_springs_non_negative(const Eigen::Matrix3d& c,
+                                                                          double thickness) {
+  const std::array<FamilyStiffness, 4> eq33 = square_springs_eq33(c, thickness);
+  if (all_non_negative(eq33)) return eq33;
+  // The exact, non-relaxing family: k_sd = diagonal shear, k_sa = axial shear (each pair equal).
+  const double d = thickness;
+  const double c11 = c(0, 0) * d, c22 = c(1, 1) * d, c12 = c(0, 1) * d, c66 = c(2, 2) * d;
+  const double c16 = 0.5 * (c(0, 2) + c(1, 2)) * d;
+  const double lowest = std::max(0.0, std::abs(c16) - c12);
+  const double highest = std::min({c66 - c12, 0.5 * (c11 - c12), 0.5 * (c22 - c12)});
+  if (!(lowest <= highest)) return std::nullopt;
+  const double diagonal_shear = std::clamp(eq33[2].shear, lowest, highest);
+  const double diagonal_normal = c12 + diagonal_shear;  // (k_n+ + k_n-) / 2
+  std::array<FamilyStiffness, 4> k{};
+  k[0] = {c11 - c12 - 2 * diagonal_shear, 2 * (c66 - diagonal_normal), 0, 0};
+  k[1] = {c22 - c12 - 2 * diagonal_shear, k[0].shear, 0, 0};
+  k[2] = {diagonal_normal + c16, diagonal_shear, 0, 0};
+  k[3] = {diagonal_normal - c16, diagonal_shear, 0, 0};
+  // The bounds hold up to rounding; a spring that should be zero may come out at -1e-20.
+  for (FamilyStiffness& f : k) {
+    f.normal = std::max(f.normal, 0.0);
+    f.shear = std::max(f.shear, 0.0);
+  }
+  return k;
+}
+
 std::vector<StrategyOption> SquareStrategy::options() const {
   return {
       {"fibre_offset", fibre_offset_deg_,
@@ -277,17 +305,20 @@ Calibration SquareStrategy::calibrate(const Material& material, double ply_angle
   for (double offset : offsets) {
     const double lattice_angle = ply_angle - offset * kDegree;
     const Eigen::Matrix3d target_lattice = rotate_reduced_stiffness(target, -lattice_angle);
-    const std::array<FamilyStiffness, 4> start = square_springs_eq33(target_lattice, thickness);
-    if (!all_non_negative(start)) {
+    const std::optional<std::array<FamilyStiffness, 4>> start =
+        square_springs_non_negative(target_lattice, thickness);
+    if (!start) {
       reasons +=
-          fmt::format("{}with the fibre at {:g} deg from the lattice x axis: {}",
-                      reasons.empty() ? "" : "; ", offset, negative_springs(start, target_lattice));
+          fmt::format("{}with the fibre at {:g} deg from the lattice x axis {}",
+                      reasons.empty() ? "" : "; ", offset, violated_conditions(target_lattice));
       continue;
     }
+    // square_springs_non_negative returns eq. (33) itself whenever that is non-negative.
+    const bool is_eq33 = all_non_negative(square_springs_eq33(target_lattice, thickness));
     const UnitCell cell = SquareLayer(1.0, 0.0).unit_cell(thickness);
     RelaxedCalibration relaxed;
     try {
-      relaxed = calibrate_relaxed_layer(cell, target_lattice, with_rule(start, rule), rule);
+      relaxed = calibrate_relaxed_layer(cell, target_lattice, with_rule(*start, rule), rule);
     } catch (const Error& e) {
       throw Error(fmt::format("square: the relaxed calibration of {} failed: {}", ply, e.what()));
     }
@@ -308,7 +339,10 @@ Calibration SquareStrategy::calibrate(const Material& material, double ply_angle
     }
     Calibration cal;
     cal.method = fmt::format(
-        "square: corrected eq. (33), fibre at {:g} deg from the lattice, relaxed on the unit cell",
+        "square: {}, fibre at {:g} deg from the lattice, relaxed on the unit cell",
+        is_eq33 ? "corrected eq. (33)"
+                : "nearest exact springs to eq. (33) (which has a negative spring here), axial and "
+                  "diagonal k_s apart",
         offset);
     cal.lattice_angle = lattice_angle;
     cal.target = target;
@@ -324,18 +358,15 @@ Calibration SquareStrategy::calibrate(const Material& material, double ply_angle
   // Nothing representable: name why, and what the lattice can reach instead (fibre frame).
   const Eigen::Matrix3d q = reduced_stiffness(material);
   Eigen::Matrix3d nearest = Eigen::Matrix3d::Zero();
-  double distance = std::numeric_limits<double>::infinity();
   for (double offset : offsets) {
     const Eigen::Matrix3d c = nearest_achievable(q, -offset * kDegree, thickness);
-    if (relative_difference(c, q) < distance) {
-      distance = relative_difference(c, q);
+    if (offset == offsets.front() || relative_difference(c, q) < relative_difference(nearest, q)) {
       nearest = c;
     }
   }
-  throw Error(fmt::format(
-      "square cannot represent {} with non-negative springs: eq. (33) {}. The nearest stiffness a "
-      "square layer reaches (fibre frame) is {}, {:.3g}% from the ply's Q ({})",
-      ply, reasons, stiffness_text(nearest), 100 * distance, stiffness_text(q)));
+  throw Error(
+      fmt::format("square cannot represent {} with non-negative springs: {}. {} (fibre frame)", ply,
+                  reasons, describe_unreachable(nearest, q)));
 }
 
 Model SquareStrategy::build(const CouponSpec& coupon) const {
@@ -360,7 +391,7 @@ Calibration SquarePaperStrategy::calibrate(const Material& material, double ply_
   if (!all_non_negative(k)) {
     throw Error(fmt::format(
         "square-paper cannot build material '{}' at {:.4g} deg: eq. (33) as printed gives {}",
-        material.name, ply_angle / kDegree, negative_springs(k, cal.target)));
+        material.name, ply_angle / kDegree, negative_springs(k)));
   }
   const FamilyStiffnessRule rule = parallel_bond_rule(0.5);
   for (int f = 0; f < SquareLayer::kFamilyCount; ++f) {

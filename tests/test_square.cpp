@@ -4,6 +4,7 @@
 // angle, the coupon's bond graph and boundary completion, a static tension test against CLT, and
 // the refusal of a material no square layer can represent.
 #include <doctest/doctest.h>
+#include <fmt/format.h>
 
 #include <cmath>
 #include <numbers>
@@ -55,6 +56,11 @@ struct Clt {
 Clt clt_by_hand(const Eigen::Matrix3d& qbar) {
   const Eigen::Matrix3d a = qbar.inverse();
   return {1 / a(0, 0), 1 / a(1, 1), -a(0, 1) / a(0, 0), -a(0, 1) / a(1, 1)};
+}
+
+// 1 / Gxy = a66 of the compliance a = Q-bar^-1.
+double compliance_66(const Eigen::Matrix3d& qbar) {
+  return qbar.inverse()(2, 2);
 }
 
 std::vector<FamilyStiffness> families(const std::array<FamilyStiffness, 4>& k) {
@@ -111,6 +117,54 @@ TEST_CASE("ERRATA §2: the diagonal split reproduces the 45 deg ply on a lattice
   CHECK(relative_difference(in_plane_block(relaxed_stiffness(cell, families(k))), q45) < 1e-12);
   // A stiffness with C16 != C26 has no square lattice in this frame.
   CHECK_THROWS_AS(square_springs_eq33(qbar_by_hand(eglass(), 30 * kDeg), thickness), Error);
+}
+
+TEST_CASE("where eq. (33) needs a negative spring, the nearest exact non-negative springs") {
+  // E-glass with G12 = 30 GPa: eq. (33) gives k_ny = (C12 + 3 C22 - 4 C66) delta / 3 < 0. With the
+  // diagonal shear k_sd apart from the axial k_sa the exact family has k_ny = (C22 - C12) delta -
+  // 2 k_sd, so the k_sd nearest eq. (33)'s 2 (C66 - C12) delta / 3 is (C22 - C12) delta / 2.
+  Material m = eglass();
+  m.name = "stiff-shear";
+  m.G12 = 30e9;
+  const double thickness = 0.2e-3;
+  const Eigen::Matrix3d q = qbar_by_hand(m, 0.0);
+  REQUIRE(square_springs_eq33(q, thickness)[1].normal < 0);
+  const auto k = square_springs_non_negative(q, thickness);
+  REQUIRE(k.has_value());
+  for (const FamilyStiffness& f : *k) {
+    CHECK(f.normal >= 0);
+    CHECK(f.shear >= 0);
+  }
+  CHECK((*k)[2].shear == doctest::Approx((q(1, 1) - q(0, 1)) * thickness / 2));
+  CHECK(std::abs((*k)[1].normal) < 1e-9 * (*k)[0].normal);
+  CHECK((*k)[0].shear == (*k)[1].shear);
+  CHECK((*k)[2].shear == (*k)[3].shear);
+  const UnitCell cell = SquareLayer(0.05e-3, 0.0).unit_cell(thickness);
+  CHECK(relative_difference(affine_sum(cell, *k), q) < 1e-12);
+  CHECK(relative_difference(in_plane_block(relaxed_stiffness(cell, families(*k))), q) < 1e-12);
+  // Where eq. (33) is non-negative it is returned unchanged.
+  const Eigen::Matrix3d eglass_q = qbar_by_hand(eglass(), 0.0);
+  const auto same = square_springs_non_negative(eglass_q, thickness);
+  const auto eq33 = square_springs_eq33(eglass_q, thickness);
+  for (int f = 0; f < 4; ++f) {
+    CHECK((*same)[f].normal == eq33[f].normal);
+    CHECK((*same)[f].shear == eq33[f].shear);
+  }
+  // C66 < C12: no member of the family (and no relaxed lattice) reaches it.
+  Material soft = eglass();
+  soft.G12 = 3e9;
+  CHECK_FALSE(square_springs_non_negative(qbar_by_hand(soft, 0.0), thickness).has_value());
+  // The strategy reaches the stiff-shear ply at every angle.
+  const auto strategy = default_registry().create("square");
+  for (int deg = 0; deg <= 90; deg += 15) {
+    CAPTURE(deg);
+    const Calibration cal = strategy->calibrate(m, deg * kDeg, thickness);
+    CHECK(relative_difference(cal.relaxed, qbar_by_hand(m, deg * kDeg)) < 1e-8);
+    for (const auto& f : cal.families) {
+      CHECK(f.stiffness.normal >= 0);
+      CHECK(f.stiffness.shear >= 0);
+    }
+  }
 }
 
 TEST_CASE("eq. (33) as printed drops C16: the paper's 17.66 GPa for the 45 deg ply, not 16.461") {
@@ -291,6 +345,7 @@ TEST_CASE("static tension of a 4 x 1 mm square coupon: Ex within 2%, nu_xy withi
     CHECK(std::abs(r.dem.Ey / clt.Ey - 1) < 0.02);
     CHECK(std::abs(r.dem.nu_xy - clt.nu_xy) < 0.015);
     CHECK(std::abs(r.dem.nu_yx - clt.nu_yx) < 0.015);
+    CHECK(std::abs(r.dem.Gxy * compliance_66(qbar) - 1) < 0.01);  // specimen stiffness solves
     // Free grips let the off-axis ply shear: gamma_xy / eps_x = a16 / a11.
     const Eigen::Matrix3d a = qbar.inverse();
     CHECK(std::abs(r.along_x.shear_coupling - a(0, 2) / a(0, 0)) < 0.01);
@@ -317,7 +372,11 @@ TEST_CASE(
                        Error);
   CHECK_THROWS_WITH_AS(strategy->calibrate(m, 30 * kDeg, 0.2e-3), doctest::Contains("C66 >= C12"),
                        Error);
-  CHECK_THROWS_WITH_AS(strategy->calibrate(m, 30 * kDeg, 0.2e-3), doctest::Contains("nearest"),
+  // The nearest: k_s = 0, C12 = C66 = (2 C12 + C66) / 3 (Frobenius, C12 counted twice).
+  const Eigen::Matrix3d q = qbar_by_hand(m, 0.0);
+  const double nearest_gpa = (2 * q(0, 1) + q(2, 2)) / 3 * 1e-9;
+  CHECK_THROWS_WITH_AS(strategy->calibrate(m, 30 * kDeg, 0.2e-3),
+                       doctest::Contains(fmt::format("C66 = {:.4g} GPa", nearest_gpa).c_str()),
                        Error);
   CHECK_THROWS_AS(default_registry().create("square-paper")->calibrate(m, 0.0, 0.2e-3), Error);
 }
