@@ -6,6 +6,7 @@
 /// corrected closed form, which is exact for the affine lattice sum).
 
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "core/homogenizer.hpp"
@@ -30,5 +31,18 @@ RelaxedCalibration calibrate_relaxed_layer(const UnitCell& cell, const Eigen::Ma
                                            const std::vector<FamilyStiffness>& start,
                                            const FamilyStiffnessRule& rule,
                                            double tolerance = 1e-13, int max_iterations = 50);
+
+/// The nearest stiffness a layer cell can reach with non-negative springs: projected Gauss-Newton
+/// (least squares on the 6 independent in-plane entries, relative to |target|) over k_n, k_s >= 0,
+/// from `start` clipped to non-negative values. For refusing an unreachable target with the
+/// stiffness that can be had instead.
+RelaxedCalibration nearest_non_negative_layer(const UnitCell& cell, const Eigen::Matrix3d& target,
+                                              const std::vector<FamilyStiffness>& start,
+                                              const FamilyStiffnessRule& rule,
+                                              int max_iterations = 100);
+
+/// "C66 = 1.23 GPa (target 4.56)" for the entry of `reached` furthest from `target` (relative to
+/// |target|), then all six entries side by side, in GPa: the words of an unreachable-target error.
+std::string describe_unreachable(const Eigen::Matrix3d& reached, const Eigen::Matrix3d& target);
 
 }  // namespace plydem

@@ -29,9 +29,9 @@ void Strategy::set_option(const std::string& name, double value) {
   for (const StrategyOption& option : options()) {
     known += known.empty() ? option.name : fmt::format(", {}", option.name);
   }
-  throw Error(fmt::format("this strategy has no option '{}' (value {}); {}", name, value,
-                          known.empty() ? std::string("it takes no options")
-                                        : fmt::format("its options: {}", known)));
+  throw Error(fmt::format(
+      "this strategy has no option '{}' (value {}); {}", name, value,
+      known.empty() ? std::string("it takes no options") : fmt::format("its options: {}", known)));
 }
 
 }  // namespace plydem

@@ -4,6 +4,7 @@
 //   plydem                                   # the paper's 0 deg E-glass/MY750 lamina, Hex2D
 //   plydem tension --strategy hex2d --angle 30 --json
 //   plydem tension --material my_ply.toml --angle 0 --grips clamped
+//   plydem calibrate --strategy hex2d --angle 30 --json
 //   plydem strategies                        # registered strategies
 //   plydem materials                         # built-in materials
 #include <fmt/format.h>
@@ -40,19 +41,28 @@ struct TensionOptions {
   double safety = 0.8;
   double grip_velocity_mm_s = 0;
   std::string grips = "free";
-  std::string solver = "explicit";
+  std::string solver = "static";
+  std::vector<std::string> strategy_options;
   bool json = false;
   bool raw_edges = false;
 };
 
-void add_tension_options(CLI::App& app, TensionOptions& o) {
+// Options every command that builds a ply takes: strategy, its options, material, angle.
+void add_ply_options(CLI::App& app, TensionOptions& o) {
   app.add_option("--strategy", o.strategy, "packing strategy (see `plydem strategies`)")
       ->capture_default_str();
+  app.add_option("--strategy-option", o.strategy_options,
+                 "a strategy's own parameter, NAME=VALUE (repeatable; `plydem strategies` lists "
+                 "them)");
   app.add_option("--material", o.material,
                  "built-in material name or a TOML file with name, E1, E2, G12, nu12, nu23 (Pa)")
       ->capture_default_str();
   app.add_option("--angle", o.angle_deg, "ply (fibre) angle from the loading axis x [deg]")
       ->capture_default_str();
+}
+
+void add_tension_options(CLI::App& app, TensionOptions& o) {
+  add_ply_options(app, o);
   app.add_option("--length-mm", o.length_mm, "coupon length along x [mm]")->capture_default_str();
   app.add_option("--width-mm", o.width_mm, "coupon width along y [mm]")->capture_default_str();
   app.add_option("--thickness-mm", o.thickness_mm, "ply thickness delta [mm]")
@@ -87,7 +97,7 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
       ->check(CLI::IsMember({"free", "clamped"}))
       ->capture_default_str();
   app.add_option("--solver", o.solver,
-                 "explicit (damped dynamics to quasi-static) or static (one sparse linear solve)")
+                 "static (one sparse linear solve) or explicit (damped dynamics to quasi-static)")
       ->check(CLI::IsMember({"explicit", "static"}))
       ->capture_default_str();
   app.add_flag("--raw-edges", o.raw_edges,
@@ -95,10 +105,44 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
   app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
 }
 
+// "NAME=VALUE" -> (NAME, VALUE); a malformed entry is an error naming it.
+std::vector<std::pair<std::string, double>> parse_strategy_options(
+    const std::vector<std::string>& entries) {
+  std::vector<std::pair<std::string, double>> result;
+  for (const std::string& entry : entries) {
+    const auto eq = entry.find('=');
+    plydem::require(eq != std::string::npos && eq > 0 && eq + 1 < entry.size(),
+                    fmt::format("--strategy-option '{}' is not NAME=VALUE", entry));
+    const std::string value = entry.substr(eq + 1);
+    std::size_t used = 0;
+    double number = 0;
+    try {
+      number = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    plydem::require(
+        used == value.size() && std::isfinite(number),
+        fmt::format("--strategy-option '{}': '{}' is not a finite number", entry, value));
+    result.emplace_back(entry.substr(0, eq), number);
+  }
+  return result;
+}
+
+// The strategy named by the options, with its options set (unknown names fail here).
+std::unique_ptr<plydem::Strategy> make_strategy(const TensionOptions& o) {
+  std::unique_ptr<plydem::Strategy> strategy = plydem::default_registry().create(o.strategy);
+  for (const auto& [name, value] : parse_strategy_options(o.strategy_options)) {
+    strategy->set_option(name, value);
+  }
+  return strategy;
+}
+
 plydem::TensionSettings to_settings(const TensionOptions& o) {
   constexpr double mm = 1e-3;
   plydem::TensionSettings s;
   s.strategy = o.strategy;
+  s.strategy_options = parse_strategy_options(o.strategy_options);
   plydem::require(std::isfinite(o.angle_deg), "--angle is not a finite number");
   s.coupon.material = plydem::load_material(o.material);
   s.coupon.ply_angle = o.angle_deg * std::numbers::pi / 180.0;
@@ -121,8 +165,7 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
   s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
   s.explicit_settings.local_damping = o.damping;
   s.explicit_settings.safety_factor = o.safety;
-  // Unknown strategies fail here, before any work.
-  plydem::default_registry().create(s.strategy);
+  make_strategy(o);  // unknown strategies and options fail here, before any work
   return s;
 }
 
@@ -130,13 +173,37 @@ int run_tension(const TensionOptions& o) {
   const plydem::TensionSettings settings = to_settings(o);
   plydem::TensionTest test(settings);
   test.on_progress([](const plydem::TensionProgress& p) {
-    spdlog::info("{}: {} cycles, unbalanced-force ratio {:.3g}", p.phase, p.cycles, p.ratio);
+    const std::string left =
+        p.seconds_left >= 0 ? fmt::format(", about {:.0f} s left", p.seconds_left) : "";
+    spdlog::info("{}: {} cycles, unbalanced-force ratio {:.3g}, {:.0f} s{}", p.phase, p.cycles,
+                 p.ratio, p.elapsed_seconds, left);
   });
   const plydem::TensionResult result = test.run();
   if (o.json) {
     std::cout << plydem::tension_json(result, settings).dump(2) << "\n";
   } else {
     std::cout << plydem::format_tension_table(result, settings);
+  }
+  return 0;
+}
+
+int run_calibrate(const TensionOptions& o, bool json) {
+  plydem::require(std::isfinite(o.angle_deg), "--angle is not a finite number");
+  const plydem::Material material = plydem::load_material(o.material);
+  const double angle = o.angle_deg * std::numbers::pi / 180.0;
+  const std::unique_ptr<plydem::Strategy> strategy = make_strategy(o);
+  const plydem::Calibration calibration =
+      strategy->calibrate(material, angle, o.thickness_mm * 1e-3);
+  if (json) {
+    nlohmann::json j = plydem::calibration_json(calibration);
+    j["strategy"] = o.strategy;
+    j["material"] = material.name;
+    j["angle_deg"] = o.angle_deg;
+    j["thickness"] = o.thickness_mm * 1e-3;
+    j["units"] = "SI (N/m, N m/rad, Pa)";
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::cout << plydem::format_calibration(calibration, o.strategy, material, angle);
   }
   return 0;
 }
@@ -158,6 +225,16 @@ int main(int argc, char** argv) {
   CLI::App* tension = app.add_subcommand(
       "tension", "virtual uniaxial tension test of one ply: Ex, Ey, nu_xy, nu_yx beside CLT");
   add_tension_options(*tension, tension_options);
+  TensionOptions calibrate_options;
+  bool calibrate_json = false;
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate",
+      "bond stiffness of each family, lattice orientation, and the stiffness the model has as "
+      "simulated beside the target");
+  add_ply_options(*calibrate, calibrate_options);
+  calibrate->add_option("--thickness-mm", calibrate_options.thickness_mm, "ply thickness [mm]")
+      ->capture_default_str();
+  calibrate->add_flag("--json", calibrate_json, "print one JSON object (SI units)");
   CLI::App* strategies = app.add_subcommand("strategies", "list the registered strategies");
   CLI::App* materials = app.add_subcommand("materials", "list the built-in materials");
 
@@ -170,7 +247,11 @@ int main(int argc, char** argv) {
     if (*strategies) {
       const plydem::Registry& registry = plydem::default_registry();
       for (const std::string& name : registry.names()) {
-        std::cout << fmt::format("{:<10} {}\n", name, registry.description(name));
+        std::cout << fmt::format("{:<14} {}\n", name, registry.description(name));
+        for (const plydem::StrategyOption& option : registry.create(name)->options()) {
+          std::cout << fmt::format("{:<14}   --strategy-option {}={:g}: {}\n", "", option.name,
+                                   option.value, option.description);
+        }
       }
       return 0;
     }
@@ -184,6 +265,7 @@ int main(int argc, char** argv) {
       }
       return 0;
     }
+    if (*calibrate) return run_calibrate(calibrate_options, calibrate_json);
     return run_tension(*tension ? tension_options : defaults);
   } catch (const plydem::Error& e) {
     std::cerr << "plydem: error: " << e.what() << "\n";

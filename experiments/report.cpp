@@ -15,11 +15,14 @@ const char* grips_name(GripCondition g) {
 }
 
 nlohmann::json constants_json(const InPlaneConstants& c) {
-  return {{"Ex", c.Ex},
-          {"Ey", c.Ey},
-          {"nu_xy", c.nu_xy},
-          {"nu_yx", c.nu_yx},
-          {"shear_coupling_x", c.shear_coupling_x}};
+  return {{"Ex", c.Ex},       {"Ey", c.Ey},   {"nu_xy", c.nu_xy},
+          {"nu_yx", c.nu_yx}, {"Gxy", c.Gxy}, {"shear_coupling_x", c.shear_coupling_x}};
+}
+
+nlohmann::json matrix_json(const Eigen::Matrix3d& m) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
+  return rows;
 }
 
 nlohmann::json pull_json(const PullResult& r) {
@@ -34,6 +37,7 @@ nlohmann::json pull_json(const PullResult& r) {
           {"final_unbalanced_ratio", r.final_ratio},
           {"time_step", r.time_step},
           {"grip_velocity", r.grip_velocity},
+          {"loading_transits", r.loading_transits},
           {"cross_section", r.cross_section},
           {"wall_seconds", r.wall_seconds},
           {"strain", r.strain},
@@ -73,6 +77,12 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
                        fmt::format("{:.{}f}{}", row.clt * row.scale, digits, unit),
                        100.0 * (row.dem - row.clt) / row.clt);
   }
+  if (r.specimen.volume > 0) {
+    out += fmt::format("{:<14} {:>12} {:>12} {:>+9.3f}%\n", zero ? "G12 (Gxy)" : "Gxy",
+                       fmt::format("{:.3f} GPa", r.dem.Gxy * 1e-9),
+                       fmt::format("{:.3f} GPa", r.theory.Gxy * 1e-9),
+                       100.0 * (r.dem.Gxy - r.theory.Gxy) / r.theory.Gxy);
+  }
   out += fmt::format("{:<14} {:>12.4f} {:>12.4f}\n", "g_xy/e_x", r.dem.shear_coupling_x,
                      r.theory.shear_coupling_x);
   out += fmt::format("\nreciprocity nu_yx*Ex / (nu_xy*Ey) = {:.5f}\n",
@@ -87,6 +97,12 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
                        pull->ply_angle / kDegree, pull->particles, pull->bonds, run,
                        pull->wall_seconds);
   }
+  if (r.specimen.volume > 0) {
+    out += fmt::format(
+        "Gxy: membrane stiffness of the {:g} deg coupon under affine boundary displacements "
+        "({} frame particles, 3 static solves, {:.2f} s)\n",
+        r.ply_angle / kDegree, r.specimen.frame_particles, r.specimen.wall_seconds);
+  }
   out += fmt::format("calibration: {}; relaxed stiffness vs target: {:.2e} relative\n",
                      r.calibration.method, r.calibration.relaxed_error);
   out += fmt::format("wall time {:.2f} s\n", r.wall_seconds);
@@ -94,13 +110,6 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
 }
 
 nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
-  nlohmann::json families = nlohmann::json::array();
-  for (const FamilyCalibration& f : r.calibration.families) {
-    families.push_back({{"family", f.label},
-                        {"direction_deg", f.direction / kDegree},
-                        {"normal_stiffness", f.stiffness.normal},
-                        {"shear_stiffness", f.stiffness.shear}});
-  }
   nlohmann::json j = constants_json(r.dem);
   j["theory"] = constants_json(r.theory);
   j["particles"] = r.along_x.particles;
@@ -114,11 +123,71 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
   j["units"] = "SI (Pa, m, s)";
   j["loading_x"] = pull_json(r.along_x);
   j["loading_y"] = pull_json(r.along_y);
-  j["calibration"] = {{"method", r.calibration.method},
-                      {"lattice_angle_deg", r.calibration.lattice_angle / kDegree},
-                      {"families", families},
-                      {"relaxed_relative_error", r.calibration.relaxed_error}};
+  if (r.specimen.volume > 0) {
+    j["specimen_stiffness"] = {
+        {"method", "affine boundary displacements, static solves (experiments/stiffness_test.hpp)"},
+        {"stiffness", matrix_json(r.specimen.stiffness)},
+        {"constants", constants_json(r.specimen.constants)},
+        {"frame_particles", r.specimen.frame_particles},
+        {"wall_seconds", r.specimen.wall_seconds}};
+  }
+  j["calibration"] = calibration_json(r.calibration);
   return j;
+}
+
+nlohmann::json calibration_json(const Calibration& c) {
+  nlohmann::json families = nlohmann::json::array();
+  for (const FamilyCalibration& f : c.families) {
+    families.push_back({{"family", f.label},
+                        {"direction_deg", f.direction / kDegree},
+                        {"normal_stiffness", f.stiffness.normal},
+                        {"shear_stiffness", f.stiffness.shear},
+                        {"bending_stiffness", f.stiffness.bending},
+                        {"twisting_stiffness", f.stiffness.twisting}});
+  }
+  return {{"method", c.method},
+          {"lattice_angle_deg", c.lattice_angle / kDegree},
+          {"families", families},
+          {"target", matrix_json(c.target)},
+          {"affine", matrix_json(c.affine)},
+          {"relaxed", matrix_json(c.relaxed)},
+          {"relaxed_relative_error", c.relaxed_error}};
+}
+
+std::string format_calibration(const Calibration& c, const std::string& strategy,
+                               const Material& material, double ply_angle) {
+  std::string out = fmt::format(
+      "plydem calibration: strategy {}, material {}, ply angle {:g} deg\n{}\nlattice "
+      "orientation: {:g} deg from x\n\n",
+      strategy, material.name, ply_angle / kDegree, c.method, c.lattice_angle / kDegree);
+  out += fmt::format("{:<24} {:>9} {:>13} {:>13} {:>13} {:>13}\n", "bond family", "dir [deg]",
+                     "k_n [N/m]", "k_s [N/m]", "k_b [N m]", "k_t [N m]");
+  for (const FamilyCalibration& f : c.families) {
+    out += fmt::format("{:<24} {:>9.2f} {:>13.6g} {:>13.6g} {:>13.6g} {:>13.6g}\n", f.label,
+                       f.direction / kDegree, f.stiffness.normal, f.stiffness.shear,
+                       f.stiffness.bending, f.stiffness.twisting);
+  }
+  out +=
+      "\nplane-stress stiffness (xx, yy, xy) [GPa]: target Q-bar | relaxed (as simulated) | "
+      "affine (eq. 5)\n";
+  for (int r = 0; r < 3; ++r) {
+    std::string line;
+    for (const Eigen::Matrix3d* m : {&c.target, &c.relaxed, &c.affine}) {
+      line += fmt::format("{:9.4f} {:9.4f} {:9.4f}   ", (*m)(r, 0) * 1e-9, (*m)(r, 1) * 1e-9,
+                          (*m)(r, 2) * 1e-9);
+    }
+    out += line + "\n";
+  }
+  out += fmt::format("relaxed vs target: {:.3e} relative (Frobenius)\n", c.relaxed_error);
+  if (is_positive_definite(c.relaxed)) {
+    const InPlaneConstants t = in_plane_constants(c.target), m = in_plane_constants(c.relaxed);
+    out += fmt::format(
+        "as simulated: Ex {:.4f} Ey {:.4f} Gxy {:.4f} GPa, nu_xy {:.4f} (target {:.4f} {:.4f} "
+        "{:.4f} GPa, {:.4f})\n",
+        m.Ex * 1e-9, m.Ey * 1e-9, m.Gxy * 1e-9, m.nu_xy, t.Ex * 1e-9, t.Ey * 1e-9, t.Gxy * 1e-9,
+        t.nu_xy);
+  }
+  return out;
 }
 
 }  // namespace plydem

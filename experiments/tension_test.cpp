@@ -1,6 +1,7 @@
 #include "experiments/tension_test.hpp"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <chrono>
 #include <cmath>
@@ -59,6 +60,7 @@ void TensionTest::on_progress(std::function<void(const TensionProgress&)> callba
 TensionResult TensionTest::run() const {
   const auto start = Clock::now();
   const std::unique_ptr<Strategy> strategy = default_registry().create(settings_.strategy);
+  for (const auto& [name, value] : settings_.strategy_options) strategy->set_option(name, value);
   TensionResult result;
   result.strategy = settings_.strategy;
   result.material = settings_.coupon.material;
@@ -74,6 +76,10 @@ TensionResult TensionTest::run() const {
   result.dem.shear_coupling_x = result.along_x.shear_coupling;
   result.dem.Ey = result.along_y.modulus;
   result.dem.nu_yx = result.along_y.poisson;
+  if (settings_.measure_specimen_stiffness) {
+    result.specimen = measure_specimen_stiffness(strategy->build(settings_.coupon));
+    result.dem.Gxy = result.specimen.constants.Gxy;
+  }
   result.wall_seconds = seconds_since(start);
   return result;
 }
@@ -160,12 +166,53 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   result.time_step = dt;
   result.cross_section = area;
   const double total_grip_travel = 0.5 * s.target_strain * span;
+  // Progress every two seconds, with an estimate of the time left: `planned` cycles are known
+  // (loading), relaxation is extrapolated from the ratio's decay since the last report.
   auto last_report = Clock::now();
-  auto report = [&](const char* phase, const CycleReport& cycle) {
-    if (progress_ && seconds_since(last_report) > 2.0) {
-      progress_({phase, integrator->cycles(), cycle.unbalanced_force_ratio});
-      last_report = Clock::now();
+  long last_cycles = 0;
+  double last_ratio = 0;
+  long cycles_per_finished_stage = 0;
+  int stages_left = 0;
+  auto report = [&](const char* phase, const CycleReport& cycle, long planned_left) {
+    if (!progress_ || seconds_since(last_report) <= 2.0) return;
+    const long cycles = integrator->cycles();
+    const double ratio = cycle.unbalanced_force_ratio;
+    const double per_cycle = seconds_since(start) / std::max(1L, cycles);
+    double left = planned_left;  // in cycles; < 0 = unknown
+    if (planned_left < 0 && last_cycles > 0 && ratio < last_ratio && ratio > s.tolerance) {
+      const double decay = std::log(last_ratio / ratio) / static_cast<double>(cycles - last_cycles);
+      left = std::log(ratio / s.tolerance) / decay;
     }
+    if (left >= 0 && stages_left > 0) {
+      // Later stages cost what the last finished one did (the first: what this one will).
+      const double per_stage = cycles_per_finished_stage > 0
+                                   ? static_cast<double>(cycles_per_finished_stage)
+                                   : static_cast<double>(cycles) + left;
+      left += static_cast<double>(stages_left) * per_stage;
+    }
+    progress_({phase, cycles, ratio, seconds_since(start), left >= 0 ? left * per_cycle : -1.0});
+    last_report = Clock::now();
+    last_cycles = cycles;
+    last_ratio = ratio;
+  };
+  // How fast the grips move compared with the coupon's longitudinal wave (theory modulus along x).
+  auto loading_transits = [&](double loading_time) {
+    const double modulus =
+        in_plane_constants(rotate_reduced_stiffness(reduced_stiffness(spec.material), ply_angle))
+            .Ex;
+    const double transit = span / std::sqrt(modulus / spec.material.density);
+    const double transits = loading_time / transit;
+    // Staged runs relax to quasi-static after each stage, so only a grip faster than the wave
+    // itself (a shock) matters there; fixed-cycle runs measure while loading.
+    if (transits < (s.fixed_cycles > 0 ? kQuasiStaticTransits : 1.0)) {
+      spdlog::warn(
+          "the grips reach their travel in {:.3g} wave transits of the coupon (< {:g}): the "
+          "loading is too fast to be quasi-static{}; use more --ramp-cycles / --cycles or a lower "
+          "--grip-velocity-mm-s",
+          transits, s.fixed_cycles > 0 ? kQuasiStaticTransits : 1.0,
+          s.fixed_cycles > 0 ? ", and the fixed-cycle mode does not relax afterwards" : "");
+    }
+    return transits;
   };
 
   // Each stage point goes straight into the result; staged and static runs start from the
@@ -204,12 +251,13 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
                          ? s.grip_velocity
                          : total_grip_travel / (static_cast<double>(s.fixed_cycles) * dt);
     result.grip_velocity = v;
+    result.loading_transits = loading_transits(total_grip_travel / v);
     grips_moving(v);
     const long every = std::max(1L, s.fixed_cycles / 100);
     CycleReport cycle;
     for (long c = 1; c <= s.fixed_cycles; ++c) {
       cycle = integrator->cycle();
-      report("loading", cycle);
+      report("loading", cycle, s.fixed_cycles - c);
       // Forces in p.force belong to the state before this cycle's update: sample both together.
       if (c % every == 0 && c > s.fixed_cycles / 2) {
         Particles before = p;
@@ -218,15 +266,29 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
       }
     }
     result.final_ratio = cycle.unbalanced_force_ratio;
+    if (result.final_ratio > s.tolerance) {
+      spdlog::warn(
+          "after {} fixed cycles the coupon at {:.4g} deg is not quasi-static (unbalanced-force "
+          "ratio {:.3g} > tolerance {:.3g}): its modulus includes inertia and damping forces",
+          s.fixed_cycles, ply_angle * 180 / std::numbers::pi, result.final_ratio, s.tolerance);
+    }
   } else {
     const double stage_travel = total_grip_travel / s.load_stages;
     const double v = s.grip_velocity > 0 ? s.grip_velocity
                                          : stage_travel / (static_cast<double>(s.ramp_cycles) * dt);
     result.grip_velocity = v;
+    result.loading_transits = loading_transits(stage_travel / v);
     const long ramp = std::max(1L, std::lround(stage_travel / (v * dt)));
     for (int stage = 1; stage <= s.load_stages; ++stage) {
+      const long stage_start = integrator->cycles();
+      stages_left = s.load_stages - stage;
       grips_moving(v);
-      for (long c = 0; c < ramp; ++c) report("loading", integrator->cycle());
+      for (long c = 0; c < ramp; ++c) {
+        const CycleReport cycle = integrator->cycle();
+        const long done = integrator->cycles() - stage_start;
+        report("loading", cycle,
+               cycles_per_finished_stage > 0 ? std::max(0L, cycles_per_finished_stage - done) : -1);
+      }
       grips_moving(0.0);
       CycleReport cycle = integrator->cycle();
       while (cycle.unbalanced_force_ratio > s.tolerance) {
@@ -239,8 +301,9 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
               s.max_cycles, cycle.unbalanced_force_ratio, s.tolerance));
         }
         cycle = integrator->cycle();
-        report("relaxing", cycle);
+        report("relaxing", cycle, -1);
       }
+      cycles_per_finished_stage = integrator->cycles() - stage_start;
       result.final_ratio = cycle.unbalanced_force_ratio;
       compute_bond_forces(p, model.bonds);
       record(sample(p));

@@ -21,11 +21,13 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/elasticity.hpp"
 #include "core/explicit_integrator.hpp"
 #include "core/strategy.hpp"
+#include "experiments/stiffness_test.hpp"
 
 namespace plydem {
 
@@ -36,6 +38,8 @@ enum class TensionSolver { kExplicit, kStatic };
 
 struct TensionSettings {
   std::string strategy = "hex2d";
+  /// Strategy options (Strategy::set_option), applied in order before calibration.
+  std::vector<std::pair<std::string, double>> strategy_options;
   CouponSpec coupon;            ///< material, ply angle and the coupon's size
   double grip_length = 0;       ///< [m]; 0 = two particle diameters
   double gauge_fraction = 0.5;  ///< central fraction of the length used as gauge section
@@ -49,7 +53,12 @@ struct TensionSettings {
   long max_cycles = 5'000'000;  ///< per coupon; exceeding it is an error
   long fixed_cycles = 0;        ///< > 0: the paper's fixed-cycle mode
   GripCondition grips = GripCondition::kFree;
-  TensionSolver solver = TensionSolver::kExplicit;
+  /// Static by default: elasticity is linear, and one sparse solve gives the state an explicit run
+  /// converges to.
+  TensionSolver solver = TensionSolver::kStatic;
+  /// Also measure the specimen's membrane stiffness (and Gxy) with affine boundary displacements
+  /// (experiments/stiffness_test.hpp): three more static solves on the ply's coupon.
+  bool measure_specimen_stiffness = true;
   ExplicitSettings explicit_settings;
 
   /// Throws plydem::Error naming the first bad setting.
@@ -70,16 +79,28 @@ struct PullResult {
   double time_step = 0;      ///< [s]
   double grip_velocity = 0;  ///< [m/s] per grip
   double cross_section = 0;  ///< [m^2]
+  /// Explicit runs: the loading time of one stage (or of the fixed-cycle run) in units of the time
+  /// a longitudinal wave takes to cross the coupon; 0 for static solves. A fixed-cycle run below
+  /// kQuasiStaticTransits, or a staged run below 1 (a shock), logs a warning that the grips move
+  /// too fast for the coupon to follow quasi-statically.
+  double loading_transits = 0;
   double wall_seconds = 0;
 };
+
+/// A fixed-cycle loading slower than this many wave transits counts as quasi-static.
+inline constexpr double kQuasiStaticTransits = 10.0;
 
 struct TensionResult {
   std::string strategy;
   Material material;
-  double ply_angle = 0;     ///< [rad]
-  InPlaneConstants dem;     ///< Ex, Ey, nu_xy, nu_yx (Gxy not measured here)
+  double ply_angle = 0;  ///< [rad]
+  /// Ex, Ey, nu_xy, nu_yx from the two pulls; Gxy from the specimen stiffness (if measured).
+  InPlaneConstants dem;
   InPlaneConstants theory;  ///< CLT of the ply (Q-bar)
   PullResult along_x, along_y;
+  /// The ply coupon's membrane stiffness under affine boundary displacements (empty if not
+  /// measured: stiffness all zero).
+  SpecimenStiffness specimen;
   Calibration calibration;
   double wall_seconds = 0;
 };
@@ -89,13 +110,18 @@ struct TensionProgress {
   std::string phase;
   long cycles = 0;
   double ratio = 0;
+  double elapsed_seconds = 0;  ///< on this coupon
+  /// Estimated seconds left on this coupon: exact cycle counts while loading, the observed
+  /// exponential decay of the ratio towards the tolerance while relaxing; negative when unknown.
+  double seconds_left = -1;
 };
 
 class TensionTest {
  public:
   explicit TensionTest(TensionSettings settings);
   void on_progress(std::function<void(const TensionProgress&)> callback);
-  /// Both loadings; the strategy is taken from the default registry.
+  /// Both loadings; the strategy is taken from the default registry and given the settings'
+  /// strategy options.
   TensionResult run() const;
   /// One coupon of the ply at `ply_angle`, pulled along x by `strategy`.
   PullResult pull(const Strategy& strategy, double ply_angle) const;

@@ -46,6 +46,16 @@ std::array<FamilyStiffness, 3> hexagonal_springs_eq27(const Eigen::Matrix3d& c, 
   return k;
 }
 
+std::array<FamilyStiffness, 3> hexagonal_springs_eq27_as_printed(const Eigen::Matrix3d& c,
+                                                                 double thickness) {
+  std::array<FamilyStiffness, 3> k = hexagonal_springs_eq27(c, thickness);
+  const double s3 = std::sqrt(3.0);
+  const double c16_26 = s3 * (c(0, 2) + c(1, 2));
+  k[1].normal = s3 / 3.0 * (c(0, 0) + c(1, 1) + c16_26) * thickness;
+  k[2].normal = s3 / 3.0 * (c(0, 0) + c(1, 1) - c16_26) * thickness;
+  return k;
+}
+
 std::string Hex2dStrategy::description() const {
   return "extended 2D hexagonal layer (paper Sec. 3.3): 6 neighbours, family 1 along the fibre, "
          "corrected eq. (27) then relaxed calibration";
@@ -77,22 +87,29 @@ Calibration Hex2dStrategy::calibrate(const Material& material, double ply_angle,
       "{:.4g}, "
       "C22 = {:.4g}, C12 = {:.4g} GPa",
       target_lattice(2, 2) * 1e-9, target_lattice(1, 1) * 1e-9, target_lattice(0, 1) * 1e-9);
+  // Unreachable targets (negative springs, an unstable cell) are refused with the nearest
+  // stiffness non-negative springs can give.
+  auto refuse = [&](const std::string& why) {
+    const RelaxedCalibration nearest =
+        nearest_non_negative_layer(cell, target_lattice, start_families, rule);
+    return Error(
+        fmt::format("hex2d cannot represent {} with a stable lattice ({}): {} (fibre frame); {}",
+                    ply, why, describe_unreachable(nearest.relaxed, target_lattice), limits));
+  };
   RelaxedCalibration relaxed;
   try {
     relaxed = calibrate_relaxed_layer(cell, target_lattice, start_families, rule);
   } catch (const Error& e) {
-    throw Error(fmt::format("hex2d cannot represent {} with a stable lattice ({}); {}", ply,
-                            e.what(), limits));
+    throw refuse(e.what());
   }
 
   const char* names[3] = {"1 (0 deg, fibre)", "2 (+60 deg)", "3 (+120 deg)"};
   for (int f = 0; f < 3; ++f) {
     const FamilyStiffness& k = relaxed.families[f];
-    require(
-        k.normal > 0 && k.shear >= 0,
-        fmt::format("hex2d cannot represent {} with a stable lattice: bond family {} would need "
-                    "k_n = {:.4g} N/m, k_s = {:.4g} N/m (negative stiffness); {}",
-                    ply, names[f], k.normal, k.shear, limits));
+    if (!(k.normal > 0 && k.shear >= 0)) {
+      throw refuse(fmt::format("bond family {} would need k_n = {:.4g} N/m, k_s = {:.4g} N/m",
+                               names[f], k.normal, k.shear));
+    }
     cal.families.push_back({names[f], cal.lattice_angle + f * std::numbers::pi / 3.0, k});
   }
   require(
@@ -154,9 +171,69 @@ Model Hex2dStrategy::build(const CouponSpec& coupon) const {
   return model;
 }
 
+std::string Hex2dPaperStrategy::description() const {
+  return "hex2d as the paper prints it: lattice along x, eq. (27) as printed (C11 + C22), no "
+         "relaxation; for comparison, not for use";
+}
+
+Calibration Hex2dPaperStrategy::calibrate(const Material& material, double ply_angle,
+                                          double thickness) const {
+  validate(material);
+  require(std::isfinite(ply_angle), "ply angle is not finite");
+  require(std::isfinite(thickness) && thickness > 0,
+          fmt::format("ply thickness must be positive, got {} m", thickness));
+  Calibration cal;
+  cal.method = "hex2d-paper: eq. (27) as printed, particles assumed not to spin";
+  cal.target = rotate_reduced_stiffness(reduced_stiffness(material), ply_angle);
+  const UnitCell cell = HexagonalLayer(1.0, 0.0).unit_cell(thickness);
+  const FamilyStiffnessRule rule = parallel_bond_rule(0.5);
+  // The paper's lattice has family 1 along x; for the 90 deg ply it swaps x and y (Sec. 3.3),
+  // which turns the lattice by 90 deg.
+  std::string refused;
+  for (const double lattice_angle : {0.0, std::numbers::pi / 2}) {
+    const Eigen::Matrix3d in_lattice = rotate_reduced_stiffness(cal.target, -lattice_angle);
+    const auto springs = hexagonal_springs_eq27_as_printed(in_lattice, thickness);
+    std::vector<FamilyStiffness> families;
+    for (int f = 0; f < 3 && refused.empty(); ++f) {
+      if (!(springs[f].normal > 0 && springs[f].shear >= 0)) {
+        refused = fmt::format("family {} at {:g} deg: k_n = {:.4g} N/m, k_s = {:.4g} N/m", f + 1,
+                              (lattice_angle + f * std::numbers::pi / 3) / kDegree,
+                              springs[f].normal, springs[f].shear);
+      }
+      families.push_back(rule(springs[f].normal, springs[f].shear));
+    }
+    if (!refused.empty() && lattice_angle == 0) {
+      refused.clear();
+      continue;
+    }
+    if (!refused.empty()) {
+      throw Error(fmt::format(
+          "hex2d-paper: eq. (27) as printed gives a negative spring for material '{}' at {:.4g} "
+          "deg with the lattice along x and along y ({}): a negative spring makes the lattice "
+          "unstable, so it is not run (the paper's remark on 30 and 90 deg; the strategy hex2d "
+          "turns the lattice with the fibre instead)",
+          material.name, ply_angle / kDegree, refused));
+    }
+    cal.lattice_angle = lattice_angle;
+    const char* names[3] = {"1", "2 (+60 deg)", "3 (+120 deg)"};
+    for (int f = 0; f < 3; ++f) {
+      cal.families.push_back({names[f], lattice_angle + f * std::numbers::pi / 3, families[f]});
+    }
+    cal.affine =
+        rotate_reduced_stiffness(in_plane_block(affine_stiffness(cell, families)), lattice_angle);
+    cal.relaxed =
+        rotate_reduced_stiffness(in_plane_block(relaxed_stiffness(cell, families)), lattice_angle);
+    cal.relaxed_error = relative_difference(cal.relaxed, cal.target);
+    break;
+  }
+  return cal;
+}
+
 void register_hex2d(Registry& registry) {
   registry.add("hex2d", Hex2dStrategy().description(),
                [] { return std::make_unique<Hex2dStrategy>(); });
+  registry.add("hex2d-paper", Hex2dPaperStrategy().description(),
+               [] { return std::make_unique<Hex2dPaperStrategy>(); });
 }
 
 }  // namespace plydem

@@ -18,12 +18,29 @@ namespace plydem {
 /// stiffness `c` (expressed in the lattice frame) for a layer of thickness `thickness`.
 std::array<FamilyStiffness, 3> hexagonal_springs_eq27(const Eigen::Matrix3d& c, double thickness);
 
+/// eq. (27) exactly as printed, with C11 + C22 in k_n2 and k_n3 (ERRATA §2): kept so that
+/// experiments can show what the printed formula does.
+std::array<FamilyStiffness, 3> hexagonal_springs_eq27_as_printed(const Eigen::Matrix3d& c,
+                                                                 double thickness);
+
 class Hex2dStrategy : public Strategy {
  public:
   std::string description() const override;
   Calibration calibrate(const Material& material, double ply_angle,
                         double thickness) const override;
   Model build(const CouponSpec& coupon) const override;
+};
+
+/// `hex2d-paper`: the paper's Hex2D as printed: the lattice fixed with family 1 along x
+/// (Fig. 9), eq. (27) as printed applied to the ply's Q-bar, no relaxation. Its calibration
+/// reports the stiffness the engine will really simulate and its error; negative springs (any
+/// ply whose fibre is not along a bond family, the paper's 30 and 90 deg remark) are refused,
+/// never run.
+class Hex2dPaperStrategy : public Hex2dStrategy {
+ public:
+  std::string description() const override;
+  Calibration calibrate(const Material& material, double ply_angle,
+                        double thickness) const override;
 };
 
 }  // namespace plydem

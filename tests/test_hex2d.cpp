@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/calibration.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
@@ -175,4 +176,33 @@ TEST_CASE("materials hex2d cannot represent are refused by name") {
   m.G12 = 1e9;
   CHECK_THROWS_WITH_AS(Hex2dStrategy().calibrate(m, 0.0, 0.2e-3), doctest::Contains("soft-shear"),
                        Error);
+}
+
+TEST_CASE("an unreachable target is refused with the nearest stiffness non-negative springs give") {
+  Material m = eglass();
+  m.name = "soft-shear";
+  m.G12 = 1e9;
+  // The nearest reachable shear stiffness lies between the relaxed floor and the affine bound
+  // 3 C66 >= C22 of eq. (27): C66 >= Q22 / 3 = 5.55 GPa for this ply.
+  CHECK_THROWS_WITH_AS(Hex2dStrategy().calibrate(m, 0.0, 0.2e-3),
+                       doctest::Contains("C66 cannot be reached"), Error);
+  const UnitCell cell = HexagonalLayer(1.0, 0.0).unit_cell(0.2e-3);
+  const Eigen::Matrix3d target = qbar_by_hand(m, 0.0);
+  const auto rule = [](double kn, double ks) { return FamilyStiffness{kn, ks, kn / 16, ks / 8}; };
+  std::vector<FamilyStiffness> start;
+  for (const FamilyStiffness& k : hexagonal_springs_eq27(target, 0.2e-3)) {
+    start.push_back(rule(k.normal, k.shear));
+  }
+  const RelaxedCalibration nearest = nearest_non_negative_layer(cell, target, start, rule);
+  for (const FamilyStiffness& k : nearest.families) {
+    CHECK(k.normal >= 0);
+    CHECK(k.shear >= 0);
+  }
+  const double q22 = target(1, 1);
+  CHECK(nearest.relaxed(2, 2) > 0.9 * q22 / 3);
+  CHECK(nearest.relaxed(2, 2) < 1.01 * q22 / 3);
+  // Least squares spreads the miss a little over the entries the springs could match alone.
+  CHECK(nearest.relaxed(0, 0) == doctest::Approx(target(0, 0)).epsilon(1e-3));
+  CHECK(nearest.relaxed(1, 1) == doctest::Approx(target(1, 1)).epsilon(1e-3));
+  CHECK(nearest.relative_error > 0.05);
 }

@@ -7,6 +7,8 @@
 #include <numbers>
 
 #include "core/material.hpp"
+#include "core/registry.hpp"
+#include "experiments/stiffness_test.hpp"
 #include "experiments/tension_test.hpp"
 
 using namespace plydem;
@@ -71,6 +73,7 @@ TEST_CASE("a small coupon runs the whole test path: both loadings, fits, clean s
   settings.coupon.material = load_material("eglass-my750");
   settings.coupon.length = 1.2e-3;
   settings.coupon.width = 0.4e-3;
+  settings.solver = TensionSolver::kExplicit;
   const TensionResult r = TensionTest(settings).run();
   const Clt clt = clt_of(r.material);
   CHECK(std::abs(r.dem.Ex / clt.E1 - 1) < 0.02);
@@ -81,4 +84,70 @@ TEST_CASE("a small coupon runs the whole test path: both loadings, fits, clean s
   CHECK(r.along_y.ply_angle == doctest::Approx(-std::numbers::pi / 2));
   settings.solver = TensionSolver::kStatic;
   check_solvers_agree(r, TensionTest(settings).run());
+}
+
+namespace {
+
+// Plane-stress Q-bar of a transversely isotropic ply, written out from the engineering constants.
+Eigen::Matrix3d qbar_by_hand(const Material& m, double theta) {
+  const double nu21 = m.nu12 * m.E2 / m.E1, den = 1 - m.nu12 * nu21;
+  const double q11 = m.E1 / den, q22 = m.E2 / den, q12 = m.nu12 * m.E2 / den, q66 = m.G12;
+  const double c = std::cos(theta), s = std::sin(theta);
+  const double c2 = c * c, s2 = s * s;
+  Eigen::Matrix3d q;
+  q(0, 0) = q11 * c2 * c2 + 2 * (q12 + 2 * q66) * s2 * c2 + q22 * s2 * s2;
+  q(1, 1) = q11 * s2 * s2 + 2 * (q12 + 2 * q66) * s2 * c2 + q22 * c2 * c2;
+  q(0, 1) = (q11 + q22 - 4 * q66) * s2 * c2 + q12 * (s2 * s2 + c2 * c2);
+  q(0, 2) = (q11 - q12 - 2 * q66) * s * c2 * c + (q12 - q22 + 2 * q66) * s2 * s * c;
+  q(1, 2) = (q11 - q12 - 2 * q66) * s2 * s * c + (q12 - q22 + 2 * q66) * s * c2 * c;
+  q(2, 2) = (q11 + q22 - 2 * q12 - 2 * q66) * s2 * c2 + q66 * (s2 * s2 + c2 * c2);
+  q(1, 0) = q(0, 1);
+  q(2, 0) = q(0, 2);
+  q(2, 1) = q(1, 2);
+  return q;
+}
+
+}  // namespace
+
+TEST_CASE("the built coupon's membrane stiffness and Gxy match the ply's Q-bar") {
+  const Material eglass = load_material("eglass-my750");
+  const std::unique_ptr<Strategy> hex2d = default_registry().create("hex2d");
+  for (const double degrees : {0.0, 30.0}) {
+    CouponSpec coupon;
+    coupon.material = eglass;
+    coupon.ply_angle = degrees * std::numbers::pi / 180;
+    coupon.length = 2.0e-3;
+    coupon.width = 1.2e-3;
+    const SpecimenStiffness measured = measure_specimen_stiffness(hex2d->build(coupon));
+    const Eigen::Matrix3d q = qbar_by_hand(eglass, coupon.ply_angle);
+    CAPTURE(degrees);
+    CAPTURE(measured.stiffness);
+    CHECK((measured.stiffness - q).norm() / q.norm() < 0.005);
+    // Gxy = 1 / a66 of the hand-written Q-bar.
+    const double gxy = 1.0 / q.inverse()(2, 2);
+    CHECK(std::abs(measured.constants.Gxy / gxy - 1) < 0.005);
+    CHECK(measured.frame_particles > 0);
+  }
+}
+
+TEST_CASE("an explicit loading too fast to be quasi-static is measured and flagged") {
+  TensionSettings settings;
+  settings.coupon.material = load_material("eglass-my750");
+  settings.coupon.length = 1.2e-3;
+  settings.coupon.width = 0.4e-3;
+  settings.solver = TensionSolver::kExplicit;
+  settings.measure_specimen_stiffness = false;
+  settings.fixed_cycles = 40;  // a few wave transits at most
+  const TensionResult fast = TensionTest(settings).run();
+  CHECK(fast.along_x.loading_transits > 0);
+  CHECK(fast.along_x.loading_transits < kQuasiStaticTransits);
+  CHECK(fast.along_x.final_ratio > settings.tolerance);
+  settings.fixed_cycles = 20000;
+  const TensionResult slow = TensionTest(settings).run();
+  CHECK(slow.along_x.loading_transits > kQuasiStaticTransits);
+  // The slow run is close to the static answer; the fast one is not.
+  settings.solver = TensionSolver::kStatic;
+  const TensionResult exact = TensionTest(settings).run();
+  CHECK(std::abs(slow.dem.Ex / exact.dem.Ex - 1) < 0.02);
+  CHECK(std::abs(fast.dem.Ex / exact.dem.Ex - 1) > 0.02);
 }
