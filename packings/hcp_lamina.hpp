@@ -54,7 +54,8 @@ class HcpLamina {
   static bool is_inclined(int family) { return family >= kInPlaneFamilyCount; }
   /// Angle from +x of a family's direction (for inclined families, of its in-plane projection).
   double family_angle(int family) const;
-  /// Unit vector of an in-plane family, or of an inclined family going up from A to B.
+  /// Unit vector of an in-plane family; for an inclined family, its bond going up (+z) whose
+  /// in-plane projection points along family_angle.
   Eigen::Vector3d family_direction(int family) const;
   /// Position of layer 0, 1, 2's lattice origin relative to layer 0's: B is shifted in-plane by
   /// (a1 + a2)/3 and up by c, A' up by 2c.

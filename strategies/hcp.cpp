@@ -36,9 +36,10 @@ int group_of(int family) {
 const char* const kGroupNames[kGroupCount] = {"fibre (in-plane along the fibre)",
                                               "matrix (in-plane at +-60 deg and inclined)"};
 
+// Inclined families are named by the angle of their in-plane projection.
 const char* const kFamilyLabels[HcpLamina::kFamilyCount] = {
-    "1 (in-plane, fibre)",         "2 (in-plane, +60 deg)",       "3 (in-plane, +120 deg)",
-    "4 (inclined, +30 deg proj.)", "5 (inclined, +90 deg proj.)", "6 (inclined, +150 deg proj.)"};
+    "1 (fibre)",         "2 (+60 deg)",       "3 (+120 deg)",
+    "4 (inclined, +30)", "5 (inclined, +90)", "6 (inclined, +150)"};
 
 // The lamina cell with its six families merged into the two groups of eq. (24).
 UnitCell grouped_cell(UnitCell cell) {
@@ -82,74 +83,8 @@ Eigen::VectorXd affine_fit(const UnitCell& cell, const Eigen::Matrix3d& target,
   return columns.completeOrthogonalDecomposition().solve(independent_entries(target));
 }
 
-// The nearest stiffness that non-negative springs give: Gauss-Newton on the relaxed stiffness in
-// least squares, each spring that would turn negative held at zero from then on.
-struct NonNegativeFit {
-  Eigen::VectorXd parameters;
-  Eigen::Matrix3d relaxed;
-};
-NonNegativeFit nearest_non_negative(const UnitCell& cell, const Eigen::Matrix3d& target,
-                                    Eigen::VectorXd p, const FamilyStiffnessRule& rule) {
-  const int unknowns = static_cast<int>(p.size());
-  std::vector<bool> held(unknowns, false);
-  const double scale = std::max(p.cwiseAbs().maxCoeff(), 1e-300);
-  for (int k = 0; k < unknowns; ++k) {
-    if (p(k) < 0) {
-      p(k) = 0;
-      held[k] = true;
-    }
-  }
-  auto relaxed_of = [&](const Eigen::VectorXd& q) {
-    return in_plane_block(relaxed_stiffness(cell, groups_of(q, rule)));
-  };
-  const Eigen::Matrix<double, 6, 1> goal = independent_entries(target);
-  Eigen::Matrix3d current = relaxed_of(p);
-  for (int iteration = 0; iteration < 100; ++iteration) {
-    std::vector<int> free;
-    for (int k = 0; k < unknowns; ++k)
-      if (!held[k]) free.push_back(k);
-    if (free.empty()) break;
-    Eigen::MatrixXd jacobian(6, free.size());
-    const double h = 1e-6 * scale;
-    for (size_t m = 0; m < free.size(); ++m) {
-      Eigen::VectorXd plus = p, minus = p;
-      plus(free[m]) += h;
-      minus(free[m]) -= h;
-      jacobian.col(static_cast<long>(m)) =
-          (independent_entries(relaxed_of(plus)) - independent_entries(relaxed_of(minus))) /
-          (2 * h);
-    }
-    const Eigen::VectorXd step =
-        jacobian.completeOrthogonalDecomposition().solve(goal - independent_entries(current));
-    bool improved = false;
-    double lambda = 1.0;
-    for (int tries = 0; tries < 30 && !improved; ++tries, lambda *= 0.5) {
-      Eigen::VectorXd trial = p;
-      for (size_t m = 0; m < free.size(); ++m) {
-        trial(free[m]) = std::max(0.0, p(free[m]) + lambda * step(static_cast<long>(m)));
-      }
-      const Eigen::Matrix3d c = relaxed_of(trial);
-      if ((c - target).norm() < (current - target).norm() * (1 - 1e-12)) {
-        for (int k : free) held[k] = held[k] || trial(k) == 0.0;
-        p = trial;
-        current = c;
-        improved = true;
-      }
-    }
-    if (!improved) break;
-  }
-  return {p, current};
-}
-
 std::string gpa(double pascal) {
   return fmt::format("{:.4g}", pascal * 1e-9);
-}
-
-// The fibre-frame constants of a plane-stress stiffness, each beside its target.
-std::string compare_fibre_frame(const Eigen::Matrix3d& reached, const Eigen::Matrix3d& target) {
-  return fmt::format("Q11 = {} (target {}), Q22 = {} ({}), Q12 = {} ({}), Q66 = {} ({}) GPa",
-                     gpa(reached(0, 0)), gpa(target(0, 0)), gpa(reached(1, 1)), gpa(target(1, 1)),
-                     gpa(reached(0, 1)), gpa(target(0, 1)), gpa(reached(2, 2)), gpa(target(2, 2)));
 }
 
 void validate_ply(double ply_angle, double thickness) {
@@ -187,13 +122,13 @@ Eigen::Matrix<double, 5, 4> hcp_eq26_matrix(double radius, double layer_spacing,
   const double wp = 4 * R * R / (2 * volume_per_particle);
   const double wi = inclined_length2 / (2 * volume_per_particle);
   Eigen::Matrix<double, 5, 4> m;
+  // Rows C1111, C1122, C2222, C2233, C1212; columns k_N1, k_T1, k_N2, k_T2.
   // clang-format off
-  //      k_N1      k_T1      k_N2                                k_T2
-  m << 2 * wp,    0,        wp / 4 + wi * 9 * s4 / 4,          wp * 3 / 4 + wi * (3 * s2 - 9 * s4 / 4),  // C1111
-       0,         0,        wp * 3 / 4 + wi * 3 * s4 / 4,      -(wp * 3 / 4 + wi * 3 * s4 / 4),          // C1122
-       0,         0,        wp * 9 / 4 + wi * 9 * s4 / 4,      wp * 3 / 4 + wi * (3 * s2 - 9 * s4 / 4),  // C2222
-       0,         0,        wi * 3 * s2 * c2,                  -wi * 3 * s2 * c2,                        // C2233
-       0,         wp / 2,   wp * 3 / 4 + wi * 3 * s4 / 4,      wp / 4 + wi * (3 * s2 / 2 - 3 * s4 / 4);  // C1212
+  m << 2 * wp, 0,      wp / 4 + wi * 9 * s4 / 4,     wp * 3 / 4 + wi * (3 * s2 - 9 * s4 / 4),
+       0,      0,      wp * 3 / 4 + wi * 3 * s4 / 4, -(wp * 3 / 4 + wi * 3 * s4 / 4),
+       0,      0,      wp * 9 / 4 + wi * 9 * s4 / 4, wp * 3 / 4 + wi * (3 * s2 - 9 * s4 / 4),
+       0,      0,      wi * 3 * s2 * c2,             -wi * 3 * s2 * c2,
+       0,      wp / 2, wp * 3 / 4 + wi * 3 * s4 / 4, wp / 4 + wi * (3 * s2 / 2 - 3 * s4 / 4);
   // clang-format on
   // With wp = wi (every bond equally long) C1212's k_T2 coefficient is the corrected
   // (1/4 + 3/2 sin^2 - 3/4 sin^4) of ERRATA §2.
@@ -245,7 +180,7 @@ int complete_boundary_cells_by_class(const Particles& particles, Bonds& bonds,
   return changed;
 }
 
-// --- the shared part: option c, the lamina, the coupon ------------------------------------------
+// --- the shared part: option c, the lamina, the coupon ---------------------------------------
 
 HcpStrategyBase::HcpStrategyBase()
     : layer_spacing_radii_(HcpLamina::close_packed_layer_spacing(2.0)) {}
@@ -326,8 +261,7 @@ Model HcpStrategyBase::build(const CouponSpec& coupon) const {
   return model;
 }
 
-// --- hcp: exact on the relaxed lamina
-// -------------------------------------------------------------
+// --- hcp: exact on the relaxed lamina -------------------------------------------------------
 
 std::string HcpStrategy::description() const {
   return "three-layer HCP lamina (paper Sec. 3.2): 12 neighbours, eq. (24) bond groups, fibre "
@@ -352,44 +286,37 @@ Calibration HcpStrategy::calibrate(const Material& material, double ply_angle,
   const std::string ply =
       fmt::format("material '{}' at {:.4g} deg", material.name, ply_angle / kDegree);
 
+  // Unreachable targets (negative springs, an unstable cell) are refused with the nearest
+  // stiffness non-negative springs can give.
+  auto refuse = [&](const std::string& why) {
+    const RelaxedCalibration nearest =
+        nearest_non_negative_layer(cell, target_lattice, groups_of(start, rule), rule);
+    return Error(
+        fmt::format("hcp cannot represent {} with non-negative springs ({}): {} (fibre "
+                    "frame)",
+                    ply, why, describe_unreachable(nearest.relaxed, target_lattice)));
+  };
   RelaxedCalibration relaxed;
-  bool stable = true;
   try {
     relaxed = calibrate_relaxed_layer(cell, target_lattice, groups_of(start, rule), rule);
-  } catch (const Error&) {
-    stable = false;  // a negative spring on the way made the lattice unstable
-  }
-  std::string negative;
-  for (int g = 0; stable && g < kGroupCount; ++g) {
-    const FamilyStiffness& k = relaxed.families[g];
-    if (!(k.normal > 0 && k.shear >= 0)) {
-      negative = fmt::format("the {} bonds would need k_n = {:.4g} N/m, k_s = {:.4g} N/m",
-                             kGroupNames[g], k.normal, k.shear);
-    }
-  }
-  if (!stable || !negative.empty()) {
-    const NonNegativeFit nearest = nearest_non_negative(cell, target_lattice, start, rule);
-    const char* names[4] = {"Q11", "Q22", "Q12", "Q66"};
-    const double reached[4] = {nearest.relaxed(0, 0), nearest.relaxed(1, 1), nearest.relaxed(0, 1),
-                               nearest.relaxed(2, 2)};
-    const double wanted[4] = {target_lattice(0, 0), target_lattice(1, 1), target_lattice(0, 1),
-                              target_lattice(2, 2)};
-    int worst = 0;
-    double worst_miss = 0;
-    for (int k = 0; k < 4; ++k) {
-      const double miss = std::abs(reached[k] - wanted[k]) / std::max(std::abs(wanted[k]), 1e-300);
-      if (miss > worst_miss) {
-        worst = k;
-        worst_miss = miss;
+  } catch (const Error& e) {
+    std::string why = e.what();
+    for (int g = 0; g < kGroupCount; ++g) {
+      if (start(2 * g) < 0 || start(2 * g + 1) < 0) {
+        why = fmt::format(
+            "the affine lattice sum alone needs k_n = {:.4g} N/m, k_s = {:.4g} N/m "
+            "for the {} bonds",
+            start(2 * g), start(2 * g + 1), kGroupNames[g]);
       }
     }
-    throw Error(fmt::format(
-        "hcp cannot represent {} with non-negative springs ({}); {} is out of reach: "
-        "the nearest stiffness of the relaxed lamina with non-negative springs, in the fibre "
-        "frame, is {} (relative error {:.3g})",
-        ply, stable ? negative : std::string("the lattice turns unstable"), names[worst],
-        compare_fibre_frame(nearest.relaxed, target_lattice),
-        relative_difference(nearest.relaxed, target_lattice)));
+    throw refuse(why);
+  }
+  for (int g = 0; g < kGroupCount; ++g) {
+    const FamilyStiffness& k = relaxed.families[g];
+    if (!(k.normal > 0 && k.shear >= 0)) {
+      throw refuse(fmt::format("the {} bonds would need k_n = {:.4g} N/m, k_s = {:.4g} N/m",
+                               kGroupNames[g], k.normal, k.shear));
+    }
   }
   require(relaxed.relative_error < 1e-9,
           fmt::format("hcp: the relaxed calibration of {} did not converge (relative error {:.3g} "
@@ -400,8 +327,7 @@ Calibration HcpStrategy::calibrate(const Material& material, double ply_angle,
   return cal;
 }
 
-// --- hcp-eq26: the corrected closed form, reported as it is
-// -----------------------------------------
+// --- hcp-eq26: the corrected closed form, reported as it is ---------------------------------
 
 std::string HcpEq26Strategy::description() const {
   return "three-layer HCP lamina with the springs of the corrected eq. (26) in least squares "

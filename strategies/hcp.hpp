@@ -17,8 +17,16 @@
 ///    once, the k_T2 coefficient of C1212, the true inclined bond length), solved in least squares
 ///    for the five constants of the ply's 3D stiffness it matches. It reports the relaxed stiffness
 ///    the lamina really has; it does not reach Q-bar, and E-glass has no non-negative solution.
+///    Eq. (26)'s volume 2 sqrt(3) R^2 c per particle is that of a crystal whose layers are c apart;
+///    in the lamina the three layers stand for the ply thickness delta, so each particle stands for
+///    2 sqrt(3) R^2 delta / 3 (the springs scale with the volume; c still sets the geometry).
 ///
-/// Both take the option `c`, the spacing of the layers in particle radii.
+/// Both take the option `c`, the spacing of the layers in particle radii. Bonds keep the six
+/// families of the packing (by direction) for reports; families 2 to 6 share the springs of
+/// group 2. At free edges the bonds present carry their missing partners' share
+/// (complete_boundary_cells_by_class): per in-plane family (2 bonds per particle in the bulk), and
+/// per pair of adjacent layers for the inclined bonds (3 per particle in the bulk), since an
+/// inclined bond has no partner of the opposite direction on the same particle.
 
 #include <Eigen/Dense>
 #include <vector>
