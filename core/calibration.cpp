@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.hpp"
@@ -132,7 +133,9 @@ RelaxedCalibration nearest_non_negative_layer(const UnitCell& cell, const Eigen:
     for (int tries = 0; tries < 30 && !improved; ++tries, lambda *= 0.5) {
       Eigen::VectorXd trial = p;
       for (int c = 0; c < static_cast<int>(free.size()); ++c) {
-        trial(free[c]) = std::max(p(free[c]) + lambda * step(c), 0.0);
+        // Bounded above too: a spring that no longer changes the relaxed stiffness (a shear
+        // spring whose work the spins take over) must not drift without limit.
+        trial(free[c]) = std::clamp(p(free[c]) + lambda * step(c), 0.0, 100 * scale);
       }
       const Eigen::Matrix3d c = relaxed_of(trial);
       if ((c - target).norm() < (current - target).norm() * (1 - 1e-12)) {
@@ -159,8 +162,10 @@ std::string describe_unreachable(const Eigen::Matrix3d& reached, const Eigen::Ma
     if (miss > std::abs(reached(rows[worst], cols[worst]) - target(rows[worst], cols[worst]))) {
       worst = e;
     }
-    entries += fmt::format("{}{} {:.4g} ({:.4g})", e ? ", " : "", names[e],
-                           reached(rows[e], cols[e]) * 1e-9, target(rows[e], cols[e]) * 1e-9);
+    // + 0.0 turns -0 into 0 for printing.
+    entries +=
+        fmt::format("{}{} {:.4g} ({:.4g})", e ? ", " : "", names[e],
+                    reached(rows[e], cols[e]) * 1e-9 + 0.0, target(rows[e], cols[e]) * 1e-9 + 0.0);
   }
   return fmt::format(
       "{} cannot be reached: the nearest stiffness with non-negative springs has {} = {:.4g} GPa "
