@@ -216,7 +216,28 @@ void SupernodalCholesky::analyze(const SparseMatrix& a) {
     row_start_.push_back(static_cast<int>(rows_.size()));
     panel_start_.push_back(panel_start_.back() + static_cast<Eigen::Index>(m) * (e - f));
   }
-  panel_.clear();
+  // Workspace of the factorization: the largest update matrix, and the most that the stack of
+  // pending updates holds at once (children wait until their parent is assembled).
+  largest_update_ = 1;
+  stack_size_ = 1;
+  {
+    std::size_t depth = 0;
+    std::vector<std::size_t> pending;
+    for (int s = 0; s < supernodes; ++s) {
+      const int children = child_start_[s + 1] - child_start_[s];
+      for (int c = 0; c < children; ++c) {
+        depth -= pending.back();
+        pending.pop_back();
+      }
+      const std::size_t mu = static_cast<std::size_t>(expected_rows[s]) -
+                             static_cast<std::size_t>(first_column_[s + 1] - first_column_[s]);
+      pending.push_back(mu * mu);
+      depth += mu * mu;
+      largest_update_ = std::max(largest_update_, mu * mu);
+      stack_size_ = std::max(stack_size_, depth);
+    }
+  }
+  panel_.reset();
   pivot_.clear();
   zero_pivots_.clear();
   is_zero_pivot_.clear();
@@ -224,9 +245,8 @@ void SupernodalCholesky::analyze(const SparseMatrix& a) {
 
 namespace {
 
-// Column-by-column (left-looking) Cholesky of the first k columns of the m x m front, with the
-// zero-pivot rule of the file comment; returns the pivots through `pivot` and flags through
-// `is_zero`.
+// Column-by-column (left-looking) Cholesky of the k columns of an m x k panel, with the zero-pivot
+// rule of the file comment; returns the pivots through `pivot` and flags through `is_zero`.
 void factor_columns_carefully(Eigen::Ref<Eigen::MatrixXd> front, int k, const double* diagonal,
                               double tolerance, double* pivot, char* is_zero) {
   const Eigen::Index m = front.rows();
@@ -259,31 +279,38 @@ void SupernodalCholesky::factorize(const SparseMatrix& a, double pivot_tolerance
   const double* value = a.valuePtr();
   const int supernodes = supernode_count();
 
-  panel_.resize(static_cast<std::size_t>(factor_entries()));
+  // Each supernode's panel (its k columns of the front) is assembled and factorized in place;
+  // the rest of the front, the update for the parent, in `update` (lower triangle). Updates wait
+  // on a stack: in postorder a supernode's children are the last ones pushed. Buffers are not
+  // value-initialized: every entry read is written first.
+  panel_.reset(new double[static_cast<std::size_t>(factor_entries())]);
+  const std::unique_ptr<double[]> update_buffer(new double[largest_update_]);
+  const std::unique_ptr<double[]> stack(new double[stack_size_]);
+  std::vector<std::size_t> stack_top;  // where each pending update starts
+  std::size_t stack_end = 0;
   pivot_.assign(n, 0.0);
   is_zero_pivot_.assign(n, 0);
   zero_pivots_.clear();
   std::vector<int> local(n, 0), map;
-  std::vector<double> diagonal, front_buffer;
-  // Update matrices wait on a stack: in postorder a supernode's children are the last ones pushed.
-  std::vector<double> stack;
-  std::vector<std::size_t> stack_top;  // where each pending update starts
+  std::vector<double> diagonal;
+  Eigen::MatrixXd saved;
   for (int s = 0; s < supernodes; ++s) {
     const int f = first_column_[s], k = first_column_[s + 1] - f;
     const int* rows = rows_.data() + row_start_[s];
-    const int m = row_start_[s + 1] - row_start_[s];
+    const int m = row_start_[s + 1] - row_start_[s], mu = m - k;
     for (int r = 0; r < m; ++r) local[rows[r]] = r;
 
-    // The front (lower triangle): A's columns of this supernode, plus the children's updates.
-    front_buffer.resize(static_cast<std::size_t>(m) * m);
-    Eigen::Map<Eigen::MatrixXd> front(front_buffer.data(), m, m);
-    for (int c = 0; c < m; ++c) front.col(c).tail(m - c).setZero();
+    // The front: A's columns of this supernode, plus the children's updates.
+    Eigen::Map<Eigen::MatrixXd> panel(panel_.get() + panel_start_[s], m, k);
+    Eigen::Map<Eigen::MatrixXd> update(update_buffer.get(), mu, mu);
+    panel.setZero();
+    for (int c = 0; c < mu; ++c) update.col(c).tail(mu - c).setZero();
     diagonal.assign(k, 0.0);
     for (int c = 0; c < k; ++c) {
       const int old = original_[f + c];
       for (int p = outer[old]; p < outer[old + 1]; ++p) {
         if (inner[p] < old) continue;
-        front(local[postorder_[inner[p]]], c) += value[p];
+        panel(local[postorder_[inner[p]]], c) += value[p];
         if (inner[p] == old) diagonal[c] = value[p];
       }
     }
@@ -292,48 +319,53 @@ void SupernodalCholesky::factorize(const SparseMatrix& a, double pivot_tolerance
       const int ch = child_[child_start_[s] + c];
       const int width = first_column_[ch + 1] - first_column_[ch];
       const int* child_rows = rows_.data() + row_start_[ch] + width;
-      const int mu = row_start_[ch + 1] - row_start_[ch] - width;
-      const double* u = stack.data() + stack_top[stack_top.size() - children + c];
-      map.resize(mu);
-      for (int t = 0; t < mu; ++t) map[t] = local[child_rows[t]];
-      for (int t2 = 0; t2 < mu; ++t2) {
-        double* column = front.data() + static_cast<Eigen::Index>(map[t2]) * m;
-        const double* source = u + static_cast<std::size_t>(t2) * mu;
-        for (int t1 = t2; t1 < mu; ++t1) column[map[t1]] += source[t1];
+      const int mc = row_start_[ch + 1] - row_start_[ch] - width;
+      const double* u = stack.get() + stack_top[stack_top.size() - children + c];
+      map.resize(mc);
+      for (int t = 0; t < mc; ++t) map[t] = local[child_rows[t]];
+      for (int t2 = 0; t2 < mc; ++t2) {
+        // Rows map[t1] >= map[t2] (both increase with t): the lower triangle of the front.
+        const double* source = u + static_cast<std::size_t>(t2) * mc;
+        const int column = map[t2];
+        if (column < k) {
+          double* target = panel.data() + static_cast<Eigen::Index>(column) * m;
+          for (int t1 = t2; t1 < mc; ++t1) target[map[t1]] += source[t1];
+        } else {
+          double* target = update.data() + static_cast<Eigen::Index>(column - k) * mu;
+          for (int t1 = t2; t1 < mc; ++t1) target[map[t1] - k] += source[t1];
+        }
       }
     }
     if (children > 0) {
-      stack.resize(stack_top[stack_top.size() - children]);
+      stack_end = stack_top[stack_top.size() - children];
       stack_top.resize(stack_top.size() - children);
     }
 
     // Dense Cholesky of the k pivot columns: blocked (Eigen's LLT, then a triangular solve) when
     // every pivot is clearly positive, column by column with zero pivots dropped otherwise.
-    auto f11 = front.topLeftCorner(k, k);
-    auto f21 = front.bottomLeftCorner(m - k, k);
-    Eigen::MatrixXd f11_saved = f11;
-    bool clean = Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>>(f11).info() == Eigen::Success;
+    auto p11 = panel.topRows(k);
+    auto p21 = panel.bottomRows(mu);
+    saved = p11;
+    bool clean = Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>>(p11).info() == Eigen::Success;
     for (int c = 0; clean && c < k; ++c) {
-      const double d = f11(c, c) * f11(c, c);
+      const double d = p11(c, c) * p11(c, c);
       pivot_[f + c] = d;
       clean = d > pivot_tolerance * diagonal[c];
     }
     if (clean) {
-      f11.triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(f21);
+      p11.triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(p21);
     } else {
-      f11.triangularView<Eigen::Lower>() = f11_saved;
-      factor_columns_carefully(front, k, diagonal.data(), pivot_tolerance, pivot_.data() + f,
+      p11 = saved;
+      factor_columns_carefully(panel, k, diagonal.data(), pivot_tolerance, pivot_.data() + f,
                                is_zero_pivot_.data() + f);
     }
-    if (m > k) {
-      auto f22 = front.bottomRightCorner(m - k, m - k);
-      f22.selfadjointView<Eigen::Lower>().rankUpdate(f21, -1.0);
-      const std::size_t top = stack.size();
-      stack_top.push_back(top);
-      stack.resize(top + static_cast<std::size_t>(m - k) * (m - k));
-      Eigen::Map<Eigen::MatrixXd>(stack.data() + top, m - k, m - k) = f22;
+    if (mu > 0) {
+      update.selfadjointView<Eigen::Lower>().rankUpdate(p21, -1.0);
+      stack_top.push_back(stack_end);
+      std::copy(update.data(), update.data() + static_cast<std::size_t>(mu) * mu,
+                stack.get() + stack_end);
+      stack_end += static_cast<std::size_t>(mu) * mu;
     }
-    Eigen::Map<Eigen::MatrixXd>(panel_.data() + panel_start_[s], m, k) = front.leftCols(k);
   }
   for (int j = 0; j < n; ++j)
     if (is_zero_pivot_[j]) zero_pivots_.push_back(original_[j]);
@@ -358,7 +390,7 @@ void SupernodalCholesky::solve_in_place(Eigen::MatrixXd& b) const {
     const int f = first_column_[s], k = first_column_[s + 1] - f;
     const int* rows = rows_.data() + row_start_[s];
     const int m = row_start_[s + 1] - row_start_[s];
-    const Eigen::Map<const Eigen::MatrixXd> l(panel_.data() + panel_start_[s], m, k);
+    const Eigen::Map<const Eigen::MatrixXd> l(panel_.get() + panel_start_[s], m, k);
     auto x1 = x.middleRows(f, k);
     l.topRows(k).triangularView<Eigen::Lower>().solveInPlace(x1);
     if (m > k) {
@@ -374,7 +406,7 @@ void SupernodalCholesky::solve_in_place(Eigen::MatrixXd& b) const {
     const int f = first_column_[s], k = first_column_[s + 1] - f;
     const int* rows = rows_.data() + row_start_[s];
     const int m = row_start_[s + 1] - row_start_[s];
-    const Eigen::Map<const Eigen::MatrixXd> l(panel_.data() + panel_start_[s], m, k);
+    const Eigen::Map<const Eigen::MatrixXd> l(panel_.get() + panel_start_[s], m, k);
     auto x1 = x.middleRows(f, k);
     if (m > k) {
       t.resize(m - k, r);

@@ -23,6 +23,8 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
+#include <cstddef>
+#include <memory>
 #include <vector>
 
 namespace plydem {
@@ -60,8 +62,9 @@ class SupernodalCholesky {
   std::vector<int> postorder_, original_;
   std::vector<int> first_column_, row_start_, rows_, child_start_, child_;
   std::vector<Eigen::Index> panel_start_;
+  std::size_t largest_update_ = 1, stack_size_ = 1;  // factorization workspace [doubles]
   // Numeric.
-  std::vector<double> panel_;
+  std::unique_ptr<double[]> panel_;
   std::vector<double> pivot_;  // in the new numbering
   std::vector<int> zero_pivots_;
   std::vector<char> is_zero_pivot_;  // in the new numbering

@@ -507,29 +507,33 @@ StaticResult solve_static(Model& model, const DofConstraints& given,
     }
   }
 
-  const BlockStiffness k = block_stiffness(model, order);
-  // Jacobi scaling A = S K_ff S with S = diag(K_ff)^-1/2. Rotational and translational
-  // stiffnesses differ by the squared particle radius (1e-10 in SI); with a unit diagonal the
-  // pivot test below means the same for both, and CG's preconditioners start better conditioned.
-  Eigen::VectorXd s(nf);
-  for (int f = 0; f < nf; ++f) {
-    const int i = free_dofs[f] / kDofsPerParticle, c = free_dofs[f] % kDofsPerParticle;
-    const double diagonal = k.diagonal(order.rank[i], c);
-    if (!(diagonal > 0))
-      throw Error(
-          fmt::format("static solve: nothing resists {}: every bond of the particle has zero "
-                      "stiffness in that direction; prescribe it or stiffen the bonds",
-                      dof_at(p, free_dofs[f])));
-    s(f) = 1 / std::sqrt(diagonal);
+  // The blocks are released before the factorization, whose factor then reuses their memory.
+  Eigen::VectorXd s(nf), b(nf);
+  SparseMatrix a;
+  {
+    const BlockStiffness k = block_stiffness(model, order);
+    // Jacobi scaling A = S K_ff S with S = diag(K_ff)^-1/2. Rotational and translational
+    // stiffnesses differ by the squared particle radius (1e-10 in SI); with a unit diagonal the
+    // pivot test below means the same for both, and CG's preconditioners start better
+    // conditioned.
+    for (int f = 0; f < nf; ++f) {
+      const int i = free_dofs[f] / kDofsPerParticle, c = free_dofs[f] % kDofsPerParticle;
+      const double diagonal = k.diagonal(order.rank[i], c);
+      if (!(diagonal > 0))
+        throw Error(
+            fmt::format("static solve: nothing resists {}: every bond of the particle has zero "
+                        "stiffness in that direction; prescribe it or stiffen the bonds",
+                        dof_at(p, free_dofs[f])));
+      s(f) = 1 / std::sqrt(diagonal);
+    }
+    // The lower triangle only: all that the factorization, IC and CG read, at half the memory.
+    a = compress_lower(k, free_index, nf, s);
+    // Right-hand side -K_fp u_p, from the same blocks (the prescribed values, free dofs at zero).
+    const Eigen::VectorXd k_u = k.multiply(u_ranked);
+    for (int d = 0; d < dofs; ++d)
+      if (free_index[d] >= 0) b(free_index[d]) = -s(free_index[d]) * k_u(d);
   }
-  // The lower triangle only: all that the factorization, IC and CG read, at half the memory.
-  const SparseMatrix a = compress_lower(k, free_index, nf, s);
   result.stiffness_nonzeros = a.nonZeros();
-  // Right-hand side -K_fp u_p, from the same blocks (the prescribed values, free dofs at zero).
-  const Eigen::VectorXd k_u = k.multiply(u_ranked);
-  Eigen::VectorXd b(nf);
-  for (int d = 0; d < dofs; ++d)
-    if (free_index[d] >= 0) b(free_index[d]) = -s(free_index[d]) * k_u(d);
   result.seconds.assembly = seconds_since(start);
 
   Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);

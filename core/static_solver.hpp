@@ -98,8 +98,11 @@ enum class StaticPreconditioner { kIncompleteCholesky, kDiagonal };
 
 struct StaticSettings {
   StaticMethod method = StaticMethod::kAuto;
-  /// Largest number of free dofs solved directly under kAuto.
-  int direct_max_dofs = 200000;
+  /// Largest number of free dofs solved directly under kAuto. The direct solver's memory grows
+  /// faster than the system (fill): measured on hex2d coupons of the paper's shape, 6e5 free dofs
+  /// (1e5 particles) take 0.9 GiB and 6 s CPU, where CG takes 190 s; 1.8e6 free dofs take 2.9 GiB
+  /// and 23 s (bench/static_solve).
+  int direct_max_dofs = 2000000;
   StaticPreconditioner preconditioner = StaticPreconditioner::kIncompleteCholesky;
   /// Conjugate gradient stops when |A y - b| <= tolerance |b| on the Jacobi-scaled system.
   double cg_tolerance = 1e-13;

@@ -1,0 +1,246 @@
+// plydem_static_bench: how long one linear static solve of a hex2d tension coupon takes, by phase,
+// and how much memory it needs (issue 4 item 6). One coupon per process, so that the peak resident
+// set (VmHWM) belongs to that size alone; bench/static_solve runs the sizes and prints the table.
+//
+// The coupon is E-glass/MY750 at 0 deg with particle diameter 0.05 mm, shaped like the paper's
+// 10 x 0.83 mm coupon (length/width = 10/0.83) and scaled to hold about the requested number of
+// particles. It is loaded as the tension test's static path loads it (experiments/tension_test.cpp,
+// free grips): particles within two diameters of each end are grips with ux prescribed (+-half the
+// travel of a 0.1 % nominal strain) and uz, theta_x, theta_y held; the remaining rigid-body modes
+// are pinned (StaticSettings::pin_rigid_modes). Timings are on one thread: the phases of the first
+// solve in wall-clock seconds (StaticTimings), the whole solve_static call in wall-clock and CPU
+// seconds (CPU time counts the kernel's page faults but not the time other processes take), and
+// its minor page faults. With --repeat N the solve runs N times on fresh copies of the model and
+// the best wall-clock and CPU times of the repeats are reported too: the first solve of a process
+// pays for fresh memory (a page fault per 4 KiB, expensive in a virtual machine), later ones
+// reuse it (glibc is told to keep freed memory, see main).
+//
+// Sample runs:
+//   plydem_static_bench --particles 10000
+//   plydem_static_bench --paper --json          # the paper's 10 x 0.83 mm coupon (3791 particles)
+//   plydem_static_bench --particles 100000 --method direct
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <malloc.h>
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include "core/error.hpp"
+#include "core/material.hpp"
+#include "core/registry.hpp"
+#include "core/static_solver.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr double kDiameter = 0.05e-3;
+constexpr double kPaperLength = 10e-3;
+constexpr double kPaperWidth = 0.83e-3;
+constexpr double kNominalStrain = 1e-3;
+
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+long minor_page_faults() {
+  rusage usage{};
+  getrusage(RUSAGE_THREAD, &usage);
+  return usage.ru_minflt;
+}
+
+// Peak resident set size of this process [MiB] (VmHWM of /proc/self/status), 0 if unavailable.
+double peak_rss_mib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
+  }
+  return 0;
+}
+
+// The tension test's static constraints with free grips (experiments/tension_test.cpp).
+plydem::DofConstraints tension_constraints(const plydem::Model& model) {
+  using plydem::Dof;
+  const plydem::Particles& p = model.particles;
+  const double x_min = p.reference_position.col(0).minCoeff();
+  const double x_max = p.reference_position.col(0).maxCoeff();
+  const double grip = 2.0 * kDiameter;
+  const double travel = 0.5 * kNominalStrain * (x_max - x_min);
+  plydem::DofConstraints constraints(p.size());
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0);
+    const bool left = x <= x_min + grip, right = x >= x_max - grip;
+    if (!left && !right) continue;
+    constraints.fix(i, Dof::kUx, right ? travel : -travel);
+    constraints.fix(i, Dof::kUz);
+    constraints.fix(i, Dof::kThetaX);
+    constraints.fix(i, Dof::kThetaY);
+  }
+  return constraints;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"plydem_static_bench: time one static solve of a hex2d tension coupon"};
+  double particles = 0;
+  bool paper = false, json = false, markdown = false, header = false;
+  int repeat = 1;
+  std::string method = "auto";
+  app.add_option("--particles", particles,
+                 "about this many particles, in a coupon of the paper's aspect ratio");
+  app.add_flag("--paper", paper, "the paper's 10 x 0.83 mm coupon");
+  app.add_option("--method", method,
+                 "auto (direct up to StaticSettings::direct_max_dofs free dofs), direct or cg")
+      ->check(CLI::IsMember({"auto", "direct", "cg"}));
+  app.add_option("--repeat", repeat, "solve this many times, report the best repeat too")
+      ->check(CLI::Range(1, 1000));
+  app.add_flag("--json", json, "one JSON object per line instead of text");
+  app.add_flag("--markdown", markdown, "one row of a markdown table instead of text");
+  app.add_flag("--markdown-header", header, "print the markdown table's header and exit");
+  CLI11_PARSE(app, argc, argv);
+  if (header) {
+    std::cout
+        << "| coupon [mm] | particles | bonds | free dofs | method | checks [s] | assembly [s] "
+           "| factorization [s] | solve [s] | call [s] | call CPU [s] | page faults | best "
+           "repeat: wall / CPU [s] | peak RSS [MiB] |\n"
+           "|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    return 0;
+  }
+  try {
+    plydem::require(paper != (particles > 0), "give either --particles N (N > 0) or --paper");
+    plydem::CouponSpec spec;
+    spec.material = plydem::load_material("eglass-my750");
+    spec.ply_angle = 0;
+    spec.particle_diameter = kDiameter;
+    spec.length = kPaperLength;
+    spec.width = kPaperWidth;
+    if (!paper) {
+      // Sites of the hexagonal layer (at 0 deg, first site at (R, R)) with centres at least one
+      // radius inside an L x W rectangle: rows sqrt(3)/2 d apart, every other row shifted by d/2.
+      // Bisection on L for the smallest coupon of the paper's shape holding `particles`.
+      const double aspect = kPaperLength / kPaperWidth, d = kDiameter;
+      auto sites = [&](double length) {
+        const double width = length / aspect;
+        const double rows = std::floor((width - d) / (std::sqrt(3.0) / 2 * d) + 1e-9) + 1;
+        const double even = std::floor((length - d) / d + 1e-9) + 1;
+        const double odd = std::floor((length - 1.5 * d) / d + 1e-9) + 1;
+        return std::ceil(rows / 2) * even + std::floor(rows / 2) * odd;
+      };
+      double lo = 2 * d * aspect, hi = 1.0;
+      for (int k = 0; k < 100; ++k)
+        (sites(0.5 * (lo + hi)) < particles ? lo : hi) = 0.5 * (lo + hi);
+      spec.length = hi;
+      spec.width = hi / aspect;
+    }
+
+    // Freed memory stays with the process (no trimming, no per-allocation mmap), so that repeated
+    // solves measure the arithmetic rather than the kernel's first touch of fresh pages.
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);
+    mallopt(M_TRIM_THRESHOLD, 1 << 30);
+
+    auto start = Clock::now();
+    const plydem::Model built = plydem::default_registry().create("hex2d")->build(spec);
+    const double build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    const plydem::DofConstraints constraints = tension_constraints(built);
+    plydem::StaticSettings settings;
+    settings.pin_rigid_modes = true;
+    if (method == "direct") settings.method = plydem::StaticMethod::kDirect;
+    if (method == "cg") settings.method = plydem::StaticMethod::kIterative;
+
+    plydem::StaticResult r;
+    double first_wall = 0, first_cpu = 0, best_wall = 1e300, best_cpu = 1e300;
+    long first_faults = 0;
+    for (int k = 0; k < repeat; ++k) {
+      plydem::Model model = built;
+      const long faults = minor_page_faults();
+      const double cpu = cpu_seconds();
+      start = Clock::now();
+      plydem::StaticResult solved = plydem::solve_static(model, constraints, settings);
+      const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+      const double used = cpu_seconds() - cpu;
+      if (k == 0) {
+        r = std::move(solved);
+        first_wall = wall;
+        first_cpu = used;
+        first_faults = minor_page_faults() - faults;
+      } else {
+        best_wall = std::min(best_wall, wall);
+        best_cpu = std::min(best_cpu, used);
+      }
+    }
+    const double rss = peak_rss_mib();
+
+    const plydem::StaticTimings& t = r.seconds;
+    if (json) {
+      nlohmann::json j;
+      j["coupon_mm"] = {spec.length * 1e3, spec.width * 1e3};
+      j["particles"] = built.particles.size();
+      j["bonds"] = built.bonds.size();
+      j["free_dofs"] = r.free_dofs;
+      j["nonzeros"] = r.stiffness_nonzeros;
+      j["method"] = r.method == plydem::StaticMethod::kDirect ? "direct" : "CG";
+      j["solver"] = r.method_name;
+      j["iterations"] = r.iterations;
+      j["relative_residual"] = r.relative_residual;
+      j["build_s"] = build_seconds;
+      j["checks_s"] = t.checks;
+      j["assembly_s"] = t.assembly;
+      j["factorization_s"] = t.factorization;
+      j["solve_s"] = t.solve;
+      j["phases_total_s"] = t.total();
+      j["call_s"] = first_wall;
+      j["call_cpu_s"] = first_cpu;
+      j["page_faults"] = first_faults;
+      if (repeat > 1) {
+        j["repeat"] = repeat;
+        j["best_repeat_s"] = best_wall;
+        j["best_repeat_cpu_s"] = best_cpu;
+      }
+      j["peak_rss_mib"] = rss;
+      std::cout << j.dump() << '\n';
+    } else if (markdown) {
+      const std::string method_cell = r.method == plydem::StaticMethod::kDirect
+                                          ? std::string("direct")
+                                          : fmt::format("CG ({} iterations)", r.iterations);
+      const std::string best =
+          repeat > 1 ? fmt::format("{:.4f} / {:.4f} ({} runs)", best_wall, best_cpu, repeat - 1)
+                     : std::string("-");
+      std::cout << fmt::format(
+          "| {:.3g} x {:.3g} | {} | {} | {} | {} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | "
+          "{:.4f} | {} | {} | {:.0f} |\n",
+          spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(),
+          r.free_dofs, method_cell, t.checks, t.assembly, t.factorization, t.solve, first_wall,
+          first_cpu, first_faults, best, rss);
+    } else {
+      std::cout << fmt::format(
+          "{:.3g} x {:.3g} mm: {} particles, {} bonds, {} free dofs, {} ({} iterations), "
+          "residual {:.2g}; build {:.3f} s\n  first solve: checks {:.4f} s, assembly {:.4f} s, "
+          "factorization {:.4f} s, solve {:.4f} s; call {:.4f} s wall, {:.4f} s CPU, {} page "
+          "faults\n",
+          spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(),
+          r.free_dofs, r.method_name, r.iterations, r.relative_residual, build_seconds, t.checks,
+          t.assembly, t.factorization, t.solve, first_wall, first_cpu, first_faults);
+      if (repeat > 1)
+        std::cout << fmt::format("  best of {} more solves: {:.4f} s wall, {:.4f} s CPU\n",
+                                 repeat - 1, best_wall, best_cpu);
+      std::cout << fmt::format("  peak RSS {:.0f} MiB\n", rss);
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "plydem_static_bench: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}
