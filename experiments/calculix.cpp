@@ -877,6 +877,47 @@ std::optional<Eigen::Vector3d> FemDisplacementField::at(double x, double y, doub
   return std::nullopt;
 }
 
+FieldComparison compare_displacements(const FemDisplacementField& fem, const Particles& particles,
+                                      double z_offset) {
+  require(!fem.empty(), "the FEM displacement field is empty (was CalculiX run?)");
+  require(std::isfinite(z_offset), "the particles' mid-plane offset is not finite");
+  FieldComparison result;
+  std::vector<Eigen::Vector2d> fem_u, particle_u;
+  for (int i = 0; i < particles.size(); ++i) {
+    const auto u = fem.at(particles.reference_position(i, 0), particles.reference_position(i, 1),
+                          particles.reference_position(i, 2) - z_offset);
+    if (!u) {
+      ++result.skipped;
+      continue;
+    }
+    fem_u.emplace_back(u->x(), u->y());
+    particle_u.emplace_back(particles.displacement(i, 0), particles.displacement(i, 1));
+  }
+  result.points = static_cast<int>(fem_u.size());
+  if (result.points < 2)
+    throw Error(
+        fmt::format("only {} of {} particles lie inside the FEM plate: are the two models in "
+                    "the same frame ([0, L] x [0, W], mid-plane z = 0)?",
+                    result.points, particles.size()));
+  const double n = result.points;
+  double fem_uy_mean = 0, shift = 0;
+  for (int k = 0; k < result.points; ++k) {
+    fem_uy_mean += fem_u[k].y() / n;
+    shift += (particle_u[k].y() - fem_u[k].y()) / n;
+  }
+  double dx = 0, fx = 0, dy = 0, fy = 0;
+  for (int k = 0; k < result.points; ++k) {
+    dx += std::pow(particle_u[k].x() - fem_u[k].x(), 2);
+    fx += std::pow(fem_u[k].x(), 2);
+    dy += std::pow(particle_u[k].y() - fem_u[k].y() - shift, 2);
+    fy += std::pow(fem_u[k].y() - fem_uy_mean, 2);
+  }
+  require(fx > 0 && fy > 0, "the FEM field does not move the compared points: no relative error");
+  result.ux_error = std::sqrt(dx / fx);
+  result.uy_error = std::sqrt(dy / fy);
+  return result;
+}
+
 FemSolution run_calculix(const FemSpecimen& specimen, const FemSettings& settings) {
   const auto start = Clock::now();
   specimen.validate();

@@ -209,6 +209,24 @@ class FemDisplacementField {
   std::vector<std::vector<int>> bucket_quads_;
 };
 
+/// How far a particle model's displacement field lies from a FEM one, at the particles.
+struct FieldComparison {
+  int points = 0;   ///< particles inside the FEM plate (the others are skipped)
+  int skipped = 0;  ///< particles outside it (beyond the plate, in the hole)
+  /// |ux_particles - ux_fem| / |ux_fem|, 2-norms over the compared particles.
+  double ux_error = 0;
+  /// |uy_particles - uy_fem - c| / |uy_fem - mean(uy_fem)| with c = mean(uy_particles - uy_fem):
+  /// the rigid translation along y, which the two models' supports fix differently, is removed
+  /// (the grips hold ux, so there is no rigid ux or in-plane rotation to remove).
+  double uy_error = 0;
+};
+/// Samples `fem` at each particle's reference position (x, y, z - z_offset) and compares with the
+/// particle's displacement: the relative L2 errors of ux and uy. `z_offset` is the particle
+/// model's mid-plane z (0 for hex2d layers). Throws plydem::Error if fewer than 2 particles lie in
+/// the FEM plate or the FEM field is empty.
+FieldComparison compare_displacements(const FemDisplacementField& fem, const Particles& particles,
+                                      double z_offset = 0);
+
 /// What one CalculiX run measured.
 struct FemSolution {
   /// False when ccx could not be found; then only `message` is set.

@@ -324,6 +324,31 @@ TEST_CASE("30 deg ply: Ex, nu_xy and the shear coupling gamma_xy/eps_x of off-ax
   CHECK(((*ux)(0) - (*u0)(0)) / 1.1e-3 == doctest::Approx(f.exx).epsilon(1e-5));
   CHECK(((*uy)(1) - (*u0)(1)) / 0.37e-3 == doctest::Approx(f.eyy).epsilon(1e-5));
   CHECK(((*top)(2) - (*u0)(2)) / (0.5 * h) == doctest::Approx(f.ezz).epsilon(1e-5));
+  // Particles on a grid carrying the FEM field, shifted rigidly along y: no error; ux 1% too large
+  // everywhere: 1% error in ux only.
+  Particles particles;
+  particles.resize(12 * 5 + 1);
+  for (int i = 0; i < 12; ++i) {
+    for (int j = 0; j < 5; ++j) {
+      const int k = 5 * i + j;
+      particles.reference_position.row(k) << 0.4e-3 + 0.8e-3 * i, 0.2e-3 + 0.4e-3 * j, 0;
+      const Eigen::Vector3d u =
+          *field.at(particles.reference_position(k, 0), particles.reference_position(k, 1));
+      particles.displacement.row(k) << u.x(), u.y() + 3e-6, u.z();
+    }
+  }
+  particles.reference_position.row(60) << 11e-3, 1e-3, 0;  // beyond the plate: skipped
+  FieldComparison same = compare_displacements(field, particles);
+  CHECK(same.points == 60);
+  CHECK(same.skipped == 1);
+  CHECK(same.ux_error < 1e-12);
+  CHECK(same.uy_error < 1e-12);
+  particles.displacement.col(0) *= 1.01;
+  const FieldComparison stretched = compare_displacements(field, particles);
+  CHECK(stretched.ux_error == doctest::Approx(0.01).epsilon(1e-9));
+  CHECK(stretched.uy_error < 1e-12);
+  CHECK_THROWS_WITH_AS(compare_displacements(field, particles, 1.0),
+                       doctest::Contains("same frame"), Error);
   CHECK_FALSE(field.at(-1e-4, 1e-3).has_value());
   CHECK_FALSE(field.at(5e-3, 2.1e-3).has_value());
   CHECK_FALSE(field.at(5e-3, 1e-3, 0.6 * h).has_value());
