@@ -676,11 +676,13 @@ FemMesh build_fem_mesh(const FemSpecimen& specimen, const FemMeshSettings& setti
   for (std::size_t k = 0; k < plane.quad.size(); ++k)
     for (int c = 0; c < 4; ++c)
       mesh.plane_quad(static_cast<Eigen::Index>(k), c) = corner_index[plane.quad[k][c]];
-  for (int l = 0; l <= layers; ++l) mesh.level_z.push_back(z[order * l]);
-  mesh.level_node.resize(corners, layers + 1);
+  // Every level: the corner nodes of C3D20R elements also carry the vertical mid-edge nodes.
+  mesh.level_z = z;
+  const int levels = static_cast<int>(z.size());
+  mesh.level_node.resize(corners, levels);
   for (int p = 0; p < plane_nodes; ++p) {
     if (corner_index[p] < 0) continue;
-    for (int l = 0; l <= layers; ++l) mesh.level_node(corner_index[p], l) = node(p, order * l);
+    for (int l = 0; l < levels; ++l) mesh.level_node(corner_index[p], l) = node(p, l);
   }
   return mesh;
 }

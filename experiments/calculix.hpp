@@ -140,8 +140,9 @@ CalculixAvailability calculix_availability(const std::string& executable = "ccx"
 /// graded geometrically from the hole element size to the outer one) joined node to node to
 /// rectangular grids on either side. The quadrilateral mesh is extruded through the plies.
 /// Quadratic elements take their mid-edge nodes from the same mapping, so they lie on the hole's
-/// circle. The "corner grid" (plane_position, plane_quad, level_z, level_node) is the mesh as
-/// trilinear hexahedra: what FemDisplacementField interpolates on.
+/// circle. The "corner grid" (plane_position, plane_quad, level_z, level_node) is the mesh's
+/// element corners in plane, on every node level through the thickness (C3D20R: the elements'
+/// corner levels and their mid levels): what FemDisplacementField interpolates on.
 struct FemMesh {
   FemElement element = FemElement::kC3D8I;
   Vector3Array node_position;  ///< row = node index; CalculiX node id = index + 1 [m]
@@ -152,7 +153,7 @@ struct FemMesh {
 
   Eigen::Array<double, Eigen::Dynamic, 2> plane_position;  ///< in-plane corner nodes [m]
   Eigen::Array<int, Eigen::Dynamic, 4> plane_quad;         ///< counter-clockwise seen from +z
-  std::vector<double> level_z;  ///< z of the corner node levels, bottom to top [m]
+  std::vector<double> level_z;  ///< z of the node levels, bottom to top [m]
   /// level_node(p, l): the node at plane corner node p on level l.
   Eigen::ArrayXXi level_node;
 
@@ -178,7 +179,8 @@ std::string calculix_input(const FemSpecimen& specimen, const FemMesh& mesh,
 /// bucket grid, its bilinear map inverted by Newton's method, the four corners' values combined
 /// with the bilinear weights on the two node levels that straddle z, then linearly in z. This is
 /// exactly the C3D8 displacement field (C3D8I's incompatible modes are internal to each element
-/// and not part of it) and, for C3D20R, the field of its corner nodes. To compare with a DEM field,
+/// and not part of it); for C3D20R it uses the corner and vertical mid-edge nodes (every node
+/// level) and leaves out the in-plane mid-edge nodes. To compare with a DEM field,
 /// sample both on one grid inside the plate; the supports fix the rigid translation along y at
 /// the left end, so remove the mean uy of each field (or fit and remove an in-plane rigid motion)
 /// before comparing uy.

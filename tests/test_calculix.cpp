@@ -177,6 +177,10 @@ TEST_CASE("a C3D20R element row holds 20 distinct nodes, corners on the corner g
   // (16 x 8 quadrilaterals) x 2 layers: corner levels 3, mid levels 2.
   const int corner_nodes = 17 * 9, edge_nodes = 16 * 9 + 17 * 8;
   CHECK(mesh.node_count() == 3 * (corner_nodes + edge_nodes) + 2 * corner_nodes);
+  // The corner grid has every node level: the mid levels hold the vertical mid-edge nodes.
+  REQUIRE(mesh.level_z.size() == 5);
+  CHECK(mesh.level_z[1] == doctest::Approx(-0.05e-3));
+  CHECK(mesh.level_node(mesh.plane_quad(0, 0), 1) == mesh.element_nodes(0, 16));
   for (int e = 0; e < mesh.element_count(); ++e) {
     std::vector<int> row(mesh.element_nodes.row(e).begin(), mesh.element_nodes.row(e).end());
     std::sort(row.begin(), row.end());
@@ -293,6 +297,16 @@ TEST_CASE("30 deg ply: Ex, nu_xy and the shear coupling gamma_xy/eps_x of off-ax
   CHECK(std::abs(r.fem.nu_yx - clt.nu_yx) < 1e-5);
   CHECK(r.fem.shear_coupling_x == doctest::Approx(clt.shear_coupling_x).epsilon(1e-5));
   CHECK(clt.shear_coupling_x == doctest::Approx(-0.73).epsilon(0.01));  // FEM_NOTES' -0.73
+
+  // The quadratic element, on a coarse mesh, is as exact.
+  FemSettings quadratic;
+  quadratic.mesh.element = FemElement::kC3D20R;
+  quadratic.mesh.element_size = 0.5e-3;
+  const FemSolution q = run_calculix(coupon, quadratic);
+  REQUIRE(q.available);
+  CHECK(q.elements == 80);
+  CHECK(relative(q.gross_stress / q.exx, clt.Ex) < 1e-5);
+  CHECK(q.gamma_xy / q.exx == doctest::Approx(clt.shear_coupling_x).epsilon(1e-5));
 
   // Clamped grips stop the shear and stiffen the coupon (FEM_NOTES: the trap the free ends avoid).
   FemSettings clamped;
