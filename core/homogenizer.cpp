@@ -10,32 +10,6 @@
 namespace plydem {
 namespace {
 
-// Strain tensor of the Voigt unit strain k (engineering shear: off-diagonals 1/2).
-Eigen::Matrix3d unit_strain(int k) {
-  Eigen::Matrix3d e = Eigen::Matrix3d::Zero();
-  switch (k) {
-    case 0:
-      e(0, 0) = 1;
-      break;
-    case 1:
-      e(1, 1) = 1;
-      break;
-    case 2:
-      e(2, 2) = 1;
-      break;
-    case 3:
-      e(1, 2) = e(2, 1) = 0.5;
-      break;
-    case 4:
-      e(0, 2) = e(2, 0) = 0.5;
-      break;
-    default:
-      e(0, 1) = e(1, 0) = 0.5;
-      break;
-  }
-  return e;
-}
-
 BondParameters cell_bond(const UnitCell& cell, int b, const FamilyStiffness& k) {
   const UnitCell::Bond& bond = cell.bonds[b];
   const Eigen::Vector3d branch = cell.branch(b);
@@ -78,7 +52,7 @@ Eigen::MatrixXd cell_hessian(const UnitCell& cell, const std::vector<FamilyStiff
     const Eigen::Vector3d x_j =
         cell.basis[bond.second] + cell.lattice_vectors * bond.image.cast<double>();
     for (int s = 0; s < 6; ++s) {
-      const Eigen::Matrix3d e = unit_strain(s);
+      const Eigen::Matrix3d e = voigt_unit_strain(s);
       map.block<3, 1>(0, s) = e * x_i;
       map.block<3, 1>(6, s) = e * x_j;
     }
@@ -90,6 +64,31 @@ Eigen::MatrixXd cell_hessian(const UnitCell& cell, const std::vector<FamilyStiff
 }
 
 }  // namespace
+
+Eigen::Matrix3d voigt_unit_strain(int k) {
+  Eigen::Matrix3d e = Eigen::Matrix3d::Zero();
+  switch (k) {
+    case 0:
+      e(0, 0) = 1;
+      break;
+    case 1:
+      e(1, 1) = 1;
+      break;
+    case 2:
+      e(2, 2) = 1;
+      break;
+    case 3:
+      e(1, 2) = e(2, 1) = 0.5;
+      break;
+    case 4:
+      e(0, 2) = e(2, 0) = 0.5;
+      break;
+    default:
+      e(0, 1) = e(1, 0) = 0.5;
+      break;
+  }
+  return e;
+}
 
 Eigen::Vector3d UnitCell::branch(int b) const {
   const Bond& bond = bonds[b];

@@ -45,6 +45,10 @@ struct FamilyStiffness {
   double twisting = 0;  ///< k_t [N m/rad]
 };
 
+/// The strain tensor of the Voigt unit strain k (order 11, 22, 33, 23, 13, 12) with engineering
+/// shear strains: an off-diagonal pair of entries is 1/2 each. A particle at x moves by E x.
+Eigen::Matrix3d voigt_unit_strain(int k);
+
 /// Affine stiffness, eq. (5): particles follow the strain, no particle rotates.
 Matrix6d affine_stiffness(const UnitCell& cell, const std::vector<FamilyStiffness>& families);
 /// Relaxed stiffness: spins and sublattice shifts condensed out at minimum energy.

@@ -21,6 +21,7 @@
 #include "core/elasticity.hpp"
 #include "core/homogenizer.hpp"
 #include "core/model.hpp"
+#include "core/static_solver.hpp"
 
 namespace plydem {
 
@@ -59,13 +60,28 @@ struct PeriodicHomogenization {
   int particles = 0;
   int bonds = 0;
   int internal_dofs = 0;  ///< fluctuation and rotation dofs condensed out
-  std::string method;     ///< the sparse solver used
-  double seconds = 0;     ///< wall-clock time of the whole homogenization
+  /// Internal dofs without stiffness of their own (e.g. particle spins in a network of normal
+  /// springs) plus zero pivots of the factorization: zero-energy modes of the fluctuations that
+  /// the macro strains do not load, set to zero. Rigid translations are not counted.
+  int zero_modes = 0;
+  std::string method;  ///< the sparse solver used
+  double seconds = 0;  ///< wall-clock time of the whole homogenization
 };
 
 /// Affine and relaxed effective stiffness of one period. Throws plydem::Error naming the cause for
-/// an inconsistent model, a negative stiffness (an unstable calibration) or internal dofs that the
-/// bonds do not restrain beyond the rigid translations (a loose particle, a mechanism).
-PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic);
+/// an inconsistent model, a negative stiffness (an unstable calibration), a loose particle (no
+/// bonds) or a mechanism that the macro strains load (the bonds do not restrain some internal
+/// dofs, and straining the period would move them). Zero-energy modes that the strains do not load
+/// (rigid translations of the fluctuation, spins of particles without rotational stiffness, a
+/// lattice's sliding planes) do not change the stiffness; they are counted in zero_modes.
+///
+/// H_ww (the fluctuation and rotation block) is the static solver's stiffness of `periodic.model`
+/// (core/stiffness_assembly.hpp), with one particle's translations fixed (the rigid translations);
+/// it is factorized with SupernodalCholesky up to settings.direct_max_dofs internal dofs and solved
+/// by conjugate gradients above (settings.method, preconditioner, cg_tolerance and pivot_tolerance
+/// as for solve_static). The six columns of H_wE are the right-hand sides; relaxed = (H_EE - H_Ew
+/// H_ww^-1 H_wE) / volume, affine = H_EE / volume.
+PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
+                                           const StaticSettings& settings = {});
 
 }  // namespace plydem

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <Eigen/IterativeLinearSolvers>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,8 +12,9 @@
 #include <vector>
 
 #include "contacts/bond_kernel.hpp"
-#include "contacts/parallel_bond.hpp"
 #include "core/error.hpp"
+#include "core/sparse_cholesky.hpp"
+#include "core/stiffness_assembly.hpp"
 
 namespace plydem {
 namespace {
@@ -287,19 +287,17 @@ std::string join(const std::vector<std::string>& items) {
       join(clusters)));
 }
 
-// Zero pivots of the factor: the free dofs the bonds do not restrain (a mechanism).
+// Zero pivots of the factor: the free dofs the bonds do not restrain (a mechanism). `zero` lists
+// them by free index; `pivots` are in the same numbering.
 [[noreturn]] void refuse_zero_pivots(const Particles& p, const std::vector<int>& free_dofs,
-                                     const Eigen::VectorXd& pivots,
-                                     const Eigen::VectorXi& permuted_to_free, double tolerance) {
-  std::vector<int> zero;
+                                     const Eigen::VectorXd& pivots, const std::vector<int>& zero,
+                                     double tolerance) {
   bool negative = false;
-  for (Eigen::Index k = 0; k < pivots.size(); ++k) {
-    if (!(pivots(k) > tolerance)) zero.push_back(static_cast<int>(k));
-    if (pivots(k) < -tolerance) negative = true;
-  }
+  for (int f : zero)
+    if (pivots(f) < -tolerance) negative = true;
   std::vector<std::string> at;
   for (std::size_t k = 0; k < zero.size() && k < 6; ++k)
-    at.push_back(dof_at(p, free_dofs[permuted_to_free(zero[k])]));
+    at.push_back(dof_at(p, free_dofs[zero[k]]));
   if (zero.size() > at.size()) at.push_back(fmt::format("and {} more", zero.size() - at.size()));
   throw Error(fmt::format(
       "static solve: the free dofs are not restrained: the LDL^T factor of the stiffness has {} "
@@ -410,102 +408,6 @@ std::vector<PinnedDof> pin_rigid_modes(const Model& model, DofConstraints& const
 
 namespace {
 
-// The stiffness as 6x6 blocks, one per pair of bonded particles and one per particle, before it is
-// compressed to scalar entries. Summing the bonds into blocks first keeps the memory at a third of
-// a list of 144 triplets per bond and needs no sort.
-struct BlockStiffness {
-  std::vector<int> start;      // blocks of column particle i: start[i] .. start[i+1]
-  std::vector<int> neighbour;  // row particle of each block, sorted, including i itself
-  std::vector<double> value;   // 36 per block, column-major: K(6 j + r, 6 i + c) at 6 c + r
-
-  // The block K(row particle, column particle); the pair must be bonded (or the same particle).
-  std::size_t slot(int column_particle, int row_particle) const {
-    const auto first = neighbour.begin() + start[column_particle];
-    const auto last = neighbour.begin() + start[column_particle + 1];
-    return static_cast<std::size_t>(std::lower_bound(first, last, row_particle) -
-                                    neighbour.begin());
-  }
-  double* block(int column_particle, int row_particle) {
-    return value.data() + 36 * slot(column_particle, row_particle);
-  }
-  const double* block(int column_particle, int row_particle) const {
-    return value.data() + 36 * slot(column_particle, row_particle);
-  }
-};
-
-BlockStiffness block_stiffness(const Model& model) {
-  const int n = model.particles.size();
-  const Bonds& bonds = model.bonds;
-  BlockStiffness k;
-  std::vector<std::vector<int>> adjacent(n);
-  for (int i = 0; i < n; ++i) adjacent[i].push_back(i);
-  for (int b = 0; b < bonds.size(); ++b) {
-    adjacent[bonds.first(b)].push_back(bonds.second(b));
-    adjacent[bonds.second(b)].push_back(bonds.first(b));
-  }
-  k.start.assign(n + 1, 0);
-  for (int i = 0; i < n; ++i) {
-    std::sort(adjacent[i].begin(), adjacent[i].end());
-    adjacent[i].erase(std::unique(adjacent[i].begin(), adjacent[i].end()), adjacent[i].end());
-    k.start[i + 1] = k.start[i] + static_cast<int>(adjacent[i].size());
-  }
-  k.neighbour.reserve(k.start[n]);
-  for (const std::vector<int>& a : adjacent)
-    k.neighbour.insert(k.neighbour.end(), a.begin(), a.end());
-  k.value.assign(36 * static_cast<std::size_t>(k.start[n]), 0.0);
-
-  for (int b = 0; b < bonds.size(); ++b) {
-    const Matrix12d full = parallel_bond_stiffness(bond_parameters(bonds, b));
-    // B^T D B is symmetric up to rounding; make it exactly so (the solvers read one triangle).
-    const Matrix12d sym = 0.5 * (full + full.transpose());
-    const int particle[2] = {bonds.first(b), bonds.second(b)};
-    for (int cb = 0; cb < 2; ++cb)
-      for (int rb = 0; rb < 2; ++rb) {
-        double* v = k.block(particle[cb], particle[rb]);
-        for (int c = 0; c < 6; ++c)
-          for (int r = 0; r < 6; ++r) v[6 * c + r] += sym(6 * rb + r, 6 * cb + c);
-      }
-  }
-  return k;
-}
-
-// The scalar matrix over the dofs with free_index >= 0 (in that numbering), or only its lower
-// triangle, each entry times scale(row) scale(column); exact zeros are dropped (the in-plane and
-// out-of-plane blocks of a flat layer stay apart, so the ordering sees that they are independent).
-SparseMatrix compress(const BlockStiffness& k, const std::vector<int>& free_index, int size,
-                      const Eigen::VectorXd& scale, bool lower_only) {
-  const int n = static_cast<int>(k.start.size()) - 1;
-  // Two passes, counting then filling the matrix's own arrays: no growing vectors, no copy (in a
-  // virtual machine the page faults of large fresh buffers cost more than the arithmetic).
-  // Columns come in increasing order (free_index increases with the dof) and so do rows within a
-  // column (sorted neighbours, then components): the result is a valid compressed matrix.
-  SparseMatrix out(size, size);
-  for (int pass = 0; pass < 2; ++pass) {
-    Eigen::Index entries = 0;
-    for (int i = 0; i < n; ++i)
-      for (int c = 0; c < kDofsPerParticle; ++c) {
-        const int column = free_index[kDofsPerParticle * i + c];
-        if (column < 0) continue;
-        for (int slot = k.start[i]; slot < k.start[i + 1]; ++slot) {
-          const int j = k.neighbour[slot];
-          const double* v = k.value.data() + 36 * static_cast<std::size_t>(slot) + 6 * c;
-          for (int r = 0; r < kDofsPerParticle; ++r) {
-            const int row = free_index[kDofsPerParticle * j + r];
-            if (row < 0 || v[r] == 0 || (lower_only && row < column)) continue;
-            if (pass == 1) {
-              out.innerIndexPtr()[entries] = row;
-              out.valuePtr()[entries] = scale(row) * v[r] * scale(column);
-            }
-            ++entries;
-          }
-        }
-        if (pass == 1) out.outerIndexPtr()[column + 1] = static_cast<int>(entries);
-      }
-    if (pass == 0) out.resizeNonZeros(entries);
-  }
-  return out;
-}
-
 // Generalized forces of the bonds, -K q, by the explicit kernel, in dof order.
 Eigen::VectorXd bond_generalized_forces(Particles& p, const Bonds& bonds, double* energy) {
   const BondPass pass = compute_bond_forces(p, bonds);
@@ -533,17 +435,25 @@ SparseMatrix assemble_stiffness(const Model& model) {
   const int dofs = kDofsPerParticle * model.particles.size();
   std::vector<int> all(dofs);
   std::iota(all.begin(), all.end(), 0);
-  return compress(block_stiffness(model), all, dofs, Eigen::VectorXd::Ones(dofs), false);
+  const SparseMatrix lower =
+      compress_lower(block_stiffness(model, ParticleOrder::identity(model.particles.size())), all,
+                     dofs, Eigen::VectorXd::Ones(dofs));
+  const SparseMatrix strictly_lower = lower.triangularView<Eigen::StrictlyLower>();
+  return lower + SparseMatrix(strictly_lower.transpose());
 }
 
-StaticResult solve_static(Model& model, const DofConstraints& given,
-                          const StaticSettings& settings) {
+void validate(const StaticSettings& settings) {
   require(settings.direct_max_dofs >= 0 && settings.cg_max_iterations >= 0 &&
               std::isfinite(settings.cg_tolerance) && settings.cg_tolerance > 0 &&
               std::isfinite(settings.pivot_tolerance) && settings.pivot_tolerance > 0 &&
               settings.pivot_tolerance < 1,
-          "static solve: settings out of range (need direct_max_dofs >= 0, cg_max_iterations >= "
+          "static solver settings out of range (need direct_max_dofs >= 0, cg_max_iterations >= "
           "0, cg_tolerance > 0, 0 < pivot_tolerance < 1)");
+}
+
+StaticResult solve_static(Model& model, const DofConstraints& given,
+                          const StaticSettings& settings) {
+  validate(settings);
   StaticResult result;
   auto start = Clock::now();
   check_input(model, given);
@@ -559,38 +469,52 @@ StaticResult solve_static(Model& model, const DofConstraints& given,
   }
   result.seconds.checks = seconds_since(start);
 
-  start = Clock::now();
   Particles& p = model.particles;
   const int n = p.size();
   const int dofs = kDofsPerParticle * n;
   result.dofs = dofs;
+  const int prescribed = constraints.prescribed_count();
+  const int nf = dofs - prescribed;
+  result.free_dofs = nf;
+  result.prescribed_dofs = prescribed;
+  const bool direct = settings.method == StaticMethod::kDirect ||
+                      (settings.method == StaticMethod::kAuto && nf <= settings.direct_max_dofs);
+  result.method = direct ? StaticMethod::kDirect : StaticMethod::kIterative;
 
-  // Dof -> index among the free dofs (-1 if prescribed); prescribed values in a full vector.
+  // The direct solver factorizes in a fill-reducing order of the particles (counted with the
+  // factorization); CG needs none.
+  start = Clock::now();
+  const ParticleOrder order =
+      direct && nf > 0 ? ParticleOrder::minimum_degree(model) : ParticleOrder::identity(n);
+  const double ordering_seconds = seconds_since(start);
+
+  start = Clock::now();
+  // Dofs in rank order (dof 6 * rank + component): index among the free dofs, or -1 if
+  // prescribed; free_dofs[f] is the model's dof (6 * particle + component) of free index f.
   std::vector<int> free_index(dofs, -1);
   std::vector<int> free_dofs;
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(dofs);
-  for (int i = 0; i < n; ++i)
+  free_dofs.reserve(nf);
+  Eigen::VectorXd u_ranked = Eigen::VectorXd::Zero(dofs);
+  for (int r = 0; r < n; ++r) {
+    const int i = order.order[r];
     for (int c = 0; c < kDofsPerParticle; ++c) {
-      const int d = kDofsPerParticle * i + c;
       if (constraints.fixed(i, c)) {
-        u(d) = constraints.value(i, c);
+        u_ranked(kDofsPerParticle * r + c) = constraints.value(i, c);
       } else {
-        free_index[d] = static_cast<int>(free_dofs.size());
-        free_dofs.push_back(d);
+        free_index[kDofsPerParticle * r + c] = static_cast<int>(free_dofs.size());
+        free_dofs.push_back(kDofsPerParticle * i + c);
       }
     }
-  const int nf = static_cast<int>(free_dofs.size());
-  result.free_dofs = nf;
-  result.prescribed_dofs = dofs - nf;
+  }
 
-  const BlockStiffness k = block_stiffness(model);
+  const BlockStiffness k = block_stiffness(model, order);
   // Jacobi scaling A = S K_ff S with S = diag(K_ff)^-1/2. Rotational and translational
   // stiffnesses differ by the squared particle radius (1e-10 in SI); with a unit diagonal the
   // pivot test below means the same for both, and CG's preconditioners start better conditioned.
   Eigen::VectorXd s(nf);
   for (int f = 0; f < nf; ++f) {
     const int i = free_dofs[f] / kDofsPerParticle, c = free_dofs[f] % kDofsPerParticle;
-    const double diagonal = k.block(i, i)[7 * c];
+    const double diagonal = k.diagonal(order.rank[i], c);
     if (!(diagonal > 0))
       throw Error(
           fmt::format("static solve: nothing resists {}: every bond of the particle has zero "
@@ -598,49 +522,36 @@ StaticResult solve_static(Model& model, const DofConstraints& given,
                       dof_at(p, free_dofs[f])));
     s(f) = 1 / std::sqrt(diagonal);
   }
-  // The lower triangle only: all that LDL^T, IC and CG read, at half the memory.
-  const SparseMatrix a = compress(k, free_index, nf, s, true);
+  // The lower triangle only: all that the factorization, IC and CG read, at half the memory.
+  const SparseMatrix a = compress_lower(k, free_index, nf, s);
   result.stiffness_nonzeros = a.nonZeros();
-  // Right-hand side -K_fp u_p: the kernel's generalized forces with the free dofs at zero, taken
-  // on a copy so that a refused solve leaves the model as it was.
-  Particles scratch = p;
-  set_state(scratch, u);
-  const Eigen::VectorXd f_p = bond_generalized_forces(scratch, model.bonds, nullptr);
+  // Right-hand side -K_fp u_p, from the same blocks (the prescribed values, free dofs at zero).
+  const Eigen::VectorXd k_u = k.multiply(u_ranked);
   Eigen::VectorXd b(nf);
-  for (int f = 0; f < nf; ++f) b(f) = s(f) * f_p(free_dofs[f]);
+  for (int d = 0; d < dofs; ++d)
+    if (free_index[d] >= 0) b(free_index[d]) = -s(free_index[d]) * k_u(d);
   result.seconds.assembly = seconds_since(start);
 
-  const bool direct = settings.method == StaticMethod::kDirect ||
-                      (settings.method == StaticMethod::kAuto && nf <= settings.direct_max_dofs);
-  result.method = direct ? StaticMethod::kDirect : StaticMethod::kIterative;
   Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);
   if (nf == 0) {
     result.method_name = "none (every dof prescribed)";
   } else if (direct) {
-    result.method_name = "SimplicialLDLT (AMD)";
+    result.method_name = "supernodal Cholesky (AMD on particles)";
     start = Clock::now();
-    Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
-    ldlt.analyzePattern(a);
-    ldlt.factorize(a);
-    bool singular = ldlt.info() != Eigen::Success;
+    SupernodalCholesky cholesky;
+    cholesky.analyze(a);
     // Round-off leaves a zero pivot far above machine epsilon, the more so the larger the
     // system: on hex2d coupons with a free rigid mode we measured up to 4e-10 at 2.3e4 free dofs
     // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold
-    // that grows with the size.
+    // that grows with the size. The factorization collects every zero pivot in one pass.
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
-    if (!singular) singular = !(ldlt.vectorD().minCoeff() > threshold);
-    if (singular) {
-      // Eigen stops at an exact zero pivot and leaves the rest undefined. Shifting A by far less
-      // than the tolerance makes it positive definite, so every pivot is computed and the zero
-      // ones stay below the tolerance: count and locate them for the message.
-      ldlt.setShift(1e-3 * threshold);
-      ldlt.factorize(a);
-      const Eigen::VectorXi permuted_to_free = ldlt.permutationPinv().indices();
-      refuse_zero_pivots(p, free_dofs, ldlt.vectorD(), permuted_to_free, threshold);
-    }
-    result.seconds.factorization = seconds_since(start);
+    cholesky.factorize(a, threshold);
+    if (!cholesky.zero_pivots().empty())
+      refuse_zero_pivots(p, free_dofs, cholesky.pivots(), cholesky.zero_pivots(), threshold);
+    result.seconds.factorization = ordering_seconds + seconds_since(start);
     start = Clock::now();
-    y = ldlt.solve(b);
+    y = b;
+    cholesky.solve_in_place(y);
     result.seconds.solve = seconds_since(start);
   } else {
     // Warm start from the current state: successive load stages then take few iterations.
@@ -666,6 +577,10 @@ StaticResult solve_static(Model& model, const DofConstraints& given,
   result.relative_residual = b_norm > 0 ? (ay - b).norm() / b_norm : ay.norm();
 
   // The solution, and the kernel's forces at it: ~0 on free dofs, -(K u)_p on prescribed ones.
+  Eigen::VectorXd u(dofs);
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < kDofsPerParticle; ++c)
+      u(kDofsPerParticle * i + c) = constraints.value(i, c);
   for (int f = 0; f < nf; ++f) u(free_dofs[f]) = s(f) * y(f);
   set_state(p, u);
   const Eigen::VectorXd force = bond_generalized_forces(p, model.bonds, &result.strain_energy);

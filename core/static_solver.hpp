@@ -90,7 +90,7 @@ Eigen::SparseMatrix<double> assemble_stiffness(const Model& model);
 
 enum class StaticMethod {
   kAuto,      ///< kDirect up to StaticSettings::direct_max_dofs free dofs, kIterative above
-  kDirect,    ///< sparse LDL^T (Eigen::SimplicialLDLT, AMD ordering)
+  kDirect,    ///< sparse Cholesky (SupernodalCholesky, AMD ordering of the particles)
   kIterative  ///< preconditioned conjugate gradient (Eigen::ConjugateGradient)
 };
 
@@ -105,7 +105,7 @@ struct StaticSettings {
   double cg_tolerance = 1e-13;
   /// Iteration cap of the conjugate gradient; 0 = twice the number of free dofs (Eigen's default).
   int cg_max_iterations = 0;
-  /// A pivot of the LDL^T factor of the Jacobi-scaled K_ff (unit diagonal) at or below
+  /// A pivot (of the LDL^T form) of the Jacobi-scaled K_ff (unit diagonal) at or below
   /// pivot_tolerance * max(free dofs, 1000) is taken as zero: the free dofs are not restrained
   /// there. The round-off in a zero pivot grows with the size of the system (see the .cpp); this
   /// test is a heuristic for mechanisms, while free rigid-body modes are found exactly, from the
@@ -115,18 +115,21 @@ struct StaticSettings {
   bool pin_rigid_modes = false;
 };
 
+/// Throws plydem::Error if a setting is out of range.
+void validate(const StaticSettings& settings);
+
 /// Wall-clock seconds of each phase (std::chrono::steady_clock).
 struct StaticTimings {
   double checks = 0;         ///< input checks and the rigid-mode analysis
   double assembly = 0;       ///< K, the free-free block, its scaling and the right-hand side
-  double factorization = 0;  ///< LDL^T (ordering included), or the preconditioner for CG
+  double factorization = 0;  ///< Cholesky (ordering included), or the preconditioner for CG
   double solve = 0;          ///< triangular solves, or the CG iterations
   double total() const { return checks + assembly + factorization + solve; }
 };
 
 struct StaticResult {
   StaticMethod method = StaticMethod::kDirect;  ///< kDirect or kIterative, as used
-  std::string method_name;                      ///< e.g. "SimplicialLDLT (AMD)"
+  std::string method_name;                      ///< e.g. "supernodal Cholesky (AMD on particles)"
   int dofs = 0;
   int free_dofs = 0;
   int prescribed_dofs = 0;              ///< pins included

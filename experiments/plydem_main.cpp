@@ -41,6 +41,8 @@ struct TensionOptions {
   double safety = 0.8;
   double grip_velocity_mm_s = 0;
   std::string grips = "free";
+  std::string layup;
+  double interface_normal = 0, interface_shear = 0;
   std::string solver = "static";
   std::vector<std::string> strategy_options;
   bool json = false;
@@ -92,6 +94,18 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
       ->capture_default_str();
   app.add_option("--grip-velocity-mm-s", o.grip_velocity_mm_s,
                  "grip velocity [mm/s]; 0 = derived from --ramp-cycles")
+      ->capture_default_str();
+  app.add_option(
+      "--layup", o.layup,
+      "a laminate instead of one ply, bottom ply first: [0/90/0], [0/30/45]s, [45/-45]s, "
+      "[0/90]2s (--angle then turns the whole laminate)");
+  app.add_option("--interface-normal", o.interface_normal,
+                 "normal stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
+                 "10 E2/t (see core/laminate.hpp); the paper used 1e14")
+      ->capture_default_str();
+  app.add_option("--interface-shear", o.interface_shear,
+                 "shear stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
+                 "10 G12/t; the paper used 1e13")
       ->capture_default_str();
   app.add_option("--grips", o.grips, "free (uniaxial stress) or clamped (ends held laterally)")
       ->check(CLI::IsMember({"free", "clamped"}))
@@ -151,6 +165,12 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
   s.coupon.thickness = o.thickness_mm * mm;
   s.coupon.particle_diameter = o.diameter_mm * mm;
   s.coupon.complete_boundary_cells = !o.raw_edges;
+  if (!o.layup.empty()) {
+    s.layup = plydem::parse_layup(o.layup);
+    for (double& angle : s.layup) angle += s.coupon.ply_angle;
+  }
+  s.interface.normal = o.interface_normal;
+  s.interface.shear = o.interface_shear;
   s.grip_length = o.grip_mm * mm;
   s.gauge_fraction = o.gauge_fraction;
   s.target_strain = o.target_strain;

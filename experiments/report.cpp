@@ -49,7 +49,7 @@ nlohmann::json pull_json(const PullResult& r) {
 }  // namespace
 
 std::string format_tension_table(const TensionResult& r, const TensionSettings& s) {
-  const bool zero = std::abs(r.ply_angle) < 1e-12;
+  const bool zero = std::abs(r.ply_angle) < 1e-12 && s.layup.empty();
   struct Row {
     std::string name;
     double dem, clt, scale;
@@ -62,12 +62,17 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
       {zero ? "nu21 (nu_yx)" : "nu_yx", r.dem.nu_yx, r.theory.nu_yx, 1, false},
   };
   std::string out;
-  out +=
-      fmt::format("plydem tension test: strategy {}, material {}, ply angle {:g} deg, grips {}\n",
-                  r.strategy, r.material.name, r.ply_angle / kDegree, grips_name(s.grips));
-  out += fmt::format("coupon {:g} mm x {:g} mm x {:g} mm, particle diameter {:g} mm\n\n",
+  const std::string specimen =
+      s.layup.empty()
+          ? fmt::format("ply angle {:g} deg", r.ply_angle / kDegree)
+          : fmt::format("laminate {} (interface {:.3g} / {:.3g} N/m^3)", format_layup(s.layup),
+                        s.interface.resolved(r.material, s.coupon.thickness).normal,
+                        s.interface.resolved(r.material, s.coupon.thickness).shear);
+  out += fmt::format("plydem tension test: strategy {}, material {}, {}, grips {}\n", r.strategy,
+                     r.material.name, specimen, grips_name(s.grips));
+  out += fmt::format("coupon {:g} mm x {:g} mm x {:g} mm{}, particle diameter {:g} mm\n\n",
                      s.coupon.length * 1e3, s.coupon.width * 1e3, s.coupon.thickness * 1e3,
-                     s.coupon.particle_diameter * 1e3);
+                     s.layup.empty() ? "" : " per ply", s.coupon.particle_diameter * 1e3);
   out += fmt::format("{:<14} {:>12} {:>12} {:>10}\n", "", "DEM", "CLT", "rel. error");
   for (const Row& row : rows) {
     const std::string unit = row.modulus ? " GPa" : "";
@@ -118,6 +123,13 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
   j["strategy"] = r.strategy;
   j["material"] = r.material.name;
   j["angle_deg"] = r.ply_angle / kDegree;
+  if (!s.layup.empty()) {
+    j["layup"] = format_layup(s.layup);
+    const InterfaceStiffness interface = s.interface.resolved(r.material, s.coupon.thickness);
+    j["interface"] = {{"normal_stiffness_per_area", interface.normal},
+                      {"shear_stiffness_per_area", interface.shear},
+                      {"lateral_radius_diameters", s.interface.lateral_radius}};
+  }
   j["solver"] = s.solver == TensionSolver::kStatic ? "static" : "explicit";
   j["grips"] = grips_name(s.grips);
   j["units"] = "SI (Pa, m, s)";

@@ -33,6 +33,9 @@ struct Sample {
 
 void TensionSettings::validate() const {
   coupon.validate();
+  if (!layup.empty()) interface.validate();
+  for (double angle : layup)
+    require(std::isfinite(angle), "a ply angle of the layup is not finite");
   require(std::isfinite(grip_length) && grip_length >= 0, "grip length must be >= 0");
   require(std::isfinite(gauge_fraction) && gauge_fraction > 0 && gauge_fraction < 1,
           fmt::format("gauge fraction must lie in (0, 1), got {}", gauge_fraction));
@@ -67,8 +70,13 @@ TensionResult TensionTest::run() const {
   result.ply_angle = settings_.coupon.ply_angle;
   result.calibration = strategy->calibrate(settings_.coupon.material, settings_.coupon.ply_angle,
                                            settings_.coupon.thickness);
-  result.theory = in_plane_constants(
-      rotate_reduced_stiffness(reduced_stiffness(settings_.coupon.material), result.ply_angle));
+  if (settings_.layup.empty()) {
+    result.theory = in_plane_constants(
+        rotate_reduced_stiffness(reduced_stiffness(settings_.coupon.material), result.ply_angle));
+  } else {
+    result.theory = laminate_constants(
+        laminate_plies({settings_.coupon, settings_.layup, settings_.interface}));
+  }
   result.along_x = pull(*strategy, result.ply_angle);
   result.along_y = pull(*strategy, result.ply_angle - std::numbers::pi / 2);
   result.dem.Ex = result.along_x.modulus;
@@ -77,11 +85,20 @@ TensionResult TensionTest::run() const {
   result.dem.Ey = result.along_y.modulus;
   result.dem.nu_yx = result.along_y.poisson;
   if (settings_.measure_specimen_stiffness) {
-    result.specimen = measure_specimen_stiffness(strategy->build(settings_.coupon));
+    result.specimen = measure_specimen_stiffness(build_specimen(*strategy, result.ply_angle));
     result.dem.Gxy = result.specimen.constants.Gxy;
   }
   result.wall_seconds = seconds_since(start);
   return result;
+}
+
+Model TensionTest::build_specimen(const Strategy& strategy, double ply_angle) const {
+  CouponSpec spec = settings_.coupon;
+  spec.ply_angle = ply_angle;
+  if (settings_.layup.empty()) return strategy.build(spec);
+  LaminateSpec laminate{spec, settings_.layup, settings_.interface};
+  for (double& angle : laminate.ply_angles) angle += ply_angle - settings_.coupon.ply_angle;
+  return build_laminate(strategy, laminate);
 }
 
 PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
@@ -89,7 +106,7 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   const TensionSettings& s = settings_;
   CouponSpec spec = s.coupon;
   spec.ply_angle = ply_angle;
-  Model model = strategy.build(spec);
+  Model model = build_specimen(strategy, ply_angle);
   Particles& p = model.particles;
 
   // Grips at both ends, gauge section in the middle.

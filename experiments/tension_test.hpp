@@ -26,6 +26,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/explicit_integrator.hpp"
+#include "core/laminate.hpp"
 #include "core/strategy.hpp"
 #include "experiments/stiffness_test.hpp"
 
@@ -40,9 +41,13 @@ struct TensionSettings {
   std::string strategy = "hex2d";
   /// Strategy options (Strategy::set_option), applied in order before calibration.
   std::vector<std::pair<std::string, double>> strategy_options;
-  CouponSpec coupon;            ///< material, ply angle and the coupon's size
-  double grip_length = 0;       ///< [m]; 0 = two particle diameters
-  double gauge_fraction = 0.5;  ///< central fraction of the length used as gauge section
+  CouponSpec coupon;  ///< material, ply angle and the coupon's size (thickness: per ply)
+  /// Ply angles of a laminate, bottom to top [rad] (core/laminate.hpp parse_layup); empty = the
+  /// single ply at coupon.ply_angle. A laminate's theory is CLT from its A matrix.
+  std::vector<double> layup;
+  InterfaceStiffness interface;  ///< between the plies of a laminate
+  double grip_length = 0;        ///< [m]; 0 = two particle diameters
+  double gauge_fraction = 0.5;   ///< central fraction of the length used as gauge section
   /// Strains are fitted on gauge particles at least this many diameters from a free edge.
   double edge_band_diameters = 2.0;
   double target_strain = 1e-3;  ///< nominal strain of the last stage
@@ -123,8 +128,11 @@ class TensionTest {
   /// Both loadings; the strategy is taken from the default registry and given the settings'
   /// strategy options.
   TensionResult run() const;
-  /// One coupon of the ply at `ply_angle`, pulled along x by `strategy`.
+  /// One coupon pulled along x by `strategy`: the ply at `ply_angle`, or for a laminate every ply
+  /// turned by `ply_angle` - coupon.ply_angle.
   PullResult pull(const Strategy& strategy, double ply_angle) const;
+  /// The specimen pull() loads, before grips are assigned.
+  Model build_specimen(const Strategy& strategy, double ply_angle) const;
 
  private:
   TensionSettings settings_;

@@ -1,0 +1,113 @@
+// Laminates: layup strings, stacking with interface bonds, and a [0/90/0] tension test against
+// classical lamination theory written out here from the engineering constants.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "core/laminate.hpp"
+#include "core/registry.hpp"
+#include "experiments/tension_test.hpp"
+
+using namespace plydem;
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::vector<double> degrees(const std::vector<double>& radians) {
+  std::vector<double> out;
+  for (double r : radians) out.push_back(std::round(r / kDeg * 1e9) / 1e9);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("layup strings expand as composites engineers write them") {
+  CHECK(degrees(parse_layup("[0/90/0]")) == std::vector<double>{0, 90, 0});
+  CHECK(degrees(parse_layup("[0/30/45]s")) == std::vector<double>{0, 30, 45, 45, 30, 0});
+  CHECK(degrees(parse_layup("[45/-45]s")) == std::vector<double>{45, -45, -45, 45});
+  CHECK(degrees(parse_layup("[0/45/-45/90]s")) ==
+        std::vector<double>{0, 45, -45, 90, 90, -45, 45, 0});
+  CHECK(degrees(parse_layup("[0/90]2s")) == std::vector<double>{0, 90, 0, 90, 90, 0, 90, 0});
+  CHECK(degrees(parse_layup("[0/±45/90]")) == std::vector<double>{0, 45, -45, 90});
+  CHECK(degrees(parse_layup(" [ 0 / +-30 ] ")) == std::vector<double>{0, 30, -30});
+  CHECK(format_layup(parse_layup("[0/30/45]s")) == "[0/30/45/45/30/0]");
+  CHECK_THROWS_WITH_AS(parse_layup("0/90"), doctest::Contains("not of the form"), Error);
+  CHECK_THROWS_WITH_AS(parse_layup("[0//90]"), doctest::Contains("empty ply"), Error);
+  CHECK_THROWS_WITH_AS(parse_layup("[0/abc]"), doctest::Contains("'abc' is not a ply angle"),
+                       Error);
+  CHECK_THROWS_WITH_AS(parse_layup("[0/90]x"), doctest::Contains("repeat count"), Error);
+  CHECK_THROWS_WITH_AS(parse_layup("[]"), doctest::Contains("no plies"), Error);
+  CHECK_THROWS_WITH_AS(parse_layup("[nan]"), doctest::Contains("not a ply angle"), Error);
+}
+
+TEST_CASE("a laminate stacks its plies and bonds every facing surface particle across") {
+  LaminateSpec spec;
+  spec.coupon.material = load_material("eglass-my750");
+  spec.coupon.length = 1.0e-3;
+  spec.coupon.width = 0.5e-3;
+  spec.ply_angles = parse_layup("[0/45/90]");
+  const std::unique_ptr<Strategy> hex2d = default_registry().create("hex2d");
+  const Model model = build_laminate(*hex2d, spec);
+  const Particles& p = model.particles;
+  CHECK(model.thickness == doctest::Approx(3 * spec.coupon.thickness));
+  std::vector<int> interface_bonds(p.size(), 0);
+  double volume = 0;
+  for (int b = 0; b < model.bonds.size(); ++b) {
+    const int i = model.bonds.first(b), j = model.bonds.second(b);
+    if (model.bonds.family(b) < 0) {
+      CHECK(std::abs(p.ply(i) - p.ply(j)) == 1);  // only adjacent plies
+      CHECK(model.bonds.family(b) == -1 - std::min(p.ply(i), p.ply(j)));
+      CHECK(model.bonds.bending_stiffness(b) == 0);
+      ++interface_bonds[i];
+      ++interface_bonds[j];
+    } else {
+      CHECK(p.ply(i) == p.ply(j));
+    }
+  }
+  for (int i = 0; i < p.size(); ++i) {
+    volume += p.volume(i);
+    CHECK(p.reference_position(i, 2) == doctest::Approx(p.ply(i) * spec.coupon.thickness));
+    // hex2d plies are single layers: every particle faces an interface, the middle ply two
+    // (at the rim, lattices turned to different angles need not overlap).
+    const double x = p.reference_position(i, 0), y = p.reference_position(i, 1), d = 0.05e-3;
+    if (x > 2 * d && x < spec.coupon.length - 2 * d && y > 2 * d && y < spec.coupon.width - 2 * d) {
+      CHECK(interface_bonds[i] >= (p.ply(i) == 1 ? 2 : 1));
+    }
+  }
+  // The particles stand for the laminate's volume (less the edge strips the lattice leaves out).
+  CHECK(volume / (3 * spec.coupon.thickness * spec.coupon.length * spec.coupon.width) > 0.85);
+  CHECK(volume / (3 * spec.coupon.thickness * spec.coupon.length * spec.coupon.width) <= 1.0);
+
+  spec.interface.shear = -1;
+  CHECK_THROWS_WITH_AS(build_laminate(*hex2d, spec),
+                       doctest::Contains("interface shear stiffness must be >= 0"), Error);
+  spec.interface.shear = 0;
+  spec.ply_angles.clear();
+  CHECK_THROWS_WITH_AS(build_laminate(*hex2d, spec), doctest::Contains("at least one ply"), Error);
+}
+
+TEST_CASE("the paper's [0/90/0] laminate: moduli within 2% and Poisson's ratios within 0.015") {
+  // CLT written out: A = sum Q-bar_k t_k with Q-bar of 0 and 90 deg plies (Q11 <-> Q22).
+  const Material m = load_material("eglass-my750");
+  const double nu21 = m.nu12 * m.E2 / m.E1, den = 1 - m.nu12 * nu21;
+  const double q11 = m.E1 / den, q22 = m.E2 / den, q12 = m.nu12 * m.E2 / den;
+  const double a11 = (2 * q11 + q22) / 3, a22 = (2 * q22 + q11) / 3, a12 = q12;
+  const double ex = a11 - a12 * a12 / a22, ey = a22 - a12 * a12 / a11;
+  const double nu_xy = a12 / a22, nu_yx = a12 / a11;
+
+  TensionSettings settings;
+  settings.coupon.material = m;
+  settings.coupon.length = 3e-3;  // the paper's width, 0.83 mm
+  settings.layup = parse_layup("[0/90/0]");
+  settings.measure_specimen_stiffness = false;
+  const TensionResult r = TensionTest(settings).run();
+  CHECK(r.theory.Ex == doctest::Approx(ex).epsilon(1e-12));  // the library's CLT agrees
+  CHECK(std::abs(r.dem.Ex / ex - 1) < 0.02);
+  CHECK(std::abs(r.dem.Ey / ey - 1) < 0.02);
+  CHECK(std::abs(r.dem.nu_xy - nu_xy) < 0.015);
+  CHECK(std::abs(r.dem.nu_yx - nu_yx) < 0.015);
+  CHECK(std::abs(r.dem.shear_coupling_x) < 0.005);
+}
