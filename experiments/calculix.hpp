@@ -31,7 +31,7 @@
 ///
 /// Typical use (the moduli of a laminate, and a hole-in-plate field):
 ///
-///   FemSpecimen coupon{plies, 20e-3, 10e-3};
+///   FemSpecimen coupon{plies, 20e-3, 10e-3};  // or {laminate_plies(spec), L, W} (core/laminate)
 ///   FemTensionResult r = fem_tension_test(coupon, FemSettings{});
 ///   if (!r.available) fmt::print("{}: FEM column skipped\n", r.message);
 ///
@@ -224,8 +224,9 @@ struct FieldComparison {
 };
 /// Samples `fem` at each particle's reference position (x, y, z - z_offset) and compares with the
 /// particle's displacement: the relative L2 errors of ux and uy. `z_offset` is the particle
-/// model's mid-plane z (0 for hex2d layers). Throws plydem::Error if fewer than 2 particles lie in
-/// the FEM plate or the FEM field is empty.
+/// model's mid-plane z: 0 for a single layer, (n - 1) t / 2 for build_laminate's n plies of
+/// thickness t (core/laminate.hpp puts ply k at z = k t). Throws plydem::Error if fewer than 2
+/// particles lie in the FEM plate or the FEM field is empty.
 FieldComparison compare_displacements(const FemDisplacementField& fem, const Particles& particles,
                                       double z_offset = 0);
 
