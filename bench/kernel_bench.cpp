@@ -138,8 +138,14 @@ void write_yade_layer(const Model& model, const std::string& path) {
   }
 }
 
-int run_layer(long particles, long steps, int threads, const std::string& lammps_data,
-              const std::string& yade_layer, bool describe) {
+ParticleOrder order_named(const std::string& name) {
+  if (name == "hilbert") return ParticleOrder::kHilbert;
+  if (name == "built") return ParticleOrder::kAsBuilt;
+  return ParticleOrder::kAutomatic;
+}
+
+int run_layer(long particles, long steps, int threads, const std::string& order,
+              const std::string& lammps_data, const std::string& yade_layer, bool describe) {
   Model model = square_layer(particles);
   const long n = model.particles.size(), bonds = model.bonds.size();
   if (!lammps_data.empty()) write_lammps_data(model, lammps_data);
@@ -158,7 +164,9 @@ int run_layer(long particles, long steps, int threads, const std::string& lammps
   }
   require(steps >= 1, "--steps must be at least 1");
   omp_set_num_threads(threads);
-  ExplicitIntegrator integrator(model, ExplicitSettings{});
+  ExplicitSettings settings;
+  settings.particle_order = order_named(order);
+  ExplicitIntegrator integrator(model, settings);
   pull_with_grips(model, integrator, 200'000);
   integrator.advance(1);  // first touch of the kernel's arrays, not timed
   const auto start = Clock::now();
@@ -167,15 +175,18 @@ int run_layer(long particles, long steps, int threads, const std::string& lammps
   require(std::isfinite(report.strain_energy), "the benchmark run diverged");
   nlohmann::json r = row("plydem", n, bonds, threads, steps, seconds,
                          static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(n));
+  r["order"] = order;
   std::cout << r.dump() << "\n";
   return 0;
 }
 
-int run_coupon(long cycles, int threads, long report_every) {
+int run_coupon(long cycles, int threads, const std::string& order, long report_every) {
   require(cycles >= 1 && report_every >= 1, "--cycles and --report-every must be at least 1");
   Model model = table2_coupon();
   omp_set_num_threads(threads);
-  ExplicitIntegrator integrator(model, ExplicitSettings{});
+  ExplicitSettings settings;
+  settings.particle_order = order_named(order);
+  ExplicitIntegrator integrator(model, settings);
   pull_with_grips(model, integrator, cycles);
   const auto start = Clock::now();
   CycleReport report;
@@ -191,6 +202,7 @@ int run_coupon(long cycles, int threads, long report_every) {
       "plydem", model.particles.size(), model.bonds.size(), threads, cycles, seconds,
       static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(model.particles.size()));
   r["case"] = "table2-hex2d-coupon";
+  r["order"] = order;
   r["report_every"] = report_every;
   r["unbalanced_force_ratio"] = report.unbalanced_force_ratio;
   std::cout << r.dump() << "\n";
@@ -261,18 +273,26 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   long particles = 10000, steps = 100, cycles = 200'000, report_every = 2000;
   int threads = 1;
-  std::string lammps_data, yade_layer;
+  std::string lammps_data, yade_layer, order = "auto";
   bool describe = false;
   CLI::App* layer = app.add_subcommand("layer", "time the kernel on a square hexagonal layer");
   layer->add_option("--particles", particles, "about this many particles")->capture_default_str();
   layer->add_option("--steps", steps, "cycles to time")->capture_default_str();
   layer->add_option("--threads", threads, "OpenMP threads")->capture_default_str();
+  const auto orders = CLI::IsMember({"auto", "hilbert", "built"});
+  layer->add_option("--order", order, "kernel particle order: auto (lattice lines), hilbert, built")
+      ->check(orders)
+      ->capture_default_str();
   layer->add_option("--lammps-data", lammps_data, "also write the layer as a LAMMPS data file");
   layer->add_option("--yade-layer", yade_layer, "also write x y z radius per particle for YADE");
   layer->add_flag("--describe", describe, "print the layer's size and parameters, run nothing");
   CLI::App* coupon = app.add_subcommand("coupon", "the paper's Table 2 Hex2D coupon, timed");
   coupon->add_option("--cycles", cycles, "explicit cycles")->capture_default_str();
   coupon->add_option("--threads", threads, "OpenMP threads")->capture_default_str();
+  coupon
+      ->add_option("--order", order, "kernel particle order: auto (lattice lines), hilbert, built")
+      ->check(orders)
+      ->capture_default_str();
   coupon
       ->add_option("--report-every", report_every,
                    "cycles between unbalanced-force reports (the tension test samples every "
@@ -286,8 +306,9 @@ int main(int argc, char** argv) {
   }
   try {
     require(threads >= 1, "--threads must be at least 1");
-    if (*layer) return run_layer(particles, steps, threads, lammps_data, yade_layer, describe);
-    if (*coupon) return run_coupon(cycles, threads, report_every);
+    if (*layer)
+      return run_layer(particles, steps, threads, order, lammps_data, yade_layer, describe);
+    if (*coupon) return run_coupon(cycles, threads, order, report_every);
     if (*table) return print_table();
   } catch (const std::exception& e) {
     std::cerr << "plydem_kernel_bench: error: " << e.what() << "\n";

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <unordered_map>
 
@@ -71,29 +72,31 @@ double bond_strain_energy(const Particles& particles, const Bonds& bonds) {
 
 namespace {
 
-// Half-bond types are merged when every parameter agrees to about 2^-40 (1e-12) relative: the
-// normals and levers of a regular lattice, computed from positions, differ only in their last
-// bits, and merging them is what lets a lattice stream a type index instead of its parameters.
-// Normal components are quantized absolutely (they lie in [-1, 1] and may be noise around 0),
-// the others relative to their own magnitude.
-constexpr int kMergeBits = 40;
-
-std::int64_t quantize_absolute(double x) {
-  return std::llround(std::ldexp(x, kMergeBits));
-}
+// Half-bond types are merged when their parameters agree to about 1e-12 relative: the normals and
+// levers of a regular lattice, computed from positions, differ only in their last bits, and merging
+// them is what lets a lattice stream a type index instead of its parameters. Normals are merged
+// with the first one seen within 1e-12 (a lattice has a few directions; beyond kMaxDirections the
+// packing is irregular and normals are kept exactly), the other parameters by rounding them to 40
+// significant bits.
+constexpr int kMaxDirections = 16;
+constexpr double kSameDirection = 1e-12;
 
 std::int64_t quantize_relative(double x) {
   int exponent = 0;
   const double mantissa = std::frexp(x, &exponent);
-  return std::llround(std::ldexp(mantissa, kMergeBits)) * 4096 + exponent;
+  return std::llround(std::ldexp(mantissa, 40)) * 4096 + exponent;
+}
+
+std::int64_t bits_of(double x) {
+  std::int64_t b;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
 }
 
 using TypeKey = std::array<std::int64_t, 9>;
-using DirectionKey = std::array<std::int64_t, 3>;
 
-template <std::size_t N>
 struct KeyHash {
-  std::size_t operator()(const std::array<std::int64_t, N>& key) const {
+  std::size_t operator()(const TypeKey& key) const {
     std::uint64_t h = 1469598103934665603ull;
     for (std::int64_t k : key) {
       h ^= static_cast<std::uint64_t>(k) + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
@@ -101,19 +104,6 @@ struct KeyHash {
     return static_cast<std::size_t>(h);
   }
 };
-
-TypeKey key_of(const HalfBondType& h) {
-  return {quantize_absolute(h.normal[0]),      quantize_absolute(h.normal[1]),
-          quantize_absolute(h.normal[2]),      quantize_relative(h.lever_own),
-          quantize_relative(h.lever_other),    quantize_relative(h.shear_stiffness),
-          quantize_relative(h.normal_excess),  quantize_relative(h.bending_stiffness),
-          quantize_relative(h.twisting_excess)};
-}
-
-DirectionKey direction_of(const HalfBondType& h) {
-  return {quantize_absolute(h.normal[0]), quantize_absolute(h.normal[1]),
-          quantize_absolute(h.normal[2])};
-}
 
 }  // namespace
 
@@ -144,12 +134,50 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
   std::vector<std::int32_t> entry_other(2 * static_cast<std::size_t>(m));
   std::vector<std::int32_t> entry_type(2 * static_cast<std::size_t>(m));
 
+  // The bonds' directions, both senses, if they are few.
+  std::vector<Eigen::Vector3d> directions;
+  auto find_direction = [&](const Eigen::Vector3d& normal) {
+    for (std::size_t d = 0; d < directions.size(); ++d) {
+      if ((directions[d] - normal).cwiseAbs().maxCoeff() < kSameDirection)
+        return static_cast<int>(d);
+    }
+    return -1;
+  };
+  bool few_directions = true;
+  for (int b = 0; b < m && few_directions; ++b) {
+    const Eigen::Vector3d normal = bonds.normal.row(b).matrix().transpose();
+    for (const Eigen::Vector3d& sensed : {normal, Eigen::Vector3d(-normal)}) {
+      if (find_direction(sensed) >= 0) continue;
+      if (static_cast<int>(directions.size()) == kMaxDirections) {
+        few_directions = false;
+        break;
+      }
+      directions.push_back(sensed);
+    }
+  }
+  if (!few_directions) directions.clear();
+
   types_.assign(1, HalfBondType{});
-  std::unordered_map<TypeKey, std::int32_t, KeyHash<9>> type_index;
-  auto type_of = [&](const HalfBondType& h) {
+  std::vector<int> type_direction(1, -1);
+  std::unordered_map<TypeKey, std::int32_t, KeyHash> type_index;
+  auto type_of = [&](HalfBondType h) {
+    const Eigen::Vector3d normal(h.normal[0], h.normal[1], h.normal[2]);
+    const int d = few_directions ? find_direction(normal) : -1;
+    if (d >= 0) {
+      for (int c = 0; c < 3; ++c) h.normal[c] = directions[d](c);
+    }
+    h.lever_shear = h.lever_own * h.shear_stiffness;
+    const TypeKey key{d >= 0 ? d : bits_of(h.normal[0]),   d >= 0 ? 0 : bits_of(h.normal[1]),
+                      d >= 0 ? 0 : bits_of(h.normal[2]),   quantize_relative(h.lever_own),
+                      quantize_relative(h.lever_other),    quantize_relative(h.shear_stiffness),
+                      quantize_relative(h.normal_excess),  quantize_relative(h.bending_stiffness),
+                      quantize_relative(h.twisting_excess)};
     const auto [it, inserted] =
-        type_index.try_emplace(key_of(h), static_cast<std::int32_t>(types_.size()));
-    if (inserted) types_.push_back(h);
+        type_index.try_emplace(key, static_cast<std::int32_t>(types_.size()));
+    if (inserted) {
+      types_.push_back(h);
+      type_direction.push_back(d);
+    }
     return it->second;
   };
   for (int b = 0; b < m; ++b) {
@@ -170,29 +198,19 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
     entry_type[fill[j]++] = type_of(h);
   }
 
-  // Lattice slots: one slot per bond direction, if the directions are few and unique per particle.
-  std::unordered_map<DirectionKey, int, KeyHash<3>> direction_index;
-  std::vector<int> type_direction(types_.size(), -1);
-  constexpr int kMaxDirections = 16;
-  lattice_slots_ = true;
-  for (std::size_t t = 1; t < types_.size() && lattice_slots_; ++t) {
-    const auto [it, inserted] = direction_index.try_emplace(
-        direction_of(types_[t]), static_cast<int>(direction_index.size()));
-    type_direction[t] = it->second;
-    if (direction_index.size() > kMaxDirections) lattice_slots_ = false;
-  }
+  // Lattice slots: one slot per direction, numbered by angle (so that the slot order does not
+  // depend on the bond order), if no particle has two bonds along one direction.
+  lattice_slots_ = few_directions && !directions.empty();
   if (lattice_slots_) {
-    // Number the directions by angle, so that the slot order does not depend on the bond order.
-    std::vector<std::pair<DirectionKey, int>> directions(direction_index.begin(),
-                                                         direction_index.end());
-    auto angle = [](const DirectionKey& d) {
-      return std::pair(std::atan2(static_cast<double>(d[1]), static_cast<double>(d[0])), d[2]);
+    std::vector<int> by_angle(directions.size());
+    std::iota(by_angle.begin(), by_angle.end(), 0);
+    auto angle = [&](int d) {
+      return std::pair(std::atan2(directions[d].y(), directions[d].x()), directions[d].z());
     };
-    std::sort(directions.begin(), directions.end(),
-              [&](const auto& a, const auto& b) { return angle(a.first) < angle(b.first); });
+    std::sort(by_angle.begin(), by_angle.end(), [&](int a, int b) { return angle(a) < angle(b); });
     std::vector<int> slot_of_direction(directions.size());
-    for (std::size_t s = 0; s < directions.size(); ++s)
-      slot_of_direction[directions[s].second] = static_cast<int>(s);
+    for (std::size_t s = 0; s < by_angle.size(); ++s)
+      slot_of_direction[by_angle[s]] = static_cast<int>(s);
     for (int& d : type_direction) d = d < 0 ? d : slot_of_direction[d];
     width_ = static_cast<int>(directions.size());
     for (int k = 0; k < n && lattice_slots_; ++k) {
@@ -231,11 +249,50 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
       type_[cell] = entry_type[e];
     }
   }
+
+  // The types blocks share, repeated across the lanes.
+  uniform_.assign(1, HalfBondLanes{});
+  std::vector<std::int32_t> uniform_index(types_.size(), 0);
+  auto uniform_of = [&](std::int32_t t) {
+    if (uniform_index[t] == 0) {
+      const HalfBondType& h = types_[t];
+      HalfBondLanes v;
+      for (int c = 0; c < 3; ++c) lanes::broadcast(h.normal[c], v.normal[c]);
+      lanes::broadcast(h.lever_own, v.lever_own);
+      lanes::broadcast(h.lever_other, v.lever_other);
+      lanes::broadcast(h.shear_stiffness, v.shear_stiffness);
+      lanes::broadcast(h.lever_shear, v.lever_shear);
+      lanes::broadcast(h.normal_excess, v.normal_excess);
+      lanes::broadcast(h.bending_stiffness, v.bending_stiffness);
+      lanes::broadcast(h.twisting_excess, v.twisting_excess);
+      uniform_index[t] = static_cast<std::int32_t>(uniform_.size());
+      uniform_.push_back(v);
+    }
+    return uniform_index[t];
+  };
+  const int blocks = padded_ / lanes::kCount;
+  block_type_.assign(static_cast<std::size_t>(blocks) * width_, 0);
+  block_run_.assign(static_cast<std::size_t>(blocks) * width_, -1);
+  for (int b = 0; b < blocks; ++b) {
+    for (int s = 0; s < width_; ++s) {
+      const std::int32_t* type = types(s) + b * lanes::kCount;
+      const std::int32_t* other = neighbours(s) + b * lanes::kCount;
+      bool same_type = true, consecutive = other[0] + lanes::kCount <= padded_;
+      for (int l = 1; l < lanes::kCount; ++l) {
+        same_type &= type[l] == type[0];
+        consecutive &= other[l] == other[0] + l;
+      }
+      const std::size_t cell = static_cast<std::size_t>(b) * width_ + s;
+      block_type_[cell] = same_type ? (type[0] == 0 ? 0 : uniform_of(type[0])) : -1;
+      block_run_[cell] = consecutive ? other[0] : -1;
+    }
+  }
 }
 
 std::size_t GatherBonds::bytes() const {
-  return neighbour_.size() * sizeof(std::int32_t) + type_.size() * sizeof(std::int32_t) +
-         types_.size() * sizeof(HalfBondType);
+  return (neighbour_.size() + type_.size() + block_type_.size() + block_run_.size()) *
+             sizeof(std::int32_t) +
+         types_.size() * sizeof(HalfBondType) + uniform_.size() * sizeof(HalfBondLanes);
 }
 
 }  // namespace plydem

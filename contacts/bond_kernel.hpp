@@ -67,8 +67,11 @@ using Mask = std::int64_t __attribute__((vector_size(kCount * sizeof(double))));
 [[gnu::always_inline]] inline void store(double* p, const Doubles& v) {
   std::memcpy(__builtin_assume_aligned(p, 64), &v, sizeof v);
 }
+[[gnu::always_inline]] inline void load_unaligned(const double* p, Doubles& v) {
+  std::memcpy(&v, p, sizeof v);
+}
 [[gnu::always_inline]] inline void broadcast(double x, Doubles& v) {
-  v = Doubles{} + x;
+  v = x - Doubles{};  // exact for every x (unlike x + 0, which turns -0 into +0): one broadcast
 }
 /// v[l] = base[index[l]].
 [[gnu::always_inline]] inline void gather(const double* base, const std::int32_t* index,
@@ -124,9 +127,18 @@ struct HalfBondType {
   double lever_own = 0;          ///< [m]
   double lever_other = 0;        ///< [m]
   double shear_stiffness = 0;    ///< k_s [N/m]
+  double lever_shear = 0;        ///< s_own k_s [N]
   double normal_excess = 0;      ///< k_n - k_s [N/m]
   double bending_stiffness = 0;  ///< k_b [N m/rad]
   double twisting_excess = 0;    ///< k_t - k_b [N m/rad]
+};
+
+/// A HalfBondType with every parameter repeated in all lanes: what a block whose eight particles
+/// share the type of a slot loads (plain vector loads; no broadcasts in the loop).
+struct alignas(64) HalfBondLanes {
+  lanes::Doubles normal[3];
+  lanes::Doubles lever_own, lever_other, shear_stiffness, lever_shear, normal_excess,
+      bending_stiffness, twisting_excess;
 };
 
 /// The bonds in gather form for particles numbered in "kernel order" (see the constructor),
@@ -158,6 +170,17 @@ class GatherBonds {
     return type_.data() + static_cast<std::size_t>(slot) * padded_;
   }
   const HalfBondType& type(int t) const { return types_[t]; }
+  /// Per slot of block b (particles 8b .. 8b+7): 0 if none of the eight has a bond in the slot, -1
+  /// if their types differ, else u > 0: they all have the type uniform_lanes(u).
+  const std::int32_t* block_types(int b) const {
+    return block_type_.data() + static_cast<std::size_t>(b) * width_;
+  }
+  const HalfBondLanes& uniform_lanes(int u) const { return uniform_[u]; }
+  /// Per slot of block b: k if the eight other ends are the consecutive particles k .. k+7 (the
+  /// kernel then loads them as one vector instead of gathering), else -1.
+  const std::int32_t* block_runs(int b) const {
+    return block_run_.data() + static_cast<std::size_t>(b) * width_;
+  }
   int type_count() const { return static_cast<int>(types_.size()); }
   /// Bytes held by the lists and the type table.
   std::size_t bytes() const;
@@ -167,9 +190,12 @@ class GatherBonds {
   int padded_ = 0;
   int width_ = 0;
   bool lattice_slots_ = false;
-  std::vector<std::int32_t> neighbour_;  // [slot * padded + particle]
-  std::vector<std::int32_t> type_;       // [slot * padded + particle]
-  std::vector<HalfBondType> types_;      // [0] = empty slot
+  std::vector<std::int32_t> neighbour_;   // [slot * padded + particle]
+  std::vector<std::int32_t> type_;        // [slot * padded + particle]
+  std::vector<HalfBondType> types_;       // [0] = empty slot
+  std::vector<std::int32_t> block_type_;  // [block * width + slot]
+  std::vector<HalfBondLanes> uniform_;    // [0] unused
+  std::vector<std::int32_t> block_run_;   // [block * width + slot]
 };
 
 /// Displacements and rotations in kernel order: component c of particle k is `displacement[c][k]`.
@@ -194,39 +220,47 @@ template <bool kEnergy>
     lanes::load(s.displacement[c] + first, u_i[c]);
     lanes::load(s.rotation[c] + first, t_i[c]);
   }
+  const int block = first / kLanes;
+  const std::int32_t* block_type = g.block_types(block);
+  const std::int32_t* block_run = g.block_runs(block);
   for (int slot = 0; slot < g.width(); ++slot) {
-    const std::int32_t* other = g.neighbours(slot) + first;
-    const std::int32_t* type = g.types(slot) + first;
-    std::int32_t any = 0;
-    bool uniform = true;
-    for (int l = 0; l < kLanes; ++l) {
-      any |= type[l];
-      uniform &= type[l] == type[0];
-    }
-    if (any == 0) continue;  // no particle of the block has a bond in this slot
+    const std::int32_t uniform_type = block_type[slot];
+    if (uniform_type == 0) continue;  // no particle of the block has a bond in this slot
 
     Doubles u_j[3], t_j[3];
-    for (int c = 0; c < 3; ++c) {
-      lanes::gather(s.displacement[c], other, u_j[c]);
-      lanes::gather(s.rotation[c], other, t_j[c]);
-    }
-    Doubles n[3] = {}, s_own{}, s_other{}, k_s{}, k_n_excess{}, k_b{}, k_t_excess{};
-    if (uniform) {
-      const HalfBondType& h = g.type(type[0]);
-      for (int c = 0; c < 3; ++c) lanes::broadcast(h.normal[c], n[c]);
-      lanes::broadcast(h.lever_own, s_own);
-      lanes::broadcast(h.lever_other, s_other);
-      lanes::broadcast(h.shear_stiffness, k_s);
-      lanes::broadcast(h.normal_excess, k_n_excess);
-      lanes::broadcast(h.bending_stiffness, k_b);
-      lanes::broadcast(h.twisting_excess, k_t_excess);
+    const std::int32_t run = block_run[slot];
+    if (run >= 0) {  // the other ends are consecutive particles: plain loads
+      for (int c = 0; c < 3; ++c) {
+        lanes::load_unaligned(s.displacement[c] + run, u_j[c]);
+        lanes::load_unaligned(s.rotation[c] + run, t_j[c]);
+      }
     } else {
+      const std::int32_t* other = g.neighbours(slot) + first;
+      for (int c = 0; c < 3; ++c) {
+        lanes::gather(s.displacement[c], other, u_j[c]);
+        lanes::gather(s.rotation[c], other, t_j[c]);
+      }
+    }
+    Doubles n[3] = {}, s_own{}, s_other{}, k_s{}, s_k_s{}, k_n_excess{}, k_b{}, k_t_excess{};
+    if (uniform_type > 0) {
+      const HalfBondLanes& h = g.uniform_lanes(uniform_type);
+      for (int c = 0; c < 3; ++c) n[c] = h.normal[c];
+      s_own = h.lever_own;
+      s_other = h.lever_other;
+      k_s = h.shear_stiffness;
+      s_k_s = h.lever_shear;
+      k_n_excess = h.normal_excess;
+      k_b = h.bending_stiffness;
+      k_t_excess = h.twisting_excess;
+    } else {
+      const std::int32_t* type = g.types(slot) + first;
       for (int l = 0; l < kLanes; ++l) {
         const HalfBondType& h = g.type(type[l]);
         for (int c = 0; c < 3; ++c) n[c][l] = h.normal[c];
         s_own[l] = h.lever_own;
         s_other[l] = h.lever_other;
         k_s[l] = h.shear_stiffness;
+        s_k_s[l] = h.lever_shear;
         k_n_excess[l] = h.normal_excess;
         k_b[l] = h.bending_stiffness;
         k_t_excess[l] = h.twisting_excess;
@@ -235,22 +269,27 @@ template <bool kEnergy>
     // du = (u_j - u_i) - (s_i theta_i + s_j theta_j) x n  (contacts/parallel_bond.hpp)
     Doubles a[3], du[3];
     for (int c = 0; c < 3; ++c) a[c] = s_own * t_i[c] + s_other * t_j[c];
-    du[0] = u_j[0] - u_i[0] - (a[1] * n[2] - a[2] * n[1]);
-    du[1] = u_j[1] - u_i[1] - (a[2] * n[0] - a[0] * n[2]);
-    du[2] = u_j[2] - u_i[2] - (a[0] * n[1] - a[1] * n[0]);
+    du[0] = (u_j[0] - u_i[0]) - (a[1] * n[2] - a[2] * n[1]);
+    du[1] = (u_j[1] - u_i[1]) - (a[2] * n[0] - a[0] * n[2]);
+    du[2] = (u_j[2] - u_i[2]) - (a[0] * n[1] - a[1] * n[0]);
     const Doubles du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
     const Doubles normal_part = k_n_excess * du_n;
-    Doubles f[3];
-    for (int c = 0; c < 3; ++c) f[c] = k_s * du[c] + normal_part * n[c];
+    // F = k_s du + (k_n - k_s) du_n n, accumulated term by term; n x F = k_s (n x du).
+    for (int c = 0; c < 3; ++c) {
+      force[c] += k_s * du[c];
+      force[c] += normal_part * n[c];
+    }
+    const Doubles n_cross_du[3] = {n[1] * du[2] - n[2] * du[1], n[2] * du[0] - n[0] * du[2],
+                                   n[0] * du[1] - n[1] * du[0]};
     Doubles dt[3];
     for (int c = 0; c < 3; ++c) dt[c] = t_j[c] - t_i[c];
     const Doubles dt_n = n[0] * dt[0] + n[1] * dt[1] + n[2] * dt[2];
     const Doubles twist_part = k_t_excess * dt_n;
-    const Doubles n_cross_f[3] = {n[1] * f[2] - n[2] * f[1], n[2] * f[0] - n[0] * f[2],
-                                  n[0] * f[1] - n[1] * f[0]};
+    // M_own = s_own n x F + k_b dtheta + (k_t - k_b) dtheta_n n.
     for (int c = 0; c < 3; ++c) {
-      force[c] += f[c];
-      torque[c] += s_own * n_cross_f[c] + k_b * dt[c] + twist_part * n[c];
+      torque[c] += s_k_s * n_cross_du[c];
+      torque[c] += k_b * dt[c];
+      torque[c] += twist_part * n[c];
     }
     if constexpr (kEnergy) {
       const Doubles du2 = du[0] * du[0] + du[1] * du[1] + du[2] * du[2];
@@ -258,7 +297,10 @@ template <bool kEnergy>
       // E = 1/2 (k_s |du|^2 + (k_n - k_s) du_n^2 + k_b |dtheta|^2 + (k_t - k_b) dtheta_n^2),
       // half of it per end.
       energy += 0.25 * (k_s * du2 + normal_part * du_n + k_b * dt2 + twist_part * dt_n);
-      const Doubles f2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
+      // |F|^2 = k_s^2 |du|^2 + (k_n^2 - k_s^2) du_n^2, from scalars only: no product
+      // shared with the force above, so that report cycles compute the forces with the very same
+      // instructions as the others (cycle() and advance(n) agree to the bit).
+      const Doubles f2 = k_s * k_s * du2 + normal_part * (2.0 * k_s * du_n + normal_part);
       for (int l = 0; l < kLanes; ++l) force_norm[l] += 0.5 * __builtin_sqrt(f2[l]);
     }
   }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <map>
 
 #include "contacts/bond_kernel.hpp"
@@ -123,19 +124,24 @@ struct StepArgs {
 };
 
 // One degree of freedom of a block: the damped central difference, or the imposed velocity.
+// The local damping force alpha |F| sign(v) is built from bits (|F| with the sign of v, zero where
+// v is zero), which is exact and avoids per-lane branches.
 [[gnu::always_inline]] inline void advance_lanes(const lanes::Doubles& force,
                                                  const lanes::Doubles& dt_over_inertia,
                                                  const lanes::Mask& fixed,
                                                  const lanes::Doubles& imposed, double dt,
                                                  double alpha, lanes::Doubles& u, lanes::Doubles& v,
                                                  lanes::Doubles& v_old) {
-  const lanes::Doubles zero{};
-  const lanes::Doubles one = zero + 1.0;
-  const lanes::Doubles sign = v > zero ? one : (v < zero ? -one : zero);
-  const lanes::Doubles magnitude = force < zero ? -force : force;
+  using lanes::Doubles;
+  using lanes::Mask;
+  const Mask sign_bit = Mask{} + std::numeric_limits<std::int64_t>::min();
+  const Doubles magnitude = (Doubles)((Mask)force & ~sign_bit);
+  const Doubles push = alpha * magnitude;
+  const Doubles signed_push = (Doubles)((Mask)push | ((Mask)v & sign_bit));
+  const Doubles damping = v == Doubles{} ? Doubles{} : signed_push;
   v_old = v;
-  const lanes::Doubles free = v + dt_over_inertia * (force - alpha * magnitude * sign);
-  v = fixed ? imposed : free;
+  const Doubles free = v + dt_over_inertia * (force - damping);
+  v = (Doubles)(((Mask)imposed & fixed) | ((Mask)free & ~fixed));  // bitwise select: no branches
   u += dt * v;
 }
 
@@ -194,14 +200,14 @@ template <bool kReport>
       advance_lanes(force[c], dt_over_mass, fix_v[c], imposed_v[c], a.dt, a.alpha, u, v, v_old);
       lanes::store(next_u[c] + first, u);
       lanes::store(vel[c] + first, v);
-      if constexpr (kReport) kinetic += fix_v[c] ? Doubles{} : v_old / inverse_mass * v;
+      if constexpr (kReport) kinetic += (Doubles)((Mask)(v_old / inverse_mass * v) & ~fix_v[c]);
 
       lanes::load(state.rotation[c] + first, u);
       lanes::load(ang[c] + first, v);
       advance_lanes(torque[c], dt_over_inertia, fix_w[c], imposed_w[c], a.dt, a.alpha, u, v, v_old);
       lanes::store(next_t[c] + first, u);
       lanes::store(ang[c] + first, v);
-      if constexpr (kReport) kinetic += fix_w[c] ? Doubles{} : v_old / inverse_inertia * v;
+      if constexpr (kReport) kinetic += (Doubles)((Mask)(v_old / inverse_inertia * v) & ~fix_w[c]);
     }
     if constexpr (kReport) {
       const Doubles f2 = force[0] * force[0] + force[1] * force[1] + force[2] * force[2];
@@ -261,7 +267,7 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     fused_ = std::make_unique<Fused>();
     FusedState& k = fused_->state;
     const Particles& p = model.particles;
-    k.order = space_filling_curve_order(p.reference_position);
+    k.order = kernel_order(model, settings.particle_order);
     k.bonds = GatherBonds(model.bonds, k.order);
     k.particles = p.size();
     const int padded = k.bonds.padded_count();

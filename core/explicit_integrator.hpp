@@ -5,8 +5,9 @@
 /// Each cycle: bond forces at the current displacements, then velocities and displacements of
 /// every free degree of freedom.
 ///
-/// Two kernels run the same cycle. The fused kernel (default) renumbers the particles along a
-/// space-filling curve (core/particle_ordering.hpp), keeps its own copy of the state in that order,
+/// Two kernels run the same cycle. The fused kernel (default) renumbers the particles for locality
+/// (core/particle_ordering.hpp: lattice lines for a regular packing, else a Hilbert curve), keeps
+/// its own copy of the state in that order,
 /// and in one pass per cycle lets each particle sum its own bonds (contacts/bond_kernel.hpp,
 /// gather form) and advance, eight particles at a time in SIMD lanes, split between OpenMP threads
 /// (OMP_NUM_THREADS). Each particle's result is independent of the thread count, and a run is
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include "core/model.hpp"
+#include "core/particle_ordering.hpp"
 
 namespace plydem {
 
@@ -35,6 +37,8 @@ struct ExplicitSettings {
   /// A fixed time step [s]; 0 = automatic.
   double time_step = 0;
   ExplicitKernel kernel = ExplicitKernel::kFused;
+  /// How the fused kernel numbers the particles internally (results do not depend on it).
+  ParticleOrder particle_order = ParticleOrder::kAutomatic;
 };
 
 /// Throws plydem::Error naming the first setting out of range.

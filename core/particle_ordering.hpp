@@ -19,6 +19,26 @@ namespace plydem {
 /// deterministic.
 std::vector<int> space_filling_curve_order(const Vector3Array& position);
 
+/// Lattice lines, for a regular packing: the particles line by line along one lattice direction (of
+/// the bonds and the sums and differences of two bonds, the one with the fewest, longest lines),
+/// lines side by side (by layer, then by row), the lattice cut into
+/// strips `strip_length` bond lengths long across the lines so that the few lines the kernel works
+/// on stay in cache (a scan curve over strips). In this order, for every bond direction, the
+/// neighbours of eight consecutive particles of a line are eight consecutive particles of the same
+/// or the next line, which the kernel loads as one vector instead of gathering them one by one.
+/// Returns an empty vector when the bonds point along more than 16 directions (not a lattice).
+std::vector<int> lattice_line_order(const Model& model, int strip_length = 256);
+
+/// How the explicit kernel numbers particles internally (the model keeps its own numbering).
+enum class ParticleOrder {
+  kAutomatic,  ///< lattice lines where the packing is a lattice, else the Hilbert curve
+  kHilbert,    ///< space_filling_curve_order
+  kAsBuilt,    ///< the model's own numbering
+};
+
+/// The kernel order of `model` for the given choice.
+std::vector<int> kernel_order(const Model& model, ParticleOrder choice);
+
 /// Throws plydem::Error unless `order` is a permutation of 0 .. count-1.
 void check_permutation(const std::vector<int>& order, int count);
 

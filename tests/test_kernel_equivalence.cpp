@@ -179,7 +179,7 @@ TEST_CASE("advance(n) on the fused kernel equals n reference cycles") {
   }
   SUBCASE("the Hex2D lattice, undamped, over a thousand cycles") {
     // A lattice's bond normals and levers differ only in their last bits; the gather lists merge
-    // them to within 2^-40 (contacts/bond_kernel.cpp), hence the looser tolerance here.
+    // them to within 1e-12 (contacts/bond_kernel.cpp), hence the looser tolerance here.
     Model m = hex_coupon();
     disturb(m, 7, 1e-9);
     const Run slow = run(m, ExplicitKernel::kReference, 1000, 1, 0.0);
