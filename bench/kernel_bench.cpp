@@ -1,0 +1,318 @@
+// plydem_kernel_bench: the explicit kernel's speed on a hexagonal layer of bonded particles, the
+// program behind bench/run (which adds LAMMPS and YADE on the same lattice and prints one table).
+//
+// Sample runs:
+//   plydem_kernel_bench layer --particles 100000 --steps 500 --threads 2   # one JSON line
+//   plydem_kernel_bench layer --particles 10000 --lammps-data layer.data --yade-layer layer.txt
+//   plydem_kernel_bench coupon --cycles 200000     # the paper's Table 2 Hex2D coupon, timed
+//   plydem_kernel_bench table < rows.jsonl         # the table bench/run prints
+//
+// The layer is the Hex2D model of the paper's 0 deg E-glass/MY750 ply (0.05 mm particles, full
+// parallel bonds: normal, shear, bending and twisting, particles spinning), square, pulled by grips
+// at both ends that move apart while PFC local damping (0.7) acts, as in the tension test. Only
+// the cycles are timed; building the model and the kernel's gather lists is not.
+#include <fmt/format.h>
+#include <omp.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/explicit_integrator.hpp"
+#include "core/material.hpp"
+#include "strategies/hex2d.hpp"
+
+namespace {
+
+using namespace plydem;
+using Clock = std::chrono::steady_clock;
+
+// A square Hex2D layer of about `particles` particles (the edges lose a few).
+Model square_layer(long particles) {
+  CouponSpec spec;
+  spec.material = load_material("eglass-my750");
+  const double d = spec.particle_diameter;
+  const double side = std::sqrt(static_cast<double>(particles) * std::sqrt(3.0) / 2.0) * d;
+  spec.length = side;
+  spec.width = side;
+  return Hex2dStrategy().build(spec);
+}
+
+// The paper's Table 2 coupon: 0 deg E-glass/MY750, 10 x 0.83 mm, 200 x 19 particles.
+Model table2_coupon() {
+  CouponSpec spec;
+  spec.material = load_material("eglass-my750");
+  return Hex2dStrategy().build(spec);
+}
+
+// Grips within two diameters of either end move apart along x (free laterally), reaching a
+// nominal strain of 1e-3 after `cycles` cycles: the tension test's loading.
+void pull_with_grips(Model& model, ExplicitIntegrator& integrator, long cycles) {
+  Particles& p = model.particles;
+  const double x_min = p.reference_position.col(0).minCoeff();
+  const double x_max = p.reference_position.col(0).maxCoeff();
+  const double grip = 4.0 * p.radius.maxCoeff();
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0);
+    p.group(i) = static_cast<int>(x <= x_min + grip   ? BoundaryGroup::kLeftGrip
+                                  : x >= x_max - grip ? BoundaryGroup::kRightGrip
+                                                      : BoundaryGroup::kFree);
+  }
+  const double velocity =
+      0.5e-3 * (x_max - x_min) / (static_cast<double>(cycles) * integrator.time_step());
+  PrescribedMotion motion[2];
+  motion[0].group = BoundaryGroup::kLeftGrip;
+  motion[1].group = BoundaryGroup::kRightGrip;
+  motion[0].velocity = Eigen::Vector3d(-velocity, 0, 0);
+  motion[1].velocity = Eigen::Vector3d(velocity, 0, 0);
+  for (PrescribedMotion& m : motion) {
+    m.fix_velocity = {true, false, true};
+    m.fix_angular_velocity = {true, true, false};
+  }
+  integrator.set_prescribed_motions({motion[0], motion[1]});
+}
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+nlohmann::json row(const std::string& engine, long particles, long bonds, int threads, long steps,
+                   double seconds, double bytes_per_particle) {
+  nlohmann::json r;
+  r["engine"] = engine;
+  r["particles"] = particles;
+  r["bonds"] = bonds;
+  r["threads"] = threads;
+  r["steps"] = steps;
+  r["seconds"] = seconds;
+  r["ns_per_step"] = 1e9 * seconds / static_cast<double>(steps);
+  r["particle_steps_per_s"] = static_cast<double>(particles) * static_cast<double>(steps) / seconds;
+  r["bond_steps_per_s"] = static_cast<double>(bonds) * static_cast<double>(steps) / seconds;
+  r["bytes_per_particle"] = bytes_per_particle;
+  return r;
+}
+
+void write_lammps_data(const Model& model, const std::string& path) {
+  const Particles& p = model.particles;
+  std::ofstream out(path);
+  require(static_cast<bool>(out), fmt::format("cannot write {}", path));
+  const double margin = 4.0 * p.radius.maxCoeff();
+  out << fmt::format("plydem hexagonal layer: {} particles, {} bonds (SI units)\n\n", p.size(),
+                     model.bonds.size());
+  out << fmt::format("{} atoms\n{} bonds\n1 atom types\n1 bond types\n\n", p.size(),
+                     model.bonds.size());
+  for (int c = 0; c < 3; ++c) {
+    const char* axis = c == 0 ? "x" : (c == 1 ? "y" : "z");
+    out << fmt::format("{:.17g} {:.17g} {}lo {}hi\n",
+                       p.reference_position.col(c).minCoeff() - margin,
+                       p.reference_position.col(c).maxCoeff() + margin, axis, axis);
+  }
+  out << fmt::format("\nMasses\n\n1 {:.17g}\n\nAtoms # bond\n\n", p.mass(0));
+  for (int i = 0; i < p.size(); ++i) {
+    out << fmt::format("{} 1 1 {:.17g} {:.17g} {:.17g}\n", i + 1, p.reference_position(i, 0),
+                       p.reference_position(i, 1), p.reference_position(i, 2));
+  }
+  out << "\nBonds\n\n";
+  for (int b = 0; b < model.bonds.size(); ++b) {
+    out << fmt::format("{} 1 {} {}\n", b + 1, model.bonds.first(b) + 1, model.bonds.second(b) + 1);
+  }
+}
+
+void write_yade_layer(const Model& model, const std::string& path) {
+  const Particles& p = model.particles;
+  std::ofstream out(path);
+  require(static_cast<bool>(out), fmt::format("cannot write {}", path));
+  out << fmt::format("# x y z radius [m]; {} particles, {} bonds between touching neighbours\n",
+                     p.size(), model.bonds.size());
+  for (int i = 0; i < p.size(); ++i) {
+    out << fmt::format("{:.17g} {:.17g} {:.17g} {:.17g}\n", p.reference_position(i, 0),
+                       p.reference_position(i, 1), p.reference_position(i, 2), p.radius(i));
+  }
+}
+
+ParticleOrder order_named(const std::string& name) {
+  if (name == "hilbert") return ParticleOrder::kHilbert;
+  if (name == "built") return ParticleOrder::kAsBuilt;
+  return ParticleOrder::kAutomatic;
+}
+
+int run_layer(long particles, long steps, int threads, const std::string& order,
+              const std::string& lammps_data, const std::string& yade_layer, bool describe) {
+  Model model = square_layer(particles);
+  const long n = model.particles.size(), bonds = model.bonds.size();
+  if (!lammps_data.empty()) write_lammps_data(model, lammps_data);
+  if (!yade_layer.empty()) write_yade_layer(model, yade_layer);
+  if (describe) {
+    const Bonds& b = model.bonds;
+    nlohmann::json d;
+    d["particles"] = n;
+    d["bonds"] = bonds;
+    d["spacing"] = 2.0 * model.particles.radius(0);
+    d["mass"] = model.particles.mass(0);
+    d["normal_stiffness"] = b.normal_stiffness.maxCoeff();
+    d["time_step"] = critical_time_step(model);
+    std::cout << d.dump() << "\n";
+    return 0;
+  }
+  require(steps >= 1, "--steps must be at least 1");
+  omp_set_num_threads(threads);
+  ExplicitSettings settings;
+  settings.particle_order = order_named(order);
+  ExplicitIntegrator integrator(model, settings);
+  pull_with_grips(model, integrator, 200'000);
+  integrator.advance(1);  // first touch of the kernel's arrays, not timed
+  const auto start = Clock::now();
+  const CycleReport report = integrator.advance(steps);
+  const double seconds = seconds_since(start);
+  require(std::isfinite(report.strain_energy), "the benchmark run diverged");
+  nlohmann::json r = row("plydem", n, bonds, threads, steps, seconds,
+                         static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(n));
+  r["order"] = order;
+  std::cout << r.dump() << "\n";
+  return 0;
+}
+
+int run_coupon(long cycles, int threads, const std::string& order, long report_every) {
+  require(cycles >= 1 && report_every >= 1, "--cycles and --report-every must be at least 1");
+  Model model = table2_coupon();
+  omp_set_num_threads(threads);
+  ExplicitSettings settings;
+  settings.particle_order = order_named(order);
+  ExplicitIntegrator integrator(model, settings);
+  pull_with_grips(model, integrator, cycles);
+  const auto start = Clock::now();
+  CycleReport report;
+  for (long done = 0; done < cycles;) {
+    const long chunk = std::min(report_every, cycles - done);
+    report = integrator.advance(chunk);
+    done += chunk;
+  }
+  const double seconds = seconds_since(start);
+  require(std::isfinite(report.strain_energy) && report.strain_energy > 0,
+          "the coupon run did not load the coupon");
+  nlohmann::json r = row(
+      "plydem", model.particles.size(), model.bonds.size(), threads, cycles, seconds,
+      static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(model.particles.size()));
+  r["case"] = "table2-hex2d-coupon";
+  r["order"] = order;
+  r["report_every"] = report_every;
+  r["unbalanced_force_ratio"] = report.unbalanced_force_ratio;
+  std::cout << r.dump() << "\n";
+  return 0;
+}
+
+std::string engineering(double x) {
+  if (!std::isfinite(x)) return "-";
+  const char* prefix[] = {"", "k", "M", "G", "T"};
+  int k = 0;
+  while (std::abs(x) >= 1000 && k < 4) {
+    x /= 1000;
+    ++k;
+  }
+  return fmt::format("{:.3g}{}", x, prefix[k]);
+}
+
+// The table of bench/run: one row per JSON line read from stdin, each peer's row with the ratio of
+// plydem's bond-steps/s at the same size and thread count to the peer's.
+int print_table() {
+  std::vector<nlohmann::json> rows;
+  std::string line;
+  while (std::getline(std::cin, line)) {
+    if (line.empty() || line[0] != '{') continue;
+    rows.push_back(nlohmann::json::parse(line));
+  }
+  std::map<std::pair<long, int>, double> plydem_rate;
+  for (const auto& r : rows) {
+    if (r.value("engine", "") == "plydem" && !r.contains("case"))
+      plydem_rate[{r["particles"].get<long>(), r["threads"].get<int>()}] =
+          r["bond_steps_per_s"].get<double>();
+  }
+  std::cout << fmt::format(
+      "{:<8} {:>9} {:>9} {:>3} {:>7} {:>9} {:>10} {:>12} {:>12} {:>10} {:>11}\n", "engine",
+      "particles", "bonds", "thr", "steps", "seconds", "ns/step", "particle-st/s", "bond-st/s",
+      "bytes/part", "plydem/peer");
+  for (const auto& r : rows) {
+    const std::string engine = r.value("engine", "?");
+    if (r.contains("missing")) {
+      std::cout << fmt::format(
+          "{:<8} {:>9} {}\n", engine,
+          r.contains("particles") ? std::to_string(r["particles"].get<long>()) : std::string("-"),
+          r["missing"].get<std::string>());
+      continue;
+    }
+    std::string ratio = "";
+    const auto it = plydem_rate.find({r["particles"].get<long>(), r["threads"].get<int>()});
+    if (engine != "plydem" && it != plydem_rate.end())
+      ratio = fmt::format("{:.1f}x", it->second / r["bond_steps_per_s"].get<double>());
+    const double bytes = r.value("bytes_per_particle", std::nan(""));
+    std::cout << fmt::format(
+        "{:<8} {:>9} {:>9} {:>3} {:>7} {:>9.3f} {:>10} {:>12} {:>12} {:>10} {:>11}{}\n", engine,
+        r["particles"].get<long>(), r["bonds"].get<long>(), r["threads"].get<int>(),
+        r["steps"].get<long>(), r["seconds"].get<double>(),
+        engineering(r["ns_per_step"].get<double>()),
+        engineering(r["particle_steps_per_s"].get<double>()),
+        engineering(r["bond_steps_per_s"].get<double>()),
+        std::isfinite(bytes) ? fmt::format("{:.0f}", bytes) : std::string("-"), ratio,
+        r.contains("case") ? "  " + r["case"].get<std::string>() : std::string());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"plydem_kernel_bench: the explicit kernel on a hexagonal layer (see bench/run)"};
+  app.require_subcommand(1);
+  long particles = 10000, steps = 100, cycles = 200'000, report_every = 2000;
+  int threads = 1;
+  std::string lammps_data, yade_layer, order = "auto";
+  bool describe = false;
+  CLI::App* layer = app.add_subcommand("layer", "time the kernel on a square hexagonal layer");
+  layer->add_option("--particles", particles, "about this many particles")->capture_default_str();
+  layer->add_option("--steps", steps, "cycles to time")->capture_default_str();
+  layer->add_option("--threads", threads, "OpenMP threads")->capture_default_str();
+  const auto orders = CLI::IsMember({"auto", "hilbert", "built"});
+  layer->add_option("--order", order, "kernel particle order: auto (lattice lines), hilbert, built")
+      ->check(orders)
+      ->capture_default_str();
+  layer->add_option("--lammps-data", lammps_data, "also write the layer as a LAMMPS data file");
+  layer->add_option("--yade-layer", yade_layer, "also write x y z radius per particle for YADE");
+  layer->add_flag("--describe", describe, "print the layer's size and parameters, run nothing");
+  CLI::App* coupon = app.add_subcommand("coupon", "the paper's Table 2 Hex2D coupon, timed");
+  coupon->add_option("--cycles", cycles, "explicit cycles")->capture_default_str();
+  coupon->add_option("--threads", threads, "OpenMP threads")->capture_default_str();
+  coupon
+      ->add_option("--order", order, "kernel particle order: auto (lattice lines), hilbert, built")
+      ->check(orders)
+      ->capture_default_str();
+  coupon
+      ->add_option("--report-every", report_every,
+                   "cycles between unbalanced-force reports (the tension test samples every "
+                   "1% of the run)")
+      ->capture_default_str();
+  CLI::App* table = app.add_subcommand("table", "print JSON lines from stdin as the bench table");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    require(threads >= 1, "--threads must be at least 1");
+    if (*layer)
+      return run_layer(particles, steps, threads, order, lammps_data, yade_layer, describe);
+    if (*coupon) return run_coupon(cycles, threads, order, report_every);
+    if (*table) return print_table();
+  } catch (const std::exception& e) {
+    std::cerr << "plydem_kernel_bench: error: " << e.what() << "\n";
+    return 2;
+  }
+  return 1;
+}
