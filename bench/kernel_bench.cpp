@@ -18,6 +18,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -84,8 +85,16 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+// CPU time of the whole process, all threads [s]: with the wall time it shows whether the run had
+// its cores to itself.
+double process_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 nlohmann::json row(const std::string& engine, long particles, long bonds, int threads, long steps,
-                   double seconds, double bytes_per_particle) {
+                   double seconds, double cpu_seconds, double bytes_per_particle) {
   nlohmann::json r;
   r["engine"] = engine;
   r["particles"] = particles;
@@ -93,6 +102,7 @@ nlohmann::json row(const std::string& engine, long particles, long bonds, int th
   r["threads"] = threads;
   r["steps"] = steps;
   r["seconds"] = seconds;
+  r["cpu_seconds"] = cpu_seconds;
   r["ns_per_step"] = 1e9 * seconds / static_cast<double>(steps);
   r["particle_steps_per_s"] = static_cast<double>(particles) * static_cast<double>(steps) / seconds;
   r["bond_steps_per_s"] = static_cast<double>(bonds) * static_cast<double>(steps) / seconds;
@@ -169,11 +179,12 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   ExplicitIntegrator integrator(model, settings);
   pull_with_grips(model, integrator, 200'000);
   integrator.advance(1);  // first touch of the kernel's arrays, not timed
+  const double cpu = process_cpu_seconds();
   const auto start = Clock::now();
   const CycleReport report = integrator.advance(steps);
   const double seconds = seconds_since(start);
   require(std::isfinite(report.strain_energy), "the benchmark run diverged");
-  nlohmann::json r = row("plydem", n, bonds, threads, steps, seconds,
+  nlohmann::json r = row("plydem", n, bonds, threads, steps, seconds, process_cpu_seconds() - cpu,
                          static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(n));
   r["order"] = order;
   std::cout << r.dump() << "\n";
@@ -188,6 +199,7 @@ int run_coupon(long cycles, int threads, const std::string& order, long report_e
   settings.particle_order = order_named(order);
   ExplicitIntegrator integrator(model, settings);
   pull_with_grips(model, integrator, cycles);
+  const double cpu = process_cpu_seconds();
   const auto start = Clock::now();
   CycleReport report;
   for (long done = 0; done < cycles;) {
@@ -200,6 +212,7 @@ int run_coupon(long cycles, int threads, const std::string& order, long report_e
           "the coupon run did not load the coupon");
   nlohmann::json r = row(
       "plydem", model.particles.size(), model.bonds.size(), threads, cycles, seconds,
+      process_cpu_seconds() - cpu,
       static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(model.particles.size()));
   r["case"] = "table2-hex2d-coupon";
   r["order"] = order;
@@ -229,16 +242,23 @@ int print_table() {
     if (line.empty() || line[0] != '{') continue;
     rows.push_back(nlohmann::json::parse(line));
   }
-  std::map<std::pair<long, int>, double> plydem_rate;
+  // Bond-steps per second of wall time, and per second of CPU time (the per-core rate, which a
+  // busy machine distorts less).
+  auto per_cpu_second = [](const nlohmann::json& r) {
+    const double cpu = r.value("cpu_seconds", std::nan(""));
+    return static_cast<double>(r["bonds"].get<long>()) *
+           static_cast<double>(r["steps"].get<long>()) / cpu;
+  };
+  std::map<std::pair<long, int>, std::pair<double, double>> plydem_rate;
   for (const auto& r : rows) {
-    if (r.value("engine", "") == "plydem" && !r.contains("case"))
-      plydem_rate[{r["particles"].get<long>(), r["threads"].get<int>()}] =
-          r["bond_steps_per_s"].get<double>();
+    if (r.value("engine", "") == "plydem" && !r.contains("case") && !r.contains("missing"))
+      plydem_rate[{r["particles"].get<long>(), r["threads"].get<int>()}] = {
+          r["bond_steps_per_s"].get<double>(), per_cpu_second(r)};
   }
   std::cout << fmt::format(
-      "{:<8} {:>9} {:>9} {:>3} {:>7} {:>9} {:>10} {:>12} {:>12} {:>10} {:>11}\n", "engine",
-      "particles", "bonds", "thr", "steps", "seconds", "ns/step", "particle-st/s", "bond-st/s",
-      "bytes/part", "plydem/peer");
+      "{:<8} {:>9} {:>9} {:>3} {:>7} {:>9} {:>5} {:>10} {:>13} {:>12} {:>10} {:<15}\n", "engine",
+      "particles", "bonds", "thr", "steps", "seconds", "cpu%", "ns/step", "particle-st/s",
+      "bond-st/s", "bytes/part", "plydem/peer (per cpu-s)");
   for (const auto& r : rows) {
     const std::string engine = r.value("engine", "?");
     if (r.contains("missing")) {
@@ -250,14 +270,21 @@ int print_table() {
     }
     std::string ratio = "";
     const auto it = plydem_rate.find({r["particles"].get<long>(), r["threads"].get<int>()});
-    if (engine != "plydem" && it != plydem_rate.end())
-      ratio = fmt::format("{:.1f}x", it->second / r["bond_steps_per_s"].get<double>());
+    if (engine != "plydem" && it != plydem_rate.end()) {
+      ratio = fmt::format("{:.1f}x", it->second.first / r["bond_steps_per_s"].get<double>());
+      const double cpu_ratio = it->second.second / per_cpu_second(r);
+      if (std::isfinite(cpu_ratio)) ratio += fmt::format(" ({:.1f}x)", cpu_ratio);
+    }
     const double bytes = r.value("bytes_per_particle", std::nan(""));
+    const double cpu = r.value("cpu_seconds", std::nan(""));
+    const double seconds = r["seconds"].get<double>();
+    const std::string cpu_share =
+        std::isfinite(cpu) ? fmt::format("{:.0f}", 100.0 * cpu / seconds / r["threads"].get<int>())
+                           : std::string("-");
     std::cout << fmt::format(
-        "{:<8} {:>9} {:>9} {:>3} {:>7} {:>9.3f} {:>10} {:>12} {:>12} {:>10} {:>11}{}\n", engine,
-        r["particles"].get<long>(), r["bonds"].get<long>(), r["threads"].get<int>(),
-        r["steps"].get<long>(), r["seconds"].get<double>(),
-        engineering(r["ns_per_step"].get<double>()),
+        "{:<8} {:>9} {:>9} {:>3} {:>7} {:>9.3f} {:>5} {:>10} {:>13} {:>12} {:>10} {:<15}{}\n",
+        engine, r["particles"].get<long>(), r["bonds"].get<long>(), r["threads"].get<int>(),
+        r["steps"].get<long>(), seconds, cpu_share, engineering(r["ns_per_step"].get<double>()),
         engineering(r["particle_steps_per_s"].get<double>()),
         engineering(r["bond_steps_per_s"].get<double>()),
         std::isfinite(bytes) ? fmt::format("{:.0f}", bytes) : std::string("-"), ratio,
