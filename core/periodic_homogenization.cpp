@@ -374,7 +374,7 @@ PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
         "periodic homogenization: the bonds do not restrain some internal dofs that the macro "
         "strain loads (a mechanism: {} dofs without stiffness and {} zero pivots among {} "
         "internal dofs; unbalanced force {:.3g} of the load): stiffen the bonds or check the "
-        "packing",
+        "packing (or StaticSettings::pivot_tolerance is too large)",
         unrestrained, zero_pivots, nf, residual.norm() / load));
   }
   const Matrix6d condensed = h_ee + coupling.transpose() * fluctuation;

@@ -218,6 +218,15 @@ TEST_CASE("periodic homogenization refuses bad input by name") {
   CHECK_THROWS_WITH_AS(homogenize_periodic(missing_images),
                        doctest::Contains("3 bond images for 48 bonds"), Error);
 
+  // A pivot tolerance so large that every pivot counts as zero drops every internal dof, which
+  // the strain loads: the equilibrium check names it a mechanism instead of returning C = H_EE.
+  StaticSettings too_tolerant;
+  too_tolerant.pivot_tolerance = 0.01;
+  CHECK_THROWS_WITH_AS(homogenize_periodic(good, too_tolerant),
+                       doctest::Contains("do not restrain some internal dofs that the macro strain "
+                                         "loads (a mechanism"),
+                       Error);
+
   // Two repeats: the bond to the right neighbour and the bond to the left one's image join the
   // same pair of particles, which one Model cannot hold.
   CHECK_THROWS_WITH_AS(periodic_supercell(cell, springs.families, {2, 4, 1}, kLayer),
