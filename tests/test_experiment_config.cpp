@@ -1,0 +1,45 @@
+#include <doctest/doctest.h>
+
+#include "core/error.hpp"
+#include "experiments/experiment.hpp"
+
+using plydem::Error;
+using plydem::ExperimentConfig;
+
+TEST_CASE("an experiment config gives typed values, dotted keys and fallbacks") {
+  const ExperimentConfig c = ExperimentConfig::parse(
+      "experiment = \"laminate\"\ndescription = \"Table 4\"\nangles = [0, 15, 30.5]\n"
+      "strategies = [\"hex2d\", \"square\"]\ncycles = 200000\n[fem]\nelement = \"C3D20R\"\n"
+      "size_mm = 0.5\nrun = false\n",
+      "table4.toml");
+  CHECK(c.kind() == "laminate");
+  CHECK(c.description() == "Table 4");
+  CHECK(c.numbers("angles", {}) == std::vector<double>{0, 15, 30.5});
+  CHECK(c.strings("strategies", {}) == std::vector<std::string>{"hex2d", "square"});
+  CHECK(c.integer("cycles", 0) == 200000);
+  CHECK(c.number("cycles", 0) == 200000.0);
+  CHECK(c.string("fem.element", "") == "C3D20R");
+  CHECK(c.number("fem.size_mm", 0) == 0.5);
+  CHECK(c.boolean("fem.run", true) == false);
+  CHECK(c.number("missing", 7) == 7);
+  CHECK_NOTHROW(
+      c.require_known_keys({"experiment", "description", "angles", "strategies", "cycles", "fem"}));
+}
+
+TEST_CASE("an experiment config refuses wrong types, unknown keys and malformed TOML") {
+  const ExperimentConfig c =
+      ExperimentConfig::parse("cycles = 2.5\nname = 3\nangels = [0]\nsign = -1\n", "bad.toml");
+  CHECK_THROWS_WITH_AS(c.integer("cycles", 0), doctest::Contains("'cycles' must be an integer"),
+                       Error);
+  CHECK_THROWS_WITH_AS(c.string("name", ""), doctest::Contains("'name' must be a string"), Error);
+  CHECK_THROWS_WITH_AS(c.integer("sign", 0), doctest::Contains("must not be negative"), Error);
+  CHECK_THROWS_WITH_AS(c.kind(), doctest::Contains("'experiment'"), Error);
+  CHECK_THROWS_WITH_AS(c.require_known_keys({"cycles", "name", "angles", "sign"}),
+                       doctest::Contains("unknown key 'angels'"), Error);
+  CHECK_THROWS_WITH_AS(ExperimentConfig::parse("a = [1, \n", "broken.toml"),
+                       doctest::Contains("broken.toml:"), Error);
+  CHECK_THROWS_WITH_AS(ExperimentConfig::parse("x = nan\n", "nan.toml").number("x", 0),
+                       doctest::Contains("finite"), Error);
+  CHECK_THROWS_WITH_AS(ExperimentConfig::load("/nonexistent/table9.toml"),
+                       doctest::Contains("cannot be read"), Error);
+}
