@@ -18,6 +18,7 @@
 #include <string_view>
 
 #include "core/error.hpp"
+#include "experiments/external_tool.hpp"
 
 namespace plydem {
 namespace {
@@ -257,17 +258,6 @@ void pin_mid_plane(const FemMesh& mesh, const MidPlane& mid, int p, int dof, std
 
 // --- Running ccx -----------------------------------------------------------------------------
 
-std::string shell_quote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) {
-    if (c == '\'')
-      quoted += "'\\''";
-    else
-      quoted += c;
-  }
-  return quoted + "'";
-}
-
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(fmt::format("cannot read CalculiX output {}", path.string()));
@@ -340,7 +330,9 @@ double parse_number(const std::string& token, int line_number) {
   std::string text = token;
   if (text.find_first_of("eEdD") == std::string::npos) {
     const auto sign = text.find_last_of("+-");
-    if (sign != std::string::npos && sign > 0) text.insert(sign, "E");
+    if (sign != std::string::npos && sign > 0) {
+      text = fmt::format("{}E{}", text.substr(0, sign), text.substr(sign));
+    }
   }
   std::replace(text.begin(), text.end(), 'D', 'E');
   std::replace(text.begin(), text.end(), 'd', 'E');
@@ -533,42 +525,22 @@ void FemSettings::validate() const {
 
 CalculixAvailability calculix_availability(const std::string& executable) {
   CalculixAvailability result;
-  auto runnable = [](const fs::path& path) {
-    std::error_code ec;
-    return fs::is_regular_file(path, ec) && ::access(path.c_str(), X_OK) == 0;
-  };
   if (executable.empty()) {
     result.message = "CalculiX (ccx) is not installed: no executable name given";
     return result;
   }
-  if (executable.find('/') != std::string::npos) {
-    if (runnable(executable)) {
-      result.available = true;
-      result.executable = executable;
-    } else {
-      result.message = fmt::format(
-          "CalculiX (ccx) is not installed: '{}' is not an executable file", executable);
-    }
-    return result;
+  if (const std::optional<std::string> path = find_executable(executable)) {
+    result.available = true;
+    result.executable = *path;
+  } else if (executable.find('/') != std::string::npos) {
+    result.message =
+        fmt::format("CalculiX (ccx) is not installed: '{}' is not an executable file", executable);
+  } else {
+    result.message = fmt::format(
+        "CalculiX (ccx) is not installed: '{}' not found on PATH (Debian: apt-get install "
+        "calculix-ccx)",
+        executable);
   }
-  const char* path_env = std::getenv("PATH");
-  std::string_view path_list = path_env ? path_env : "";
-  while (!path_list.empty()) {
-    const auto colon = path_list.find(':');
-    const std::string_view dir = path_list.substr(0, colon);
-    const fs::path candidate = fs::path(dir.empty() ? "." : std::string(dir)) / executable;
-    if (runnable(candidate)) {
-      result.available = true;
-      result.executable = candidate.string();
-      return result;
-    }
-    if (colon == std::string_view::npos) break;
-    path_list.remove_prefix(colon + 1);
-  }
-  result.message = fmt::format(
-      "CalculiX (ccx) is not installed: '{}' not found on PATH (Debian: apt-get install "
-      "calculix-ccx)",
-      executable);
   return result;
 }
 

@@ -1,7 +1,12 @@
 #include <doctest/doctest.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <filesystem>
 
 #include "core/error.hpp"
 #include "experiments/experiment.hpp"
+#include "experiments/external_tool.hpp"
 
 using plydem::Error;
 using plydem::ExperimentConfig;
@@ -42,4 +47,21 @@ TEST_CASE("an experiment config refuses wrong types, unknown keys and malformed 
                        doctest::Contains("finite"), Error);
   CHECK_THROWS_WITH_AS(ExperimentConfig::load("/nonexistent/table9.toml"),
                        doctest::Contains("cannot be read"), Error);
+}
+
+TEST_CASE("gnuplot draws a PNG, or plydem says plainly that it is missing") {
+  const plydem::GnuplotAvailability gnuplot = plydem::gnuplot_availability();
+  CHECK_FALSE(plydem::gnuplot_availability("/nonexistent/gnuplot").available);
+  CHECK(plydem::gnuplot_availability("no-such-gnuplot").message.find("not installed") !=
+        std::string::npos);
+  if (!gnuplot.available) return;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / fmt::format("plydem_gnuplot_{}", ::getpid());
+  std::filesystem::create_directories(dir);
+  plydem::run_gnuplot("set terminal pngcairo size 200,150\nset output 'line.png'\nplot x\n", dir,
+                      "line.gp");
+  CHECK(std::filesystem::file_size(dir / "line.png") > 100);
+  CHECK_THROWS_WITH_AS(plydem::run_gnuplot("plot undefined_variable_xyz\n", dir, "bad.gp"),
+                       doctest::Contains("gnuplot failed"), Error);
+  std::filesystem::remove_all(dir);
 }
