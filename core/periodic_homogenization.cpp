@@ -250,7 +250,8 @@ PeriodicModel periodic_supercell(const UnitCell& cell, const std::vector<FamilyS
 }
 
 PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
-                                           const StaticSettings& settings) {
+                                           const StaticSettings& settings,
+                                           Eigen::MatrixXd* fluctuations) {
   const auto start = Clock::now();
   validate(settings);
   periodic.check_consistency();
@@ -378,6 +379,12 @@ PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
         unrestrained, zero_pivots, nf, residual.norm() / load));
   }
   const Matrix6d condensed = h_ee + coupling.transpose() * fluctuation;
+  if (fluctuations) {
+    fluctuations->resize(6 * n, 6);
+    for (int r = 0; r < n; ++r) {
+      fluctuations->middleRows<6>(6 * order.order[r]) = fluctuation.middleRows<6>(6 * r);
+    }
+  }
   result.relaxed = 0.5 * (condensed + condensed.transpose()) / periodic.volume;
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;

@@ -81,7 +81,13 @@ struct PeriodicHomogenization {
 /// by conjugate gradients above (settings.method, preconditioner, cg_tolerance and pivot_tolerance
 /// as for solve_static). The six columns of H_wE are the right-hand sides; relaxed = (H_EE - H_Ew
 /// H_ww^-1 H_wE) / volume, affine = H_EE / volume.
+///
+/// With `fluctuations`, also the relaxed motion per unit macro strain: a 6n x 6 matrix, row
+/// 6 i + c the translation (c < 3) or rotation (c >= 3) of particle i under unit strain s in
+/// column s, beyond the affine E x (zero for dofs left out). Calibrations use it for the
+/// sensitivity of the relaxed stiffness to each bond (the envelope theorem).
 PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
-                                           const StaticSettings& settings = {});
+                                           const StaticSettings& settings = {},
+                                           Eigen::MatrixXd* fluctuations = nullptr);
 
 }  // namespace plydem

