@@ -20,7 +20,9 @@
 /// point and in each ply k the DEM displacement is a moving-least-squares linear fit
 /// u = a + b (x - x0) + c (y - y0) over the ply's particles within `interpolation_radius` of the
 /// point, weighted by (1 - r^2 / rho^2)^2: it reproduces any linear field exactly, is continuous,
-/// and extrapolates by less than a particle diameter at the free edges and the hole. The FEM
+/// and extrapolates by about a particle diameter at most at the free edges and the hole (where
+/// fewer than three non-collinear particles lie within rho, at an edge whose last row of particles
+/// lies deeper than rho, the fit takes 2 rho). The FEM
 /// displacement is interpolated (FemDisplacementField::at) at the same (x, y) on ply k's
 /// mid-surface. The relative L2 errors run over all plies' points:
 ///   ux: |ux_dem - ux_fem| / |ux_fem|;

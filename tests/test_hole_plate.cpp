@@ -236,3 +236,31 @@ TEST_CASE(
           wrong_cmp.uy_error);
   CHECK(wrong_cmp.uy_error > kSmallUyBound);
 }
+
+TEST_CASE("without CalculiX the kind says so plainly and still runs the DEM") {
+  const ExperimentConfig config = ExperimentConfig::parse(
+      "experiment = \"hole\"\nlength_mm = 12\nwidth_mm = 6\nhole_diameter_mm = 1.5\n"
+      "grip_travel_mm = 0.02\n[dem]\nparticle_diameter_mm = 0.4\n[compare]\n"
+      "grid_spacing_mm = 0.5\n",
+      "small.toml");
+  ExperimentContext context;
+  context.out_dir = fresh_directory("hole_no_ccx");
+  context.calculix = "/nonexistent/ccx";
+  const ExperimentOutput out = default_experiment_registry().create("hole")->run(config, context);
+  CHECK(out.report_markdown.find("FEM column not run") != std::string::npos);
+  CHECK(out.report_markdown.find("/nonexistent/ccx") != std::string::npos);
+  bool has_error_row = false, has_dem_stiffness = false;
+  for (const ResultRow& r : out.rows) {
+    has_error_row = has_error_row || r.quantity.find("L2 error") != std::string::npos;
+    has_dem_stiffness =
+        has_dem_stiffness || (r.quantity == "plate stiffness" && r.source == "dem hex2d");
+  }
+  CHECK_FALSE(has_error_row);
+  CHECK(has_dem_stiffness);
+  CHECK(fs::exists(context.out_dir / "small_particles.vtu"));  // named after the config
+  if (gnuplot_availability().available) {
+    CHECK(has_png_signature(context.out_dir / "small_ux.png"));
+    CHECK_FALSE(fs::exists(context.out_dir / "small_difference.png"));
+  }
+  fs::remove_all(context.out_dir);
+}
