@@ -838,8 +838,9 @@ ExperimentOutput HolePlateExperiment::run(const ExperimentConfig& config,
       "so the ends contract freely; the same in both models. DEM: strategy {}, one layer per ply, "
       "particle diameter {} mm, interface bonds {:.3g} / {:.3g} N/m^3 (normal / shear), particles "
       "with their centre inside the hole removed, {}solved statically; its grips are the "
-      "particles within {} mm of each ply's outermost centres. FEM: CalculiX, {} solid elements, "
-      "{} per ply, O-grid around the hole.\n\n",
+      "particles within {} mm of each ply's outermost centres, each held where the rigid grip face "
+      "puts the material at its centre, ux = travel (x / L - 1/2). FEM: CalculiX, {} solid "
+      "elements, {} per ply, O-grid around the hole, grips on the end faces.\n\n",
       layup, material.name, format_mm(s.thickness / plies), format_mm(s.length), format_mm(s.width),
       format_mm(s.hole_diameter), format_mm(s.grip_travel), format_mm(0.5 * s.grip_travel),
       s.strategy, format_mm(s.particle_diameter),

@@ -9,11 +9,15 @@
 /// Run it with `plydem run experiments/hole.toml` (kind `hole`); the settings and their defaults
 /// are spelled out in that file.
 ///
-/// Boundary conditions, the same in both models: the grips prescribe only ux (-travel/2 on the
-/// left, +travel/2 on the right), so the ends contract and shear freely; the rigid modes left are
-/// pinned without load. DEM grips are the particles whose centres lie within `grip_length` of the
-/// outermost centres (half a diameter by default: the first column of each ply); the FEM grips are
-/// the end faces.
+/// Boundary conditions, the same in both models: the grips prescribe only ux, so the ends contract
+/// and shear freely; the rigid modes left are pinned without load. The FEM grips are the end
+/// faces, moved by -travel/2 and +travel/2. The DEM grips are the particles whose centres lie
+/// within `grip_length` of each ply's outermost centres (0.6 diameters by default: the first
+/// column; the plies' lattices differ, so their ends do not line up); a gripped particle stands
+/// for material a fraction of a diameter inside the face, and gets the displacement the rigid
+/// face gives it there at the nominal strain, ux = travel (x / L - 1/2). Gripping the particles
+/// at +-travel/2 instead would load the shorter span between the particle columns, about 2 d / L
+/// more strain (measured on the quick run, 1 mm particles: ux L2 error 3.6% instead of 0.9%).
 ///
 /// Comparison (compare_on_grid). A regular grid of cell centres covers the plate, nx x ny with
 /// nx = round(L / spacing), ny = round(W / spacing); points inside the hole are left out. At each
