@@ -61,7 +61,8 @@ int canvas_height(double aspect) {
 }  // namespace
 
 Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, const std::string& stem,
-                               const std::string& title, double window) {
+                               const std::string& title, double window,
+                               const std::vector<std::string>& ply_labels) {
   const Particles& p = model.particles;
   const Bonds& b = model.bonds;
   if (p.size() == 0 || b.size() == 0) {
@@ -93,13 +94,31 @@ Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, cons
     ++drawn;
   }
   if (drawn == 0) throw Error(fmt::format("figure {}: no bond lies in the drawn window", stem));
+  {
+    // Colours span the 1st to 97th percentile: the few completed edge bonds
+    // (core/boundary_cells.hpp) are stiffer than the bulk and would wash out the families.
+    std::vector<double> kn;
+    for (int k = 0; k < b.size(); ++k) {
+      if (b.family(k) >= 0) kn.push_back(b.normal_stiffness(k) * 1e-6);
+    }
+    std::sort(kn.begin(), kn.end());
+    const auto at = [&](double q) {
+      return kn[static_cast<std::size_t>(q * static_cast<double>(kn.size() - 1))];
+    };
+    k_min = at(0.01);
+    k_max = at(0.97);
+  }
   if (k_max <= k_min) k_max = k_min * 1.001 + 1e-9;
-  const double height = (y_max - y_min + (plies - 1) * ply_shift) * mm;
+  const double height = (y_max - y_min + (plies - 1) * ply_shift + 0.15 * (y_max - y_min)) * mm;
   const double width = (x_end - x_min) * mm;
   std::string labels;
   for (int k = 0; k < plies && plies > 1; ++k) {
-    labels += fmt::format("set label 'ply {}' at graph 1.01, first {:.6g} left\n", k,
-                          (0.5 * (y_min + y_max) + k * ply_shift) * mm);
+    const std::string label = k < static_cast<int>(ply_labels.size())
+                                  ? ply_labels[static_cast<std::size_t>(k)]
+                                  : fmt::format("ply {}", k);
+    labels += fmt::format("set label {} at first {:.6g}, first {:.6g} left front noenhanced\n",
+                          gp_quote(label), x_min * mm,
+                          (y_max + k * ply_shift + 0.075 * (y_max - y_min)) * mm);
   }
   const std::string script = fmt::format(
       "set terminal pngcairo size 1200,{} font ',11'\n"
@@ -111,7 +130,7 @@ Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, cons
       "set palette defined (0 '#1f3fbf', 1 '#2fa8e0', 2 '#f0d020', 3 '#d01010')\n"
       "set cbrange [{:.6g}:{:.6g}]\n"
       "set xrange [{:.6g}:{:.6g}]\n"
-      "set rmargin 10\n{}"
+      "{}"
       "plot '{}.dat' using 1:2:3:4:5 with vectors nohead lw 1.2 lc palette notitle\n",
       canvas_height(height / std::max(width, 1e-12)), stem, gp_quote(title), k_min, k_max,
       x_min * mm - 0.02 * width, x_min * mm + 1.02 * width, labels, stem);

@@ -38,8 +38,27 @@ double radians(double degrees) {
 // ---- configs ---------------------------------------------------------------------------------
 
 // The keys every kind reads (coupon, quick overrides, FEM settings, the paper's data).
-const std::vector<std::string> kCommonKeys = {"experiment", "description", "material", "coupon",
-                                              "quick",      "fem",         "paper",    "figures"};
+const std::vector<std::string> kCommonKeys = {"experiment",
+                                              "description",
+                                              "material",
+                                              "coupon.length_mm",
+                                              "coupon.width_mm",
+                                              "coupon.thickness_mm",
+                                              "coupon.diameter_mm",
+                                              "coupon.grips",
+                                              "quick.length_mm",
+                                              "quick.width_mm",
+                                              "quick.thickness_mm",
+                                              "quick.diameter_mm",
+                                              "fem.run",
+                                              "fem.element",
+                                              "fem.elements_per_ply",
+                                              "fem.element_size_mm",
+                                              "fem.edge_band_mm",
+                                              "fem.length_mm",
+                                              "fem.width_mm",
+                                              "figures.window_mm",
+                                              "paper"};
 
 std::vector<std::string> known_keys(std::vector<std::string> extra) {
   extra.insert(extra.end(), kCommonKeys.begin(), kCommonKeys.end());
@@ -235,14 +254,15 @@ std::string file_stem(std::string text) {
 
 // Writes vtu/STEM.pvd (+ particles and bonds .vtu) and STEM_bonds.png; returns the report lines.
 std::string write_model(const Model& model, const fs::path& out_dir, const std::string& stem,
-                        const std::string& caption, double window, ExperimentOutput& out) {
+                        const std::string& caption, double window, ExperimentOutput& out,
+                        const std::vector<std::string>& ply_labels = {}) {
   fs::create_directories(out_dir / "vtu");
   VtkSeries series((out_dir / "vtu" / fmt::format("{}.pvd", stem)).string());
   series.add_model(0.0, model);
   out.files.push_back(fs::path("vtu") / fmt::format("{}.pvd", stem));
   for (const std::string& file : series.files()) out.files.push_back(fs::path("vtu") / file);
-  const Figure figure =
-      plot_bonds_by_stiffness(model, out_dir, fmt::format("{}_bonds", stem), caption, window);
+  const Figure figure = plot_bonds_by_stiffness(model, out_dir, fmt::format("{}_bonds", stem),
+                                                caption, window, ply_labels);
   out.files.insert(out.files.end(), figure.files.begin(), figure.files.end());
   return figure_markdown(figure, caption);
 }
@@ -284,7 +304,10 @@ std::string degrees_label(double degrees) {
 class LaminaStrategiesExperiment : public Experiment {
  public:
   ExperimentOutput run(const ExperimentConfig& c, const ExperimentContext& context) const override {
-    c.require_known_keys(known_keys({"strategies", "angle_deg", "explicit"}));
+    c.require_known_keys(
+        known_keys({"strategies", "angle_deg", "explicit.cycles", "explicit.quick_cycles",
+                    "explicit.tolerance", "explicit.ramp_cycles", "explicit.load_stages",
+                    "explicit.max_cycles"}));
     const std::string name = c.name();
     const bool quick = context.quick;
     const CouponSpec coupon = coupon_from(c, quick);
@@ -611,7 +634,8 @@ class LaminaAnglesExperiment : public Experiment {
 class LaminateExperiment : public Experiment {
  public:
   ExperimentOutput run(const ExperimentConfig& c, const ExperimentContext& context) const override {
-    c.require_known_keys(known_keys({"layup", "strategy", "interface", "table"}));
+    c.require_known_keys(
+        known_keys({"layup", "strategy", "interface.normal", "interface.shear", "table"}));
     const std::string name = c.name();
     const std::string layup_text = c.string("layup", "");
     if (layup_text.empty())
@@ -640,10 +664,19 @@ class LaminateExperiment : public Experiment {
     const TensionResult r = TensionTest(s).run();
     const double dem_seconds = seconds_since(start);
     const Values dem = values_of(r.dem);
-    t += constants_line(fmt::format("DEM {}", s.strategy), dem, clt);
+    t += constants_line(fmt::format("DEM {} (tension test)", s.strategy), dem, clt);
     add_rows(out.rows, name, case_name, fmt::format("dem {}", s.strategy), dem);
     out.rows.push_back(
         {name, case_name, "wall time", fmt::format("dem {}", s.strategy), dem_seconds, "s"});
+    if (r.specimen.stiffness.norm() > 0) {
+      // The same coupon's membrane stiffness under affine boundary displacements
+      // (experiments/stiffness_test.hpp): no grips, no free edges, the laminate's A/h as the
+      // bonds carry it.
+      Values membrane = values_of(r.specimen.constants);
+      t += constants_line(fmt::format("DEM {} (membrane stiffness, affine boundary)", s.strategy),
+                          membrane, clt);
+      add_rows(out.rows, name, case_name, fmt::format("dem {} membrane", s.strategy), membrane);
+    }
     out.rows.push_back({name, case_name, "particles", fmt::format("dem {}", s.strategy),
                         static_cast<double>(r.along_x.particles), "1"});
     out.rows.push_back({name, case_name, "bonds", fmt::format("dem {}", s.strategy),
@@ -693,6 +726,10 @@ class LaminateExperiment : public Experiment {
     if (flagged) t += fmt::format("\n{}", paper_theory_note());
 
     // Figures and VTU: the solved coupon pulled along x.
+    std::vector<std::string> ply_labels;
+    for (std::size_t k = 0; k < s.layup.size(); ++k) {
+      ply_labels.push_back(fmt::format("ply {}: {:g}°", k, s.layup[k] * 180 / std::numbers::pi));
+    }
     const std::unique_ptr<Strategy> strategy = default_registry().create(s.strategy);
     const Model solved = solved_specimen(TensionTest(s), s, *strategy, s.coupon.ply_angle);
     const double window = figure_window(c, s.coupon);
@@ -702,7 +739,7 @@ class LaminateExperiment : public Experiment {
             "{} {}: bonds coloured by normal stiffness, plies side by side (plan view, first "
             "{:g} mm)",
             layup_text, s.strategy, window / kMm),
-        window, out);
+        window, out, ply_labels);
     {
       const Particles& p = solved.particles;
       std::vector<double> x, y, ux;
@@ -744,7 +781,12 @@ class LaminateExperiment : public Experiment {
     md += fmt::format(
         "Boundary condition: {}. γxy/εx is the shear coupling under σx alone (A16 ≠ 0 for an "
         "unbalanced layup; a clamped grip would suppress it and measure something else). DEM: "
-        "static tension tests; Gxy from the specimen's membrane stiffness. CalculiX leaves the "
+        "static tension tests (Ex, νxy, γxy/εx pulled along x; Ey, νyx with the laminate turned by "
+        "−90°), Gxy from the membrane stiffness. The membrane-stiffness row is the same coupon "
+        "with affine displacements prescribed on a boundary frame (no grips, no free edges): "
+        "the bonds' A/h, what CLT predicts. Where the two DEM rows differ, the coupon's free "
+        "edges and ends (a narrow coupon of a thick, coupled laminate) or the interface bonds' "
+        "shear lag are in the tension test. CalculiX leaves the "
         "free-edge zone (one laminate thickness, at most a quarter of the width) out of its strain "
         "fit. DEM {:.1f} s, "
         "CalculiX {:.1f} s. The paper's E1, E2, ν12, ν21 are Ex, Ey, νxy, νyx here. Relative "
