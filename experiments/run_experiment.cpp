@@ -1,6 +1,7 @@
 #include "experiments/run_experiment.hpp"
 
 #include <fmt/format.h>
+#include <omp.h>
 #include <spdlog/spdlog.h>
 #include <sys/utsname.h>
 #include <unistd.h>
@@ -70,7 +71,8 @@ std::string machine_line() {
     }
   }
   if (!cpu.empty()) line += fmt::format(", {}", cpu);
-  line += fmt::format(", {} hardware threads", std::thread::hardware_concurrency());
+  line += fmt::format(", {} hardware threads, {} OpenMP threads (OMP_NUM_THREADS)",
+                      std::thread::hardware_concurrency(), omp_get_max_threads());
   return line;
 }
 
