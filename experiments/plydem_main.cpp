@@ -7,12 +7,15 @@
 //   plydem calibrate --strategy hex2d --angle 30 --json
 //   plydem strategies                        # registered strategies
 //   plydem materials                         # built-in materials
+//   plydem run experiments/table4.toml       # the paper's Table 4 into results/table4/
+//   plydem run --list                        # the experiment configs
 #include <fmt/format.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <numbers>
 
@@ -20,6 +23,7 @@
 #include "core/material.hpp"
 #include "core/registry.hpp"
 #include "experiments/report.hpp"
+#include "experiments/run_experiment.hpp"
 #include "experiments/tension_test.hpp"
 
 namespace {
@@ -257,6 +261,21 @@ int main(int argc, char** argv) {
   calibrate->add_flag("--json", calibrate_json, "print one JSON object (SI units)");
   CLI::App* strategies = app.add_subcommand("strategies", "list the registered strategies");
   CLI::App* materials = app.add_subcommand("materials", "list the built-in materials");
+  plydem::RunOptions run_options;
+  std::string run_config, run_out;
+  bool run_list = false;
+  CLI::App* run = app.add_subcommand(
+      "run",
+      "run an experiment config (experiments/NAME.toml): report.md, results.csv, figures and VTU "
+      "files in the output folder");
+  run->add_option("config", run_config, "the experiment's TOML file, e.g. experiments/table4.toml");
+  run->add_option("--out", run_out, "output folder; default results/NAME");
+  run->add_flag("--quick", run_options.quick,
+                "smaller coupons and fewer cycles (seconds instead of minutes)");
+  run->add_option("--ccx", run_options.calculix, "the CalculiX executable")->capture_default_str();
+  run->add_flag("--list", run_list,
+                "list the configs in ./experiments (else the source tree's) with their "
+                "descriptions");
 
   try {
     app.parse(argc, argv);
@@ -286,6 +305,27 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*calibrate) return run_calibrate(calibrate_options, calibrate_json);
+    if (*run) {
+      if (run_list) {
+        const std::filesystem::path folder = plydem::default_experiments_folder();
+        std::cout << fmt::format("experiment configs in {}:\n", folder.string());
+        for (const plydem::ConfigListing& c : plydem::list_experiment_configs(folder)) {
+          std::cout << fmt::format("  {:<10} {}\n", c.name, c.description);
+        }
+        return 0;
+      }
+      plydem::require(!run_config.empty(),
+                      "plydem run needs an experiment config (e.g. experiments/table4.toml) or "
+                      "--list");
+      run_options.config = run_config;
+      run_options.out_dir = run_out;
+      const plydem::RunSummary summary = plydem::run_experiment(run_options);
+      std::cout << fmt::format("{} done in {:.1f} s: {} rows in {}, report {}\n",
+                               run_options.config.string(), summary.wall_seconds,
+                               summary.output.rows.size(), summary.results.string(),
+                               summary.report.string());
+      return 0;
+    }
     return run_tension(*tension ? tension_options : defaults);
   } catch (const plydem::Error& e) {
     std::cerr << "plydem: error: " << e.what() << "\n";
