@@ -874,6 +874,9 @@ Model LatticeStrategy::build(const CouponSpec& coupon) const {
   if (corrected_) {
     const LatticeCalibration start = calibrate_lattice(coupon.material, coupon.ply_angle,
                                                        coupon.thickness, coupon.particle_diameter);
+    // A target the law cannot reach on the small sample is refused before the coupon's own,
+    // slower correction.
+    check_reached(start, coupon.material, coupon.ply_angle);
     cal = calibrate_lattice(coupon.material, coupon.ply_angle, coupon.thickness,
                             coupon.particle_diameter, &size, &start.moduli);
     cal.iterations += start.iterations;
