@@ -14,16 +14,6 @@
 
 #include "core/error.hpp"
 
-#ifndef PLYDEM_SOURCE_DIR
-#define PLYDEM_SOURCE_DIR ""
-#endif
-#ifndef PLYDEM_GIT_VERSION
-#define PLYDEM_GIT_VERSION ""
-#endif
-#ifndef PLYDEM_PROJECT_VERSION
-#define PLYDEM_PROJECT_VERSION "unknown"
-#endif
-
 namespace plydem {
 namespace fs = std::filesystem;
 
@@ -88,9 +78,9 @@ std::string results_csv(const std::vector<ResultRow>& rows) {
 }
 
 std::string plydem_version() {
-  const std::string git = PLYDEM_GIT_VERSION;
-  if (git.empty()) return PLYDEM_PROJECT_VERSION;
-  return fmt::format("{} (git {})", PLYDEM_PROJECT_VERSION, git);
+  const std::string git = build_git_version();
+  if (git.empty()) return build_project_version();
+  return fmt::format("{} (git {})", build_project_version(), git);
 }
 
 std::vector<ConfigListing> list_experiment_configs(const fs::path& folder) {
@@ -120,7 +110,7 @@ fs::path default_experiments_folder() {
       if (entry.path().extension() == ".toml") return local;
     }
   }
-  const std::string source = PLYDEM_SOURCE_DIR;
+  const std::string source = build_source_dir();
   if (!source.empty() && fs::is_directory(fs::path(source) / "experiments")) {
     return fs::path(source) / "experiments";
   }

@@ -53,7 +53,14 @@ std::vector<ConfigListing> list_experiment_configs(const std::filesystem::path& 
 /// tree's experiments/ (known at build time).
 std::filesystem::path default_experiments_folder();
 
-/// The plydem version: the project version and, when built from git, `git describe`.
+/// The plydem version: the project version and, when built from git, `git describe` (at the
+/// last CMake configure).
 std::string plydem_version();
+
+/// Facts CMake writes into the generated build_info.cpp: the source tree, `git describe` (empty
+/// outside git) and the project version.
+const char* build_source_dir();
+const char* build_git_version();
+const char* build_project_version();
 
 }  // namespace plydem
