@@ -206,45 +206,6 @@ std::string paper_theory_note() {
 
 // ---- DEM models: solved state, VTU, bond figure ------------------------------------------------
 
-// The specimen pull() loads, solved statically at the test's target strain under the same grips
-// (for the VTU files and field maps; the moduli come from TensionTest itself).
-Model solved_specimen(const TensionTest& test, const TensionSettings& s, const Strategy& strategy,
-                      double ply_angle) {
-  Model model = test.build_specimen(strategy, ply_angle);
-  Particles& p = model.particles;
-  const double x_min = p.reference_position.col(0).minCoeff();
-  const double x_max = p.reference_position.col(0).maxCoeff();
-  const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * s.coupon.particle_diameter;
-  const double travel = 0.5 * s.target_strain * (x_max - x_min);
-  DofConstraints constraints(p.size());
-  const bool clamped = s.grips == GripCondition::kClamped;
-  for (int i = 0; i < p.size(); ++i) {
-    const double x = p.reference_position(i, 0);
-    double sign = 0;
-    if (x <= x_min + grip) {
-      p.group(i) = static_cast<int>(BoundaryGroup::kLeftGrip);
-      sign = -1;
-    } else if (x >= x_max - grip) {
-      p.group(i) = static_cast<int>(BoundaryGroup::kRightGrip);
-      sign = 1;
-    } else {
-      continue;
-    }
-    constraints.fix(i, Dof::kUx, sign * travel);
-    constraints.fix(i, Dof::kUz);
-    constraints.fix(i, Dof::kThetaX);
-    constraints.fix(i, Dof::kThetaY);
-    if (clamped) {
-      constraints.fix(i, Dof::kUy);
-      constraints.fix(i, Dof::kThetaZ);
-    }
-  }
-  StaticSettings settings;
-  settings.pin_rigid_modes = true;
-  solve_static(model, constraints, settings);
-  return model;
-}
-
 std::string file_stem(std::string text) {
   for (char& ch : text) {
     if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_') ch = '_';
@@ -457,7 +418,7 @@ class LaminaStrategiesExperiment : public Experiment {
              paper_time});
 
         const TensionTest test(s);
-        const Model solved = solved_specimen(test, s, *strategy, s.coupon.ply_angle);
+        const Model solved = test.solved_specimen(*strategy, s.coupon.ply_angle);
         figures += write_model(
             solved, context.out_dir, file_stem(fmt::format("{}_{}", name, strategy_name)),
             fmt::format("{}: bonds coloured by normal stiffness (plan view, first {:g} mm)",
@@ -570,7 +531,7 @@ class LaminaAnglesExperiment : public Experiment {
                               seconds_since(start), "s"});
           curves[strategy_name].push_back(pull_curve(fmt::format("{:g}°", angle_deg), r.along_x));
           const std::unique_ptr<Strategy> strategy = default_registry().create(strategy_name);
-          const Model solved = solved_specimen(TensionTest(s), s, *strategy, angle);
+          const Model solved = TensionTest(s).solved_specimen(*strategy, angle);
           figures += write_model(
               solved, context.out_dir,
               file_stem(fmt::format("{}_{}_{:g}deg", name, strategy_name, angle_deg)),
@@ -745,7 +706,7 @@ class LaminateExperiment : public Experiment {
       ply_labels.push_back(fmt::format("ply {}: {:g}°", k, s.layup[k] * 180 / std::numbers::pi));
     }
     const std::unique_ptr<Strategy> strategy = default_registry().create(s.strategy);
-    const Model solved = solved_specimen(TensionTest(s), s, *strategy, s.coupon.ply_angle);
+    const Model solved = TensionTest(s).solved_specimen(*strategy, s.coupon.ply_angle);
     const double window = figure_window(c, s.coupon);
     std::string figures = write_model(
         solved, context.out_dir, file_stem(name),

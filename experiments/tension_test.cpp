@@ -17,6 +17,61 @@
 namespace plydem {
 namespace {
 
+// The coupon's extent along x and its grips: the particles within `grip` of either end are put in
+// the left and right grip groups. Throws plydem::Error if the grips leave no free length or one
+// holds no particle.
+struct Grips {
+  double x_min = 0, x_max = 0, span = 0;
+};
+Grips assign_grips(Particles& p, double grip) {
+  Grips g;
+  g.x_min = p.reference_position.col(0).minCoeff();
+  g.x_max = p.reference_position.col(0).maxCoeff();
+  g.span = g.x_max - g.x_min;
+  require(g.span > 2 * grip,
+          fmt::format("the grips ({} mm each) leave no free length in a {} mm coupon", grip * 1e3,
+                      g.span * 1e3));
+  int left = 0, right = 0;
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0);
+    if (x <= g.x_min + grip) {
+      p.group(i) = static_cast<int>(BoundaryGroup::kLeftGrip);
+      ++left;
+    } else if (x >= g.x_max - grip) {
+      p.group(i) = static_cast<int>(BoundaryGroup::kRightGrip);
+      ++right;
+    }
+  }
+  require(left > 0 && right > 0, "a grip holds no particle");
+  return g;
+}
+
+// The static test's grips: each moved by `travel` along x (apart), held in z and against
+// tilting; clamped grips also hold y and the in-plane rotation.
+DofConstraints grip_constraints(const Particles& p, double travel, bool clamped) {
+  DofConstraints constraints(p.size());
+  for (int i = 0; i < p.size(); ++i) {
+    const int g = p.group(i);
+    if (g == static_cast<int>(BoundaryGroup::kFree)) continue;
+    const double sign = g == static_cast<int>(BoundaryGroup::kRightGrip) ? 1.0 : -1.0;
+    constraints.fix(i, Dof::kUx, sign * travel);
+    constraints.fix(i, Dof::kUz);
+    constraints.fix(i, Dof::kThetaX);
+    constraints.fix(i, Dof::kThetaY);
+    if (clamped) {
+      constraints.fix(i, Dof::kUy);
+      constraints.fix(i, Dof::kThetaZ);
+    }
+  }
+  return constraints;
+}
+
+StaticSettings grip_solve_settings() {
+  StaticSettings settings;
+  settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
+  return settings;
+}
+
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
@@ -101,6 +156,22 @@ Model TensionTest::build_specimen(const Strategy& strategy, double ply_angle) co
   return build_laminate(strategy, laminate);
 }
 
+double TensionTest::grip_length() const {
+  return settings_.grip_length > 0 ? settings_.grip_length
+                                   : 2.0 * settings_.coupon.particle_diameter;
+}
+
+Model TensionTest::solved_specimen(const Strategy& strategy, double ply_angle) const {
+  Model model = build_specimen(strategy, ply_angle);
+  Particles& p = model.particles;
+  const Grips grips = assign_grips(p, grip_length());
+  solve_static(model,
+               grip_constraints(p, 0.5 * settings_.target_strain * grips.span,
+                                settings_.grips == GripCondition::kClamped),
+               grip_solve_settings());
+  return model;
+}
+
 PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   const auto start = Clock::now();
   const TensionSettings& s = settings_;
@@ -110,25 +181,8 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   Particles& p = model.particles;
 
   // Grips at both ends, gauge section in the middle.
-  const double x_min = p.reference_position.col(0).minCoeff();
-  const double x_max = p.reference_position.col(0).maxCoeff();
-  const double span = x_max - x_min;
-  const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * spec.particle_diameter;
-  require(span > 2 * grip,
-          fmt::format("the grips ({} mm each) leave no free length in a {} mm coupon", grip * 1e3,
-                      span * 1e3));
-  int left = 0, right = 0;
-  for (int i = 0; i < p.size(); ++i) {
-    const double x = p.reference_position(i, 0);
-    if (x <= x_min + grip) {
-      p.group(i) = static_cast<int>(BoundaryGroup::kLeftGrip);
-      ++left;
-    } else if (x >= x_max - grip) {
-      p.group(i) = static_cast<int>(BoundaryGroup::kRightGrip);
-      ++right;
-    }
-  }
-  require(left > 0 && right > 0, "a grip holds no particle");
+  const Grips grips = assign_grips(p, grip_length());
+  const double x_min = grips.x_min, x_max = grips.x_max, span = grips.span;
   const double x_mid = 0.5 * (x_min + x_max);
   const double gauge_half = 0.5 * s.gauge_fraction * span;
   // Strains from the gauge interior: away from the grips and, by `edge_band`, from the free edges,
@@ -243,24 +297,9 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   if (s.fixed_cycles == 0 || s.solver == TensionSolver::kStatic) record(Sample{});
   if (s.solver == TensionSolver::kStatic) {
     // The model is linear: one solve at the target strain, fitted through the unloaded origin.
-    DofConstraints constraints(p.size());
-    const bool clamped = s.grips == GripCondition::kClamped;
-    for (int i = 0; i < p.size(); ++i) {
-      const int g = p.group(i);
-      if (g == static_cast<int>(BoundaryGroup::kFree)) continue;
-      const double sign = g == static_cast<int>(BoundaryGroup::kRightGrip) ? 1.0 : -1.0;
-      constraints.fix(i, Dof::kUx, sign * total_grip_travel);
-      constraints.fix(i, Dof::kUz);
-      constraints.fix(i, Dof::kThetaX);
-      constraints.fix(i, Dof::kThetaY);
-      if (clamped) {
-        constraints.fix(i, Dof::kUy);
-        constraints.fix(i, Dof::kThetaZ);
-      }
-    }
-    StaticSettings static_settings;
-    static_settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
-    const StaticResult solved = solve_static(model, constraints, static_settings);
+    const StaticResult solved = solve_static(
+        model, grip_constraints(p, total_grip_travel, s.grips == GripCondition::kClamped),
+        grip_solve_settings());
     record(sample(p));
     result.final_ratio = solved.relative_residual;
   } else if (s.fixed_cycles > 0) {

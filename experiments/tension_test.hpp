@@ -133,6 +133,11 @@ class TensionTest {
   PullResult pull(const Strategy& strategy, double ply_angle) const;
   /// The specimen pull() loads, before grips are assigned.
   Model build_specimen(const Strategy& strategy, double ply_angle) const;
+  /// That specimen with its grips assigned, solved statically at the target strain under the
+  /// test's grips (for VTU files and field maps; the moduli come from pull()).
+  Model solved_specimen(const Strategy& strategy, double ply_angle) const;
+  /// The grip length at each end [m]: settings.grip_length, or two particle diameters.
+  double grip_length() const;
 
  private:
   TensionSettings settings_;
