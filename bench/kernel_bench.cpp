@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "core/explicit_integrator.hpp"
+#include "solvers/explicit_integrator.hpp"
 #include "core/material.hpp"
 #include "strategies/hex2d.hpp"
 

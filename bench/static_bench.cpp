@@ -4,7 +4,7 @@
 //
 // The coupon is E-glass/MY750 at 0 deg with particle diameter 0.05 mm, shaped like the paper's
 // 10 x 0.83 mm coupon (length/width = 10/0.83) and scaled to hold about the requested number of
-// particles. It is loaded as the tension test's static path loads it (experiments/tension_test.cpp,
+// particles. It is loaded as the tension test's static path loads it (experiments/protocols/tension_test.cpp,
 // free grips): particles within two diameters of each end are grips with ux prescribed (+-half the
 // travel of a 0.1 % nominal strain) and uz, theta_x, theta_y held; the remaining rigid-body modes
 // are pinned (StaticSettings::pin_rigid_modes). Timings are on one thread: the phases of the first
@@ -36,8 +36,8 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "core/registry.hpp"
-#include "core/static_solver.hpp"
+#include "strategies/registry.hpp"
+#include "solvers/static_solver.hpp"
 
 namespace {
 
@@ -70,7 +70,7 @@ double peak_rss_mib() {
   return 0;
 }
 
-// The tension test's static constraints with free grips (experiments/tension_test.cpp).
+// The tension test's static constraints with free grips (experiments/protocols/tension_test.cpp).
 plydem::DofConstraints tension_constraints(const plydem::Model& model) {
   using plydem::Dof;
   const plydem::Particles& p = model.particles;

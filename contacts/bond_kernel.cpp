@@ -10,7 +10,7 @@
 #include <unordered_map>
 
 #include "core/error.hpp"
-#include "core/particle_ordering.hpp"
+#include "contacts/particle_ordering.hpp"
 
 namespace plydem {
 namespace {

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The bond-force kernels that advance every model, both applying the parallel bond law
-/// (contacts/parallel_bond.hpp):
+/// (core/parallel_bond.hpp):
 ///
 /// - compute_bond_forces: the simple reference loop over the bond arrays (scatter: each bond adds
 ///   to its two particles). Tests hold the fast path to it.
@@ -25,7 +25,7 @@
 #include <new>
 #include <vector>
 
-#include "contacts/parallel_bond.hpp"
+#include "core/parallel_bond.hpp"
 #include "core/model.hpp"
 
 namespace plydem {
@@ -208,7 +208,7 @@ struct GatherState {
 /// of lanes::kCount) from all their bonds, added to `force` and `torque`. With kEnergy, also adds
 /// half of each bond's strain energy and half its force magnitude (each bond is seen from both
 /// ends) to `energy` and `force_norm`. Inlined into the caller, so that it is compiled for the
-/// caller's instruction set (see core/explicit_integrator.cpp).
+/// caller's instruction set (see solvers/explicit_integrator.cpp).
 template <bool kEnergy>
 [[gnu::always_inline]] inline void gather_bond_block(
     const GatherBonds& g, int first, const GatherState& s, lanes::Doubles (&force)[3],
@@ -266,7 +266,7 @@ template <bool kEnergy>
         k_t_excess[l] = h.twisting_excess;
       }
     }
-    // du = (u_j - u_i) - (s_i theta_i + s_j theta_j) x n  (contacts/parallel_bond.hpp)
+    // du = (u_j - u_i) - (s_i theta_i + s_j theta_j) x n  (core/parallel_bond.hpp)
     Doubles a[3], du[3];
     for (int c = 0; c < 3; ++c) a[c] = s_own * t_i[c] + s_other * t_j[c];
     du[0] = (u_j[0] - u_i[0]) - (a[1] * n[2] - a[2] * n[1]);

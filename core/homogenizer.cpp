@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "contacts/parallel_bond.hpp"
+#include "core/parallel_bond.hpp"
 #include "core/error.hpp"
 
 namespace plydem {

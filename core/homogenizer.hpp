@@ -5,7 +5,7 @@
 ///    bond counted once (ERRATA §2);
 ///  - relaxed: the engine's own kinematics. Particle spins and sublattice shifts are internal
 ///    degrees of freedom that settle to minimum energy under a macroscopic strain; they are
-///    condensed out statically (ERRATA §3). Built from contacts/parallel_bond.hpp, the same bond
+///    condensed out statically (ERRATA §3). Built from core/parallel_bond.hpp, the same bond
 ///    law the kernel integrates.
 /// Voigt order (11, 22, 33, 23, 13, 12) with engineering shear strains.
 

@@ -1,6 +1,6 @@
 // A strategy of your own, registered from outside the library.
 //
-// plydem's strategies are objects found by name in a registry (core/registry.hpp). This program
+// plydem's strategies are objects found by name in a registry (strategies/registry.hpp). This program
 // defines one in its own file, adds it to the registry in its own main(), and runs the library's
 // tension test with it: nothing in plydem is edited or recompiled.
 //
@@ -21,9 +21,9 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
-#include "core/registry.hpp"
-#include "experiments/report.hpp"
-#include "experiments/tension_test.hpp"
+#include "strategies/registry.hpp"
+#include "experiments/output/report.hpp"
+#include "experiments/protocols/tension_test.hpp"
 #include "packings/hexagonal_layer.hpp"
 #include "strategies/hex2d.hpp"
 

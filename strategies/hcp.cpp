@@ -6,10 +6,10 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/calibration.hpp"
+#include "strategies/calibration.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "core/registry.hpp"
+#include "strategies/registry.hpp"
 #include "packings/hcp_lamina.hpp"
 
 namespace plydem {

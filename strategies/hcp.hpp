@@ -10,7 +10,7 @@
 ///    spins and the layers' relative shifts relaxed, ERRATA §3; its faces free, so plane stress)
 ///    has the ply's Q-bar. In the fibre frame the target is the orthotropic Q, four constants for
 ///    four springs: a least-squares fit of the affine lattice sum starts a Gauss-Newton solve on
-///    the relaxed layer cell (core/calibration.hpp), exact where non-negative springs exist.
+///    the relaxed layer cell (strategies/calibration.hpp), exact where non-negative springs exist.
 ///    Otherwise plydem::Error names the constant out of reach and the nearest stiffness
 ///    non-negative springs give.
 ///  - `hcp-eq26`: the springs of the paper's eq. (26), corrected (ERRATA §2: each bond counted
@@ -32,7 +32,7 @@
 #include <vector>
 
 #include "core/model.hpp"
-#include "core/strategy.hpp"
+#include "strategies/strategy.hpp"
 
 namespace plydem {
 
@@ -53,7 +53,7 @@ double hcp_eq26_ratio(double layer_spacing_radii);
 /// over all layer spacings: max over x = sin^2(theta) of 4 x (1 - x) / (1 + x^2).
 double hcp_eq26_printed_ratio_bound();
 
-/// Boundary-cell completion by bond class (the idea of core/boundary_cells.hpp, where every family
+/// Boundary-cell completion by bond class (the idea of strategies/boundary_cells.hpp, where every family
 /// has the same bulk count): a bond of class k between i and j is scaled by
 /// 1/2 (bulk_count[k] / n_i^k) + 1/2 (bulk_count[k] / n_j^k), n_i^k counting i's bonds of class k.
 /// Returns the number of bonds whose stiffness changed.

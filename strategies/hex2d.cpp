@@ -5,11 +5,11 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/boundary_cells.hpp"
-#include "core/calibration.hpp"
+#include "strategies/boundary_cells.hpp"
+#include "strategies/calibration.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "core/registry.hpp"
+#include "strategies/registry.hpp"
 #include "packings/hexagonal_layer.hpp"
 
 namespace plydem {

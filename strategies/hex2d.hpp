@@ -9,7 +9,7 @@
 
 #include <array>
 
-#include "core/strategy.hpp"
+#include "strategies/strategy.hpp"
 
 namespace plydem {
 

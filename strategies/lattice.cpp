@@ -14,10 +14,10 @@
 #include <optional>
 
 #include "contacts/bond_kernel.hpp"
-#include "contacts/parallel_bond.hpp"
+#include "core/parallel_bond.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "core/registry.hpp"
+#include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {
@@ -98,7 +98,7 @@ FamilyStiffness with_rotational_springs(double normal, double shear, double radi
 }
 
 // ---------------------------------------------------------------------------------------------
-// Relaxed stiffness of a periodic layer (core/periodic_homogenization.hpp, the engine's own bond
+// Relaxed stiffness of a periodic layer (solvers/periodic_homogenization.hpp, the engine's own bond
 // law: fluctuations periodic in x and y, free in z, every particle spinning) and its sensitivity
 // to each bond's stiffnesses.
 class RelaxedLayer {

@@ -35,8 +35,8 @@
 #include <string>
 #include <vector>
 
-#include "core/periodic_homogenization.hpp"
-#include "core/strategy.hpp"
+#include "solvers/periodic_homogenization.hpp"
+#include "strategies/strategy.hpp"
 #include "packings/random_packing.hpp"
 
 namespace plydem {

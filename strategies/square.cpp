@@ -9,11 +9,11 @@
 #include <numbers>
 #include <optional>
 
-#include "core/boundary_cells.hpp"
-#include "core/calibration.hpp"
+#include "strategies/boundary_cells.hpp"
+#include "strategies/calibration.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "core/registry.hpp"
+#include "strategies/registry.hpp"
 #include "packings/square_layer.hpp"
 
 namespace plydem {

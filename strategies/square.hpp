@@ -32,7 +32,7 @@
 #include <array>
 #include <optional>
 
-#include "core/strategy.hpp"
+#include "strategies/strategy.hpp"
 
 namespace plydem {
 

@@ -10,7 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "experiments/calculix.hpp"
+#include "experiments/fem/calculix.hpp"
 
 using namespace plydem;
 

@@ -12,8 +12,8 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
-#include "core/registry.hpp"
-#include "experiments/tension_test.hpp"
+#include "strategies/registry.hpp"
+#include "experiments/protocols/tension_test.hpp"
 #include "packings/hcp_lamina.hpp"
 #include "strategies/hcp.hpp"
 

@@ -1,4 +1,4 @@
-// The hole-in-plate experiment (experiments/hole_plate.hpp): hole cutting, the quick run of the
+// The hole-in-plate experiment (experiments/runner/hole_plate.hpp): hole cutting, the quick run of the
 // registered kind with its files, and the DEM field against CalculiX with a check that a wrong
 // field fails the bound.
 #include <doctest/doctest.h>
@@ -11,11 +11,11 @@
 #include <optional>
 
 #include "core/error.hpp"
-#include "core/laminate.hpp"
+#include "strategies/laminate.hpp"
 #include "core/material.hpp"
-#include "core/registry.hpp"
-#include "experiments/external_tool.hpp"
-#include "experiments/hole_plate.hpp"
+#include "strategies/registry.hpp"
+#include "experiments/output/external_tool.hpp"
+#include "experiments/runner/hole_plate.hpp"
 
 using namespace plydem;
 namespace fs = std::filesystem;

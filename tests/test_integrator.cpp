@@ -6,7 +6,7 @@
 #include <random>
 
 #include "core/error.hpp"
-#include "core/explicit_integrator.hpp"
+#include "solvers/explicit_integrator.hpp"
 #include "core/material.hpp"
 #include "strategies/hex2d.hpp"
 

@@ -12,9 +12,9 @@
 
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
-#include "core/explicit_integrator.hpp"
+#include "solvers/explicit_integrator.hpp"
 #include "core/material.hpp"
-#include "core/particle_ordering.hpp"
+#include "contacts/particle_ordering.hpp"
 #include "strategies/hex2d.hpp"
 
 using namespace plydem;
@@ -319,7 +319,7 @@ TEST_CASE("gather lists: a lattice gets one slot per direction and a few bond ty
   const GatherBonds g(lattice.bonds, order);
   CHECK(g.lattice_slots());
   CHECK(g.width() == 6);
-  // 6 directions, with the stiffness of edge bonds completed (core/boundary_cells.hpp): a few
+  // 6 directions, with the stiffness of edge bonds completed (strategies/boundary_cells.hpp): a few
   // dozen distinct half-bonds, not one per bond end.
   CHECK(g.type_count() < 100);
   CHECK(g.padded_count() % lanes::kCount == 0);

@@ -11,7 +11,7 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "core/periodic_homogenization.hpp"
+#include "solvers/periodic_homogenization.hpp"
 #include "strategies/lattice.hpp"
 
 using namespace plydem;

@@ -11,7 +11,7 @@
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
 #include "core/material.hpp"
-#include "core/periodic_homogenization.hpp"
+#include "solvers/periodic_homogenization.hpp"
 #include "packings/hexagonal_layer.hpp"
 #include "strategies/hex2d.hpp"
 

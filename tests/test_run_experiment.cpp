@@ -15,8 +15,8 @@
 #include <utility>
 
 #include "core/error.hpp"
-#include "experiments/external_tool.hpp"
-#include "experiments/run_experiment.hpp"
+#include "experiments/output/external_tool.hpp"
+#include "experiments/runner/run_experiment.hpp"
 
 using namespace plydem;
 namespace fs = std::filesystem;

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <random>
 
-#include "core/sparse_cholesky.hpp"
+#include "solvers/sparse_cholesky.hpp"
 
 using namespace plydem;
 

@@ -12,7 +12,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/measurements.hpp"
-#include "core/static_solver.hpp"
+#include "solvers/static_solver.hpp"
 #include "strategies/hex2d.hpp"
 
 using namespace plydem;

@@ -9,8 +9,8 @@
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "core/registry.hpp"
-#include "experiments/stiffness_test.hpp"
+#include "strategies/registry.hpp"
+#include "experiments/protocols/stiffness_test.hpp"
 
 using namespace plydem;
 

@@ -1,0 +1,337 @@
+// plydem: particle models of FRP composite laminae, from the command line.
+//
+// Sample runs:
+//   plydem                                   # the paper's 0 deg E-glass/MY750 lamina, Hex2D
+//   plydem tension --strategy hex2d --angle 30 --json
+//   plydem tension --material my_ply.toml --angle 0 --grips clamped
+//   plydem calibrate --strategy hex2d --angle 30 --json
+//   plydem strategies                        # registered strategies
+//   plydem materials                         # built-in materials
+//   plydem run experiments/table4.toml       # the paper's Table 4 into results/table4/
+//   plydem run --list                        # the experiment configs
+#include <fmt/format.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "core/material.hpp"
+#include "strategies/registry.hpp"
+#include "experiments/output/report.hpp"
+#include "experiments/runner/run_experiment.hpp"
+#include "experiments/protocols/tension_test.hpp"
+
+namespace {
+
+struct TensionOptions {
+  std::string strategy = "hex2d";
+  std::string material = "eglass-my750";
+  double angle_deg = 0;
+  double length_mm = 10, width_mm = 0.83, thickness_mm = 0.2, diameter_mm = 0.05;
+  double grip_mm = 0;
+  double gauge_fraction = 0.5;
+  double target_strain = 1e-3;
+  int stages = 2;
+  long ramp_cycles = 2000;
+  long cycles = 0;
+  long max_cycles = 5'000'000;
+  double tolerance = 1e-5;
+  double damping = 0.7;
+  double safety = 0.8;
+  double grip_velocity_mm_s = 0;
+  std::string grips = "free";
+  std::string layup;
+  double interface_normal = 0, interface_shear = 0;
+  std::string solver = "static";
+  std::vector<std::string> strategy_options;
+  bool json = false;
+  bool raw_edges = false;
+};
+
+// Options every command that builds a ply takes: strategy, its options, material, angle.
+void add_ply_options(CLI::App& app, TensionOptions& o) {
+  app.add_option("--strategy", o.strategy, "packing strategy (see `plydem strategies`)")
+      ->capture_default_str();
+  app.add_option("--strategy-option", o.strategy_options,
+                 "a strategy's own parameter, NAME=VALUE (repeatable; `plydem strategies` lists "
+                 "them)");
+  app.add_option("--material", o.material,
+                 "built-in material name or a TOML file with name, E1, E2, G12, nu12, nu23 (Pa)")
+      ->capture_default_str();
+  app.add_option("--angle", o.angle_deg, "ply (fibre) angle from the loading axis x [deg]")
+      ->capture_default_str();
+}
+
+void add_tension_options(CLI::App& app, TensionOptions& o) {
+  add_ply_options(app, o);
+  app.add_option("--length-mm", o.length_mm, "coupon length along x [mm]")->capture_default_str();
+  app.add_option("--width-mm", o.width_mm, "coupon width along y [mm]")->capture_default_str();
+  app.add_option("--thickness-mm", o.thickness_mm, "ply thickness delta [mm]")
+      ->capture_default_str();
+  app.add_option("--diameter-mm", o.diameter_mm, "particle diameter [mm]")->capture_default_str();
+  app.add_option("--grip-mm", o.grip_mm, "grip length at each end [mm]; 0 = two diameters")
+      ->capture_default_str();
+  app.add_option("--gauge-fraction", o.gauge_fraction, "central fraction of the length measured")
+      ->capture_default_str();
+  app.add_option("--target-strain", o.target_strain, "nominal strain at the last load stage")
+      ->capture_default_str();
+  app.add_option("--stages", o.stages, "load stages (points of the stress-strain fit)")
+      ->capture_default_str();
+  app.add_option("--ramp-cycles", o.ramp_cycles, "cycles to move the grips through one stage")
+      ->capture_default_str();
+  app.add_option("--cycles", o.cycles,
+                 "fixed-cycle mode: move the grips for exactly N cycles (paper: 200000); 0 = stop "
+                 "when quasi-static")
+      ->capture_default_str();
+  app.add_option("--max-cycles", o.max_cycles, "give up after this many cycles per coupon")
+      ->capture_default_str();
+  app.add_option("--tolerance", o.tolerance,
+                 "quasi-static when mean unbalanced force / mean bond force falls below this")
+      ->capture_default_str();
+  app.add_option("--damping", o.damping, "PFC local damping coefficient")->capture_default_str();
+  app.add_option("--safety", o.safety, "time step as a fraction of the critical time step")
+      ->capture_default_str();
+  app.add_option("--grip-velocity-mm-s", o.grip_velocity_mm_s,
+                 "grip velocity [mm/s]; 0 = derived from --ramp-cycles")
+      ->capture_default_str();
+  app.add_option(
+      "--layup", o.layup,
+      "a laminate instead of one ply, bottom ply first: [0/90/0], [0/30/45]s, [45/-45]s, "
+      "[0/90]2s (--angle then turns the whole laminate)");
+  app.add_option("--interface-normal", o.interface_normal,
+                 "normal stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
+                 "10 E2/t (see strategies/laminate.hpp); the paper used 1e14")
+      ->capture_default_str();
+  app.add_option("--interface-shear", o.interface_shear,
+                 "shear stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
+                 "10 G12/t; the paper used 1e13")
+      ->capture_default_str();
+  app.add_option("--grips", o.grips, "free (uniaxial stress) or clamped (ends held laterally)")
+      ->check(CLI::IsMember({"free", "clamped"}))
+      ->capture_default_str();
+  app.add_option("--solver", o.solver,
+                 "static (one sparse linear solve) or explicit (damped dynamics to quasi-static)")
+      ->check(CLI::IsMember({"explicit", "static"}))
+      ->capture_default_str();
+  app.add_flag("--raw-edges", o.raw_edges,
+               "do not complete the boundary cells of free edges (edge bonds keep bulk stiffness)");
+  app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
+}
+
+// "NAME=VALUE" -> (NAME, VALUE); a malformed entry is an error naming it.
+std::vector<std::pair<std::string, double>> parse_strategy_options(
+    const std::vector<std::string>& entries) {
+  std::vector<std::pair<std::string, double>> result;
+  for (const std::string& entry : entries) {
+    const auto eq = entry.find('=');
+    plydem::require(eq != std::string::npos && eq > 0 && eq + 1 < entry.size(),
+                    fmt::format("--strategy-option '{}' is not NAME=VALUE", entry));
+    const std::string value = entry.substr(eq + 1);
+    std::size_t used = 0;
+    double number = 0;
+    try {
+      number = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    plydem::require(
+        used == value.size() && std::isfinite(number),
+        fmt::format("--strategy-option '{}': '{}' is not a finite number", entry, value));
+    result.emplace_back(entry.substr(0, eq), number);
+  }
+  return result;
+}
+
+// The strategy named by the options, with its options set (unknown names fail here).
+std::unique_ptr<plydem::Strategy> make_strategy(const TensionOptions& o) {
+  std::unique_ptr<plydem::Strategy> strategy = plydem::default_registry().create(o.strategy);
+  for (const auto& [name, value] : parse_strategy_options(o.strategy_options)) {
+    strategy->set_option(name, value);
+  }
+  return strategy;
+}
+
+plydem::TensionSettings to_settings(const TensionOptions& o) {
+  constexpr double mm = 1e-3;
+  plydem::TensionSettings s;
+  s.strategy = o.strategy;
+  s.strategy_options = parse_strategy_options(o.strategy_options);
+  plydem::require(std::isfinite(o.angle_deg), "--angle is not a finite number");
+  s.coupon.material = plydem::load_material(o.material);
+  s.coupon.ply_angle = o.angle_deg * std::numbers::pi / 180.0;
+  s.coupon.length = o.length_mm * mm;
+  s.coupon.width = o.width_mm * mm;
+  s.coupon.thickness = o.thickness_mm * mm;
+  s.coupon.particle_diameter = o.diameter_mm * mm;
+  s.coupon.complete_boundary_cells = !o.raw_edges;
+  if (!o.layup.empty()) {
+    s.layup = plydem::parse_layup(o.layup);
+    for (double& angle : s.layup) angle += s.coupon.ply_angle;
+  }
+  s.interface.normal = o.interface_normal;
+  s.interface.shear = o.interface_shear;
+  s.grip_length = o.grip_mm * mm;
+  s.gauge_fraction = o.gauge_fraction;
+  s.target_strain = o.target_strain;
+  s.load_stages = o.stages;
+  s.ramp_cycles = o.ramp_cycles;
+  s.fixed_cycles = o.cycles;
+  s.max_cycles = o.max_cycles;
+  s.tolerance = o.tolerance;
+  s.grip_velocity = o.grip_velocity_mm_s * mm;
+  s.solver =
+      o.solver == "static" ? plydem::TensionSolver::kStatic : plydem::TensionSolver::kExplicit;
+  s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
+  s.explicit_settings.local_damping = o.damping;
+  s.explicit_settings.safety_factor = o.safety;
+  make_strategy(o);  // unknown strategies and options fail here, before any work
+  return s;
+}
+
+int run_tension(const TensionOptions& o) {
+  const plydem::TensionSettings settings = to_settings(o);
+  plydem::TensionTest test(settings);
+  test.on_progress([](const plydem::TensionProgress& p) {
+    const std::string left =
+        p.seconds_left >= 0 ? fmt::format(", about {:.0f} s left", p.seconds_left) : "";
+    spdlog::info("{}: {} cycles, unbalanced-force ratio {:.3g}, {:.0f} s{}", p.phase, p.cycles,
+                 p.ratio, p.elapsed_seconds, left);
+  });
+  const plydem::TensionResult result = test.run();
+  if (o.json) {
+    std::cout << plydem::tension_json(result, settings).dump(2) << "\n";
+  } else {
+    std::cout << plydem::format_tension_table(result, settings);
+  }
+  return 0;
+}
+
+int run_calibrate(const TensionOptions& o, bool json) {
+  plydem::require(std::isfinite(o.angle_deg), "--angle is not a finite number");
+  const plydem::Material material = plydem::load_material(o.material);
+  const double angle = o.angle_deg * std::numbers::pi / 180.0;
+  const std::unique_ptr<plydem::Strategy> strategy = make_strategy(o);
+  const plydem::Calibration calibration =
+      strategy->calibrate(material, angle, o.thickness_mm * 1e-3);
+  if (json) {
+    nlohmann::json j = plydem::calibration_json(calibration);
+    j["strategy"] = o.strategy;
+    j["material"] = material.name;
+    j["angle_deg"] = o.angle_deg;
+    j["thickness"] = o.thickness_mm * 1e-3;
+    j["units"] = "SI (N/m, N m/rad, Pa)";
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::cout << plydem::format_calibration(calibration, o.strategy, material, angle);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "plydem: particle (DEM and lattice) models of fibre-reinforced composite laminae.\n"
+      "With no command it runs the paper's 0 deg E-glass/MY750 lamina with the Hex2D strategy\n"
+      "and prints E1, E2, nu12, nu21 beside classical lamination theory."};
+  app.require_subcommand(0, 1);
+  // Progress and warnings go to stderr: stdout carries only the table or the JSON object.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("plydem"));
+  spdlog::set_pattern("[%H:%M:%S] %v");
+
+  TensionOptions defaults;
+  TensionOptions tension_options;
+  CLI::App* tension = app.add_subcommand(
+      "tension", "virtual uniaxial tension test of one ply: Ex, Ey, nu_xy, nu_yx beside CLT");
+  add_tension_options(*tension, tension_options);
+  TensionOptions calibrate_options;
+  bool calibrate_json = false;
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate",
+      "bond stiffness of each family, lattice orientation, and the stiffness the model has as "
+      "simulated beside the target");
+  add_ply_options(*calibrate, calibrate_options);
+  calibrate->add_option("--thickness-mm", calibrate_options.thickness_mm, "ply thickness [mm]")
+      ->capture_default_str();
+  calibrate->add_flag("--json", calibrate_json, "print one JSON object (SI units)");
+  CLI::App* strategies = app.add_subcommand("strategies", "list the registered strategies");
+  CLI::App* materials = app.add_subcommand("materials", "list the built-in materials");
+  plydem::RunOptions run_options;
+  std::string run_config, run_out;
+  bool run_list = false;
+  CLI::App* run = app.add_subcommand(
+      "run",
+      "run an experiment config (experiments/NAME.toml): report.md, results.csv, figures and VTU "
+      "files in the output folder");
+  run->add_option("config", run_config, "the experiment's TOML file, e.g. experiments/table4.toml");
+  run->add_option("--out", run_out, "output folder; default results/NAME");
+  run->add_flag("--quick", run_options.quick,
+                "smaller coupons and fewer cycles (seconds instead of minutes)");
+  run->add_option("--ccx", run_options.calculix, "the CalculiX executable")->capture_default_str();
+  run->add_flag("--list", run_list,
+                "list the configs in ./experiments (else the source tree's) with their "
+                "descriptions");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (*strategies) {
+      const plydem::Registry& registry = plydem::default_registry();
+      for (const std::string& name : registry.names()) {
+        std::cout << fmt::format("{:<14} {}\n", name, registry.description(name));
+        for (const plydem::StrategyOption& option : registry.create(name)->options()) {
+          std::cout << fmt::format("{:<14}   --strategy-option {}={:g}: {}\n", "", option.name,
+                                   option.value, option.description);
+        }
+      }
+      return 0;
+    }
+    if (*materials) {
+      for (const std::string& name : plydem::builtin_material_names()) {
+        const plydem::Material m = plydem::load_material(name);
+        std::cout << fmt::format(
+            "{:<14} E1 {:g} GPa, E2 {:g} GPa, G12 {:g} GPa, nu12 {:g}, nu23 {:g}, density {:g} "
+            "kg/m^3\n",
+            m.name, m.E1 * 1e-9, m.E2 * 1e-9, m.G12 * 1e-9, m.nu12, m.nu23, m.density);
+      }
+      return 0;
+    }
+    if (*calibrate) return run_calibrate(calibrate_options, calibrate_json);
+    if (*run) {
+      if (run_list) {
+        const std::filesystem::path folder = plydem::default_experiments_folder();
+        std::cout << fmt::format("experiment configs in {}:\n", folder.string());
+        for (const plydem::ConfigListing& c : plydem::list_experiment_configs(folder)) {
+          std::cout << fmt::format("  {:<10} {}\n", c.name, c.description);
+        }
+        return 0;
+      }
+      plydem::require(!run_config.empty(),
+                      "plydem run needs an experiment config (e.g. experiments/table4.toml) or "
+                      "--list");
+      run_options.config = run_config;
+      run_options.out_dir = run_out;
+      const plydem::RunSummary summary = plydem::run_experiment(run_options);
+      std::cout << fmt::format("{} done in {:.1f} s: {} rows in {}, report {}\n",
+                               run_options.config.string(), summary.wall_seconds,
+                               summary.output.rows.size(), summary.results.string(),
+                               summary.report.string());
+      return 0;
+    }
+    return run_tension(*tension ? tension_options : defaults);
+  } catch (const plydem::Error& e) {
+    std::cerr << "plydem: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "plydem: internal error: " << e.what() << "\n";
+    return 3;
+  }
+}

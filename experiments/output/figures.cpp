@@ -1,0 +1,206 @@
+#include "experiments/output/figures.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include "core/error.hpp"
+#include "experiments/output/external_tool.hpp"
+
+namespace plydem {
+namespace fs = std::filesystem;
+
+namespace {
+
+// gnuplot string literal in single quotes ('' escapes a quote).
+std::string gp_quote(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) {
+    if (c == '\'')
+      out += "''";
+    else
+      out += c;
+  }
+  out += '\'';
+  return out;
+}
+
+// Writes OUT/plots/STEM.dat and draws OUT/STEM.png with `script` (which reads 'STEM.dat' and
+// writes '../STEM.png'); skipped when gnuplot is missing.
+Figure draw(const fs::path& out_dir, const std::string& stem, const std::string& data,
+            const std::string& script) {
+  Figure figure;
+  const fs::path plots = out_dir / "plots";
+  fs::create_directories(plots);
+  {
+    const fs::path data_path = plots / fmt::format("{}.dat", stem);
+    std::ofstream file(data_path, std::ios::binary);
+    file << data;
+    if (!file) throw Error(fmt::format("cannot write {}", data_path.string()));
+  }
+  figure.files.push_back(fs::path("plots") / fmt::format("{}.dat", stem));
+  const GnuplotAvailability gnuplot = gnuplot_availability();
+  if (!gnuplot.available) {
+    figure.skipped = fmt::format("figure {}.png not drawn: {}", stem, gnuplot.message);
+    return figure;
+  }
+  run_gnuplot(script, plots, fmt::format("{}.gp", stem));
+  figure.files.push_back(fs::path("plots") / fmt::format("{}.gp", stem));
+  figure.png = fmt::format("{}.png", stem);
+  figure.files.push_back(figure.png);
+  return figure;
+}
+
+// Canvas height for a plot of data aspect `height / width` on a 1200 px wide canvas.
+int canvas_height(double aspect) {
+  return std::clamp(static_cast<int>(std::lround(1100 * aspect + 160)), 320, 1400);
+}
+
+}  // namespace
+
+Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, const std::string& stem,
+                               const std::string& title, double window,
+                               const std::vector<std::string>& ply_labels) {
+  const Particles& p = model.particles;
+  const Bonds& b = model.bonds;
+  if (p.size() == 0 || b.size() == 0) {
+    throw Error(fmt::format("figure {}: the model has no particles or no bonds", stem));
+  }
+  const double x_min = p.reference_position.col(0).minCoeff();
+  const double y_min = p.reference_position.col(1).minCoeff();
+  const double y_max = p.reference_position.col(1).maxCoeff();
+  const double x_end = window > 0 ? x_min + window : p.reference_position.col(0).maxCoeff();
+  const double ply_shift = 1.15 * std::max(y_max - y_min, 1e-12);
+  const int plies = p.ply.maxCoeff() + 1;
+  constexpr double mm = 1e3;
+  std::string data = "# x1 [mm], y1 [mm], dx [mm], dy [mm], k_n [MN/m], ply\n";
+  int drawn = 0;
+  double k_min = INFINITY, k_max = -INFINITY;
+  for (int k = 0; k < b.size(); ++k) {
+    if (b.family(k) < 0) continue;  // interface bonds stand along z
+    const int i = b.first(k), j = b.second(k);
+    if (std::max(p.reference_position(i, 0), p.reference_position(j, 0)) > x_end) continue;
+    const double shift = p.ply(i) * ply_shift;
+    const double kn = b.normal_stiffness(k) * 1e-6;
+    k_min = std::min(k_min, kn);
+    k_max = std::max(k_max, kn);
+    data +=
+        fmt::format("{:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {}\n", p.reference_position(i, 0) * mm,
+                    (p.reference_position(i, 1) + shift) * mm,
+                    (p.reference_position(j, 0) - p.reference_position(i, 0)) * mm,
+                    (p.reference_position(j, 1) - p.reference_position(i, 1)) * mm, kn, p.ply(i));
+    ++drawn;
+  }
+  if (drawn == 0) throw Error(fmt::format("figure {}: no bond lies in the drawn window", stem));
+  {
+    // Colours span the 1st to 97th percentile: the few completed edge bonds
+    // (strategies/boundary_cells.hpp) are stiffer than the bulk and would wash out the families.
+    std::vector<double> kn;
+    for (int k = 0; k < b.size(); ++k) {
+      if (b.family(k) >= 0) kn.push_back(b.normal_stiffness(k) * 1e-6);
+    }
+    std::sort(kn.begin(), kn.end());
+    const auto at = [&](double q) {
+      return kn[static_cast<std::size_t>(q * static_cast<double>(kn.size() - 1))];
+    };
+    k_min = at(0.01);
+    k_max = at(0.97);
+  }
+  if (k_max <= k_min) k_max = k_min * 1.001 + 1e-9;
+  const double height = (y_max - y_min + (plies - 1) * ply_shift + 0.15 * (y_max - y_min)) * mm;
+  const double width = (x_end - x_min) * mm;
+  std::string labels;
+  for (int k = 0; k < plies && plies > 1; ++k) {
+    const std::string label = k < static_cast<int>(ply_labels.size())
+                                  ? ply_labels[static_cast<std::size_t>(k)]
+                                  : fmt::format("ply {}", k);
+    labels += fmt::format("set label {} at first {:.6g}, first {:.6g} left front noenhanced\n",
+                          gp_quote(label), x_min * mm,
+                          (y_max + k * ply_shift + 0.075 * (y_max - y_min)) * mm);
+  }
+  const std::string script = fmt::format(
+      "set terminal pngcairo size 1200,{} font ',11'\n"
+      "set output '../{}.png'\n"
+      "set title {} noenhanced\n"
+      "set size ratio -1\n"
+      "set xlabel 'x [mm]'\nset ylabel 'y [mm]'\n"
+      "set cblabel 'bond normal stiffness k_n [MN/m]'\n"
+      "set palette defined (0 '#1f3fbf', 1 '#2fa8e0', 2 '#f0d020', 3 '#d01010')\n"
+      "set cbrange [{:.6g}:{:.6g}]\n"
+      "set xrange [{:.6g}:{:.6g}]\n"
+      "{}"
+      "plot '{}.dat' using 1:2:3:4:5 with vectors nohead lw 1.2 lc palette notitle\n",
+      canvas_height(height / std::max(width, 1e-12)), stem, gp_quote(title), k_min, k_max,
+      x_min * mm - 0.02 * width, x_min * mm + 1.02 * width, labels, stem);
+  return draw(out_dir, stem, data, script);
+}
+
+Figure plot_curves(const std::vector<Curve>& curves, const fs::path& out_dir,
+                   const std::string& stem, const std::string& title, const std::string& x_label,
+                   const std::string& y_label) {
+  std::string data;
+  std::string plot = "plot ";
+  int index = 0;
+  for (const Curve& c : curves) {
+    if (c.x.size() != c.y.size()) {
+      throw Error(fmt::format("figure {}: curve '{}' has {} x and {} y values", stem, c.label,
+                              c.x.size(), c.y.size()));
+    }
+    if (c.x.empty()) continue;
+    data += fmt::format("# {}\n", c.label);
+    for (std::size_t i = 0; i < c.x.size(); ++i) {
+      data += fmt::format("{:.9g} {:.9g}\n", c.x[i], c.y[i]);
+    }
+    data += "\n\n";
+    plot += fmt::format("{}'{}.dat' index {} with {} title {}", index > 0 ? ", " : "", stem, index,
+                        c.points ? "linespoints pt 7 ps 1.2 lw 2" : "lines dt 2 lw 2",
+                        gp_quote(c.label));
+    ++index;
+  }
+  if (index == 0) throw Error(fmt::format("figure {}: no curve has points", stem));
+  const std::string script = fmt::format(
+      "set terminal pngcairo size 1000,700 font ',11'\n"
+      "set output '../{}.png'\n"
+      "set title {} noenhanced\n"
+      "set xlabel {} noenhanced\nset ylabel {} noenhanced\n"
+      "set key left top noenhanced\nset grid\n{}\n",
+      stem, gp_quote(title), gp_quote(x_label), gp_quote(y_label), plot);
+  return draw(out_dir, stem, data, script);
+}
+
+Figure plot_field_map(const std::vector<double>& x, const std::vector<double>& y,
+                      const std::vector<double>& value, const fs::path& out_dir,
+                      const std::string& stem, const std::string& title,
+                      const std::string& value_label) {
+  if (x.size() != y.size() || x.size() != value.size() || x.empty()) {
+    throw Error(fmt::format("figure {}: {} x, {} y and {} values (need equal, non-zero counts)",
+                            stem, x.size(), y.size(), value.size()));
+  }
+  std::string data = "# x [mm], y [mm], value\n";
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    data += fmt::format("{:.9g} {:.9g} {:.9g}\n", x[i], y[i], value[i]);
+  }
+  const auto [xl, xh] = std::minmax_element(x.begin(), x.end());
+  const auto [yl, yh] = std::minmax_element(y.begin(), y.end());
+  const double aspect = (*yh - *yl) / std::max(*xh - *xl, 1e-12);
+  const std::string script = fmt::format(
+      "set terminal pngcairo size 1200,{} font ',11'\n"
+      "set output '../{}.png'\n"
+      "set title {} noenhanced\n"
+      "set size ratio -1\n"
+      "set xlabel 'x [mm]'\nset ylabel 'y [mm]'\n"
+      "set cblabel {} noenhanced\n"
+      "set palette rgbformulae 33,13,10\n"
+      "plot '{}.dat' using 1:2:3 with points pt 7 ps 0.6 lc palette notitle\n",
+      canvas_height(aspect), stem, gp_quote(title), gp_quote(value_label), stem);
+  return draw(out_dir, stem, data, script);
+}
+
+std::string figure_markdown(const Figure& figure, const std::string& caption) {
+  if (!figure.skipped.empty()) return fmt::format("*{}* ({})\n", caption, figure.skipped);
+  return fmt::format("![{}]({})\n\n*{}*\n", caption, figure.png.generic_string(), caption);
+}
+
+}  // namespace plydem

@@ -1,0 +1,79 @@
+#include "experiments/protocols/stiffness_test.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+
+#include "core/error.hpp"
+#include "solvers/static_solver.hpp"
+
+namespace plydem {
+
+SpecimenStiffness measure_specimen_stiffness(const Model& model, double band) {
+  const auto start = std::chrono::steady_clock::now();
+  const Particles& p = model.particles;
+  require(p.size() >= 4, "the specimen stiffness needs at least four particles");
+  require(std::isfinite(band) && band >= 0, "the boundary frame width must be >= 0");
+  if (band == 0) band = 4.0 * p.radius.maxCoeff();
+  const Eigen::Vector3d low = p.reference_position.colwise().minCoeff().transpose();
+  const Eigen::Vector3d high = p.reference_position.colwise().maxCoeff().transpose();
+  require(high.x() - low.x() > 2 * band && high.y() - low.y() > 2 * band,
+          fmt::format("a {:.4g} mm x {:.4g} mm specimen has no interior inside a {:.4g} mm "
+                      "boundary frame",
+                      (high.x() - low.x()) * 1e3, (high.y() - low.y()) * 1e3, band * 1e3));
+  std::vector<int> frame;
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0), y = p.reference_position(i, 1);
+    if (x <= low.x() + band || x >= high.x() - band || y <= low.y() + band ||
+        y >= high.y() - band) {
+      frame.push_back(i);
+    }
+  }
+  SpecimenStiffness result;
+  result.volume = p.volume.sum();
+  result.frame_particles = static_cast<int>(frame.size());
+  require(result.volume > 0, "the specimen's particles have no volume");
+  // Strains about the centre, so that the reactions' moments are taken about it.
+  const Eigen::Vector3d centre = 0.5 * (low + high);
+
+  for (int column = 0; column < 3; ++column) {
+    Eigen::Matrix2d strain = Eigen::Matrix2d::Zero();  // engineering shear: off-diagonals 1/2
+    if (column < 2) {
+      strain(column, column) = 1;
+    } else {
+      strain(0, 1) = strain(1, 0) = 0.5;
+    }
+    strain *= 1e-3;  // the model is linear; a small strain keeps the numbers physical
+    DofConstraints constraints(p.size());
+    for (int i : frame) {
+      const Eigen::Vector2d x =
+          (p.reference_position.row(i).matrix().transpose() - centre).head<2>();
+      const Eigen::Vector2d u = strain * x;
+      constraints.fix(i, Dof::kUx, u.x());
+      constraints.fix(i, Dof::kUy, u.y());
+    }
+    StaticSettings settings;
+    settings.pin_rigid_modes =
+        true;  // out-of-plane motion of a layer is not restrained by the frame
+    Model solved = model;
+    const StaticResult r = solve_static(solved, constraints, settings);
+    Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();
+    for (int i : frame) {
+      const Eigen::Vector2d x =
+          (p.reference_position.row(i).matrix().transpose() - centre).head<2>();
+      const Eigen::Vector2d force(r.reaction(i, 0), r.reaction(i, 1));
+      stress += force * x.transpose();
+    }
+    stress /= result.volume;
+    // Symmetric part: the frame's reactions carry no net moment when the particles turn freely.
+    const double sxy = 0.5 * (stress(0, 1) + stress(1, 0));
+    result.stiffness.col(column) = Eigen::Vector3d(stress(0, 0), stress(1, 1), sxy) / 1e-3;
+  }
+  result.stiffness = 0.5 * (result.stiffness + result.stiffness.transpose()).eval();
+  result.constants = in_plane_constants(result.stiffness);
+  result.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace plydem

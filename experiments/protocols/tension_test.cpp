@@ -1,0 +1,380 @@
+#include "experiments/protocols/tension_test.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <optional>
+
+#include "contacts/bond_kernel.hpp"
+#include "core/error.hpp"
+#include "core/measurements.hpp"
+#include "strategies/registry.hpp"
+#include "solvers/static_solver.hpp"
+
+namespace plydem {
+namespace {
+
+// The coupon's extent along x and its grips: the particles within `grip` of either end are put in
+// the left and right grip groups. Throws plydem::Error if the grips leave no free length or one
+// holds no particle.
+struct Grips {
+  double x_min = 0, x_max = 0, span = 0;
+};
+Grips assign_grips(Particles& p, double grip) {
+  Grips g;
+  g.x_min = p.reference_position.col(0).minCoeff();
+  g.x_max = p.reference_position.col(0).maxCoeff();
+  g.span = g.x_max - g.x_min;
+  require(g.span > 2 * grip,
+          fmt::format("the grips ({} mm each) leave no free length in a {} mm coupon", grip * 1e3,
+                      g.span * 1e3));
+  int left = 0, right = 0;
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0);
+    if (x <= g.x_min + grip) {
+      p.group(i) = static_cast<int>(BoundaryGroup::kLeftGrip);
+      ++left;
+    } else if (x >= g.x_max - grip) {
+      p.group(i) = static_cast<int>(BoundaryGroup::kRightGrip);
+      ++right;
+    }
+  }
+  require(left > 0 && right > 0, "a grip holds no particle");
+  return g;
+}
+
+// The static test's grips: each moved by `travel` along x (apart), held in z and against
+// tilting; clamped grips also hold y and the in-plane rotation.
+DofConstraints grip_constraints(const Particles& p, double travel, bool clamped) {
+  DofConstraints constraints(p.size());
+  for (int i = 0; i < p.size(); ++i) {
+    const int g = p.group(i);
+    if (g == static_cast<int>(BoundaryGroup::kFree)) continue;
+    const double sign = g == static_cast<int>(BoundaryGroup::kRightGrip) ? 1.0 : -1.0;
+    constraints.fix(i, Dof::kUx, sign * travel);
+    constraints.fix(i, Dof::kUz);
+    constraints.fix(i, Dof::kThetaX);
+    constraints.fix(i, Dof::kThetaY);
+    if (clamped) {
+      constraints.fix(i, Dof::kUy);
+      constraints.fix(i, Dof::kThetaZ);
+    }
+  }
+  return constraints;
+}
+
+StaticSettings grip_solve_settings() {
+  StaticSettings settings;
+  settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
+  return settings;
+}
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The specimen's response at the current state: gauge strain and grip stress.
+struct Sample {
+  GaugeStrain strain;
+  double stress = 0;
+};
+
+}  // namespace
+
+void TensionSettings::validate() const {
+  coupon.validate();
+  if (!layup.empty()) interface.validate();
+  for (double angle : layup)
+    require(std::isfinite(angle), "a ply angle of the layup is not finite");
+  require(std::isfinite(grip_length) && grip_length >= 0, "grip length must be >= 0");
+  require(std::isfinite(gauge_fraction) && gauge_fraction > 0 && gauge_fraction < 1,
+          fmt::format("gauge fraction must lie in (0, 1), got {}", gauge_fraction));
+  require(std::isfinite(target_strain) && target_strain > 0 && target_strain < 0.05,
+          fmt::format("target strain must lie in (0, 0.05) (small-strain model), got {}",
+                      target_strain));
+  require(load_stages >= 1 && load_stages <= 100, "load stages must lie in [1, 100]");
+  require(ramp_cycles >= 1, "ramp cycles must be >= 1");
+  require(std::isfinite(grip_velocity) && grip_velocity >= 0, "grip velocity must be >= 0");
+  require(std::isfinite(tolerance) && tolerance > 0 && tolerance < 1,
+          fmt::format("quasi-static tolerance must lie in (0, 1), got {}", tolerance));
+  require(max_cycles >= 1, "max cycles must be >= 1");
+  require(fixed_cycles >= 0, "fixed cycles must be >= 0");
+  plydem::validate(explicit_settings);  // checked even when a static solve will not use them
+}
+
+TensionTest::TensionTest(TensionSettings settings) : settings_(std::move(settings)) {
+  settings_.validate();
+}
+
+void TensionTest::on_progress(std::function<void(const TensionProgress&)> callback) {
+  progress_ = std::move(callback);
+}
+
+TensionResult TensionTest::run() const {
+  const auto start = Clock::now();
+  const std::unique_ptr<Strategy> strategy = default_registry().create(settings_.strategy);
+  for (const auto& [name, value] : settings_.strategy_options) strategy->set_option(name, value);
+  TensionResult result;
+  result.strategy = settings_.strategy;
+  result.material = settings_.coupon.material;
+  result.ply_angle = settings_.coupon.ply_angle;
+  result.calibration = strategy->calibrate(settings_.coupon.material, settings_.coupon.ply_angle,
+                                           settings_.coupon.thickness);
+  if (settings_.layup.empty()) {
+    result.theory = in_plane_constants(
+        rotate_reduced_stiffness(reduced_stiffness(settings_.coupon.material), result.ply_angle));
+  } else {
+    result.theory = laminate_constants(
+        laminate_plies({settings_.coupon, settings_.layup, settings_.interface}));
+  }
+  result.along_x = pull(*strategy, result.ply_angle);
+  result.along_y = pull(*strategy, result.ply_angle - std::numbers::pi / 2);
+  result.dem.Ex = result.along_x.modulus;
+  result.dem.nu_xy = result.along_x.poisson;
+  result.dem.shear_coupling_x = result.along_x.shear_coupling;
+  result.dem.Ey = result.along_y.modulus;
+  result.dem.nu_yx = result.along_y.poisson;
+  if (settings_.measure_specimen_stiffness) {
+    result.specimen = measure_specimen_stiffness(build_specimen(*strategy, result.ply_angle));
+    result.dem.Gxy = result.specimen.constants.Gxy;
+  }
+  result.wall_seconds = seconds_since(start);
+  return result;
+}
+
+Model TensionTest::build_specimen(const Strategy& strategy, double ply_angle) const {
+  CouponSpec spec = settings_.coupon;
+  spec.ply_angle = ply_angle;
+  if (settings_.layup.empty()) return strategy.build(spec);
+  LaminateSpec laminate{spec, settings_.layup, settings_.interface};
+  for (double& angle : laminate.ply_angles) angle += ply_angle - settings_.coupon.ply_angle;
+  return build_laminate(strategy, laminate);
+}
+
+double TensionTest::grip_length() const {
+  return settings_.grip_length > 0 ? settings_.grip_length
+                                   : 2.0 * settings_.coupon.particle_diameter;
+}
+
+Model TensionTest::solved_specimen(const Strategy& strategy, double ply_angle) const {
+  Model model = build_specimen(strategy, ply_angle);
+  Particles& p = model.particles;
+  const Grips grips = assign_grips(p, grip_length());
+  solve_static(model,
+               grip_constraints(p, 0.5 * settings_.target_strain * grips.span,
+                                settings_.grips == GripCondition::kClamped),
+               grip_solve_settings());
+  return model;
+}
+
+PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
+  const auto start = Clock::now();
+  const TensionSettings& s = settings_;
+  CouponSpec spec = s.coupon;
+  spec.ply_angle = ply_angle;
+  Model model = build_specimen(strategy, ply_angle);
+  Particles& p = model.particles;
+
+  // Grips at both ends, gauge section in the middle.
+  const Grips grips = assign_grips(p, grip_length());
+  const double x_min = grips.x_min, x_max = grips.x_max, span = grips.span;
+  const double x_mid = 0.5 * (x_min + x_max);
+  const double gauge_half = 0.5 * s.gauge_fraction * span;
+  // Strains from the gauge interior: away from the grips and, by `edge_band`, from the free edges,
+  // whose discrete boundary layer relaxes differently from the bulk.
+  std::vector<int> gauge;
+  {
+    const double y_min = p.reference_position.col(1).minCoeff();
+    const double y_max = p.reference_position.col(1).maxCoeff();
+    const double band =
+        std::min(s.edge_band_diameters * spec.particle_diameter, 0.25 * (y_max - y_min));
+    for (int i : particles_between(p, x_mid - gauge_half, x_mid + gauge_half)) {
+      const double y = p.reference_position(i, 1);
+      if (y >= y_min + band && y <= y_max - band) gauge.push_back(i);
+    }
+  }
+  const double area = cross_section_area(p, x_mid - gauge_half, x_mid + gauge_half,
+                                         std::min(4.0 * spec.particle_diameter, 0.25 * gauge_half));
+
+  // Only explicit runs need the integrator (and its critical time step over every bond).
+  std::optional<ExplicitIntegrator> integrator;
+  if (s.solver == TensionSolver::kExplicit) integrator.emplace(model, s.explicit_settings);
+  const double dt = integrator ? integrator->time_step() : 0.0;
+  auto grips_moving = [&](double velocity) {
+    PrescribedMotion motion[2];
+    motion[0].group = BoundaryGroup::kLeftGrip;
+    motion[1].group = BoundaryGroup::kRightGrip;
+    motion[0].velocity = Eigen::Vector3d(-velocity, 0, 0);
+    motion[1].velocity = Eigen::Vector3d(velocity, 0, 0);
+    const bool clamped = s.grips == GripCondition::kClamped;
+    for (PrescribedMotion& m : motion) {
+      m.fix_velocity = {true, clamped, true};
+      m.fix_angular_velocity = {true, true, clamped};
+    }
+    integrator->set_prescribed_motions({motion[0], motion[1]});
+  };
+  auto sample = [&](const Particles& state) {
+    double left_force = 0, right_force = 0;
+    for (int i = 0; i < state.size(); ++i) {
+      if (state.group(i) == static_cast<int>(BoundaryGroup::kLeftGrip))
+        left_force += state.force(i, 0);
+      if (state.group(i) == static_cast<int>(BoundaryGroup::kRightGrip))
+        right_force += state.force(i, 0);
+    }
+    // The bonds pull the right grip towards -x and the left one towards +x.
+    return Sample{fit_gauge_strain(state, gauge), 0.5 * (left_force - right_force) / area};
+  };
+
+  PullResult result;
+  result.ply_angle = ply_angle;
+  result.particles = p.size();
+  result.bonds = model.bonds.size();
+  result.time_step = dt;
+  result.cross_section = area;
+  const double total_grip_travel = 0.5 * s.target_strain * span;
+  // Progress every two seconds, with an estimate of the time left: `planned` cycles are known
+  // (loading), relaxation is extrapolated from the ratio's decay since the last report.
+  auto last_report = Clock::now();
+  long last_cycles = 0;
+  double last_ratio = 0;
+  long cycles_per_finished_stage = 0;
+  int stages_left = 0;
+  auto report = [&](const char* phase, const CycleReport& cycle, long planned_left) {
+    if (!progress_ || seconds_since(last_report) <= 2.0) return;
+    const long cycles = integrator->cycles();
+    const double ratio = cycle.unbalanced_force_ratio;
+    const double per_cycle = seconds_since(start) / std::max(1L, cycles);
+    double left = planned_left;  // in cycles; < 0 = unknown
+    if (planned_left < 0 && last_cycles > 0 && ratio < last_ratio && ratio > s.tolerance) {
+      const double decay = std::log(last_ratio / ratio) / static_cast<double>(cycles - last_cycles);
+      left = std::log(ratio / s.tolerance) / decay;
+    }
+    if (left >= 0 && stages_left > 0) {
+      // Later stages cost what the last finished one did (the first: what this one will).
+      const double per_stage = cycles_per_finished_stage > 0
+                                   ? static_cast<double>(cycles_per_finished_stage)
+                                   : static_cast<double>(cycles) + left;
+      left += static_cast<double>(stages_left) * per_stage;
+    }
+    progress_({phase, cycles, ratio, seconds_since(start), left >= 0 ? left * per_cycle : -1.0});
+    last_report = Clock::now();
+    last_cycles = cycles;
+    last_ratio = ratio;
+  };
+  // How fast the grips move compared with the coupon's longitudinal wave (theory modulus along x).
+  auto loading_transits = [&](double loading_time) {
+    const double modulus =
+        in_plane_constants(rotate_reduced_stiffness(reduced_stiffness(spec.material), ply_angle))
+            .Ex;
+    const double transit = span / std::sqrt(modulus / spec.material.density);
+    const double transits = loading_time / transit;
+    // Staged runs relax to quasi-static after each stage, so only a grip faster than the wave
+    // itself (a shock) matters there; fixed-cycle runs measure while loading.
+    if (transits < (s.fixed_cycles > 0 ? kQuasiStaticTransits : 1.0)) {
+      spdlog::warn(
+          "the grips reach their travel in {:.3g} wave transits of the coupon (< {:g}): the "
+          "loading is too fast to be quasi-static{}; use more --ramp-cycles / --cycles or a lower "
+          "--grip-velocity-mm-s",
+          transits, s.fixed_cycles > 0 ? kQuasiStaticTransits : 1.0,
+          s.fixed_cycles > 0 ? ", and the fixed-cycle mode does not relax afterwards" : "");
+    }
+    return transits;
+  };
+
+  // Each stage point goes straight into the result; staged and static runs start from the
+  // unloaded origin, which is an exact equilibrium point.
+  auto record = [&](const Sample& smp) {
+    result.strain.push_back(smp.strain.exx);
+    result.lateral_strain.push_back(smp.strain.eyy);
+    result.shear_strain.push_back(smp.strain.gamma_xy);
+    result.stress.push_back(smp.stress);
+  };
+  if (s.fixed_cycles == 0 || s.solver == TensionSolver::kStatic) record(Sample{});
+  if (s.solver == TensionSolver::kStatic) {
+    // The model is linear: one solve at the target strain, fitted through the unloaded origin.
+    const StaticResult solved = solve_static(
+        model, grip_constraints(p, total_grip_travel, s.grips == GripCondition::kClamped),
+        grip_solve_settings());
+    record(sample(p));
+    result.final_ratio = solved.relative_residual;
+  } else if (s.fixed_cycles > 0) {
+    const double v = s.grip_velocity > 0
+                         ? s.grip_velocity
+                         : total_grip_travel / (static_cast<double>(s.fixed_cycles) * dt);
+    result.grip_velocity = v;
+    result.loading_transits = loading_transits(total_grip_travel / v);
+    grips_moving(v);
+    const long every = std::max(1L, s.fixed_cycles / 100);
+    CycleReport cycle;
+    for (long c = 1; c <= s.fixed_cycles; ++c) {
+      cycle = integrator->cycle();
+      report("loading", cycle, s.fixed_cycles - c);
+      // Forces in p.force belong to the state before this cycle's update: sample both together.
+      if (c % every == 0 && c > s.fixed_cycles / 2) {
+        Particles before = p;
+        before.displacement -= dt * before.velocity;
+        record(sample(before));
+      }
+    }
+    result.final_ratio = cycle.unbalanced_force_ratio;
+    if (result.final_ratio > s.tolerance) {
+      spdlog::warn(
+          "after {} fixed cycles the coupon at {:.4g} deg is not quasi-static (unbalanced-force "
+          "ratio {:.3g} > tolerance {:.3g}): its modulus includes inertia and damping forces",
+          s.fixed_cycles, ply_angle * 180 / std::numbers::pi, result.final_ratio, s.tolerance);
+    }
+  } else {
+    const double stage_travel = total_grip_travel / s.load_stages;
+    const double v = s.grip_velocity > 0 ? s.grip_velocity
+                                         : stage_travel / (static_cast<double>(s.ramp_cycles) * dt);
+    result.grip_velocity = v;
+    result.loading_transits = loading_transits(stage_travel / v);
+    const long ramp = std::max(1L, std::lround(stage_travel / (v * dt)));
+    for (int stage = 1; stage <= s.load_stages; ++stage) {
+      const long stage_start = integrator->cycles();
+      stages_left = s.load_stages - stage;
+      grips_moving(v);
+      for (long c = 0; c < ramp; ++c) {
+        const CycleReport cycle = integrator->cycle();
+        const long done = integrator->cycles() - stage_start;
+        report("loading", cycle,
+               cycles_per_finished_stage > 0 ? std::max(0L, cycles_per_finished_stage - done) : -1);
+      }
+      grips_moving(0.0);
+      CycleReport cycle = integrator->cycle();
+      while (cycle.unbalanced_force_ratio > s.tolerance) {
+        // Not require(): this runs every cycle, and the message is needed only on failure.
+        if (integrator->cycles() >= s.max_cycles) {
+          throw Error(fmt::format(
+              "the tension test did not reach a quasi-static state within {} cycles "
+              "(unbalanced-force ratio {:.3g} > tolerance {:.3g}); raise --max-cycles or the "
+              "tolerance",
+              s.max_cycles, cycle.unbalanced_force_ratio, s.tolerance));
+        }
+        cycle = integrator->cycle();
+        report("relaxing", cycle, -1);
+      }
+      cycles_per_finished_stage = integrator->cycles() - stage_start;
+      result.final_ratio = cycle.unbalanced_force_ratio;
+      compute_bond_forces(p, model.bonds);
+      record(sample(p));
+    }
+  }
+  const LinearFit stress_fit = linear_fit(result.strain, result.stress);
+  result.modulus = stress_fit.slope;
+  result.fit_r_squared = stress_fit.r_squared;
+  result.poisson = -linear_fit(result.strain, result.lateral_strain).slope;
+  result.shear_coupling = linear_fit(result.strain, result.shear_strain).slope;
+  result.cycles = integrator ? integrator->cycles() : 0;
+  result.wall_seconds = seconds_since(start);
+  require(std::isfinite(result.modulus) && result.modulus > 0,
+          fmt::format("the tension test measured a non-positive modulus {} Pa", result.modulus));
+  return result;
+}
+
+}  // namespace plydem

@@ -1,0 +1,147 @@
+#pragma once
+/// \file
+/// The virtual uniaxial tension test (paper Secs. 3.4 and 4).
+///
+/// A coupon long along x is built by a strategy. Grips are the particle groups within
+/// `grip_length` of either end; they move apart along x at constant velocity. Stress is the grip
+/// reaction force over the cross-section of the central gauge section; strain and lateral
+/// contraction are least-squares fits of the gauge particles' displacements, away from the grips.
+///
+/// Loading runs in stages: the grips move at constant velocity to the stage's displacement, stop,
+/// and the model relaxes until it is quasi-static: the mean unbalanced force on the free particles
+/// is below `tolerance` times the mean bond force (PFC's ratio). Each stage gives one (strain,
+/// stress) point; E and nu come from a linear least-squares fit through them and the unloaded
+/// origin. With `fixed_cycles` > 0 the run instead moves the grips for exactly that many cycles
+/// (the paper used 200,000) and fits the second half of the sampled history.
+///
+/// Loading along x of the ply at angle theta gives Ex and nu_xy; Ey and nu_yx come from loading
+/// along the long axis of the same ply turned by -90 deg (the paper's x <-> y swap).
+/// Grips `free` prescribe only the axial velocity (uniaxial stress: the ends may contract and
+/// shear); `clamped` also hold the ends laterally.
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/elasticity.hpp"
+#include "solvers/explicit_integrator.hpp"
+#include "strategies/laminate.hpp"
+#include "strategies/strategy.hpp"
+#include "experiments/protocols/stiffness_test.hpp"
+
+namespace plydem {
+
+enum class GripCondition { kFree, kClamped };
+/// explicit: damped central differences to quasi-static (above); static: one sparse linear solve
+/// of the same bonds with the grips displaced to the target strain (solvers/static_solver.hpp).
+enum class TensionSolver { kExplicit, kStatic };
+
+struct TensionSettings {
+  std::string strategy = "hex2d";
+  /// Strategy options (Strategy::set_option), applied in order before calibration.
+  std::vector<std::pair<std::string, double>> strategy_options;
+  CouponSpec coupon;  ///< material, ply angle and the coupon's size (thickness: per ply)
+  /// Ply angles of a laminate, bottom to top [rad] (strategies/laminate.hpp parse_layup); empty = the
+  /// single ply at coupon.ply_angle. A laminate's theory is CLT from its A matrix.
+  std::vector<double> layup;
+  InterfaceStiffness interface;  ///< between the plies of a laminate
+  double grip_length = 0;        ///< [m]; 0 = two particle diameters
+  double gauge_fraction = 0.5;   ///< central fraction of the length used as gauge section
+  /// Strains are fitted on gauge particles at least this many diameters from a free edge.
+  double edge_band_diameters = 2.0;
+  double target_strain = 1e-3;  ///< nominal strain of the last stage
+  int load_stages = 2;
+  long ramp_cycles = 2000;      ///< cycles to move the grips through one stage
+  double grip_velocity = 0;     ///< [m/s] per grip; 0 = from ramp_cycles
+  double tolerance = 1e-5;      ///< unbalanced-force ratio that counts as quasi-static
+  long max_cycles = 5'000'000;  ///< per coupon; exceeding it is an error
+  long fixed_cycles = 0;        ///< > 0: the paper's fixed-cycle mode
+  GripCondition grips = GripCondition::kFree;
+  /// Static by default: elasticity is linear, and one sparse solve gives the state an explicit run
+  /// converges to.
+  TensionSolver solver = TensionSolver::kStatic;
+  /// Also measure the specimen's membrane stiffness (and Gxy) with affine boundary displacements
+  /// (experiments/protocols/stiffness_test.hpp): three more static solves on the ply's coupon.
+  bool measure_specimen_stiffness = true;
+  ExplicitSettings explicit_settings;
+
+  /// Throws plydem::Error naming the first bad setting.
+  void validate() const;
+};
+
+/// One coupon pulled along x.
+struct PullResult {
+  double ply_angle = 0;       ///< [rad]
+  double modulus = 0;         ///< [Pa]
+  double poisson = 0;         ///< -eps_yy / eps_xx
+  double shear_coupling = 0;  ///< gamma_xy / eps_xx
+  double fit_r_squared = 0;
+  std::vector<double> strain, lateral_strain, shear_strain, stress;  ///< fitted points [-, Pa]
+  int particles = 0, bonds = 0;
+  long cycles = 0;
+  double final_ratio = 0;    ///< unbalanced-force ratio at the last point
+  double time_step = 0;      ///< [s]
+  double grip_velocity = 0;  ///< [m/s] per grip
+  double cross_section = 0;  ///< [m^2]
+  /// Explicit runs: the loading time of one stage (or of the fixed-cycle run) in units of the time
+  /// a longitudinal wave takes to cross the coupon; 0 for static solves. A fixed-cycle run below
+  /// kQuasiStaticTransits, or a staged run below 1 (a shock), logs a warning that the grips move
+  /// too fast for the coupon to follow quasi-statically.
+  double loading_transits = 0;
+  double wall_seconds = 0;
+};
+
+/// A fixed-cycle loading slower than this many wave transits counts as quasi-static.
+inline constexpr double kQuasiStaticTransits = 10.0;
+
+struct TensionResult {
+  std::string strategy;
+  Material material;
+  double ply_angle = 0;  ///< [rad]
+  /// Ex, Ey, nu_xy, nu_yx from the two pulls; Gxy from the specimen stiffness (if measured).
+  InPlaneConstants dem;
+  InPlaneConstants theory;  ///< CLT of the ply (Q-bar)
+  PullResult along_x, along_y;
+  /// The ply coupon's membrane stiffness under affine boundary displacements (empty if not
+  /// measured: stiffness all zero).
+  SpecimenStiffness specimen;
+  Calibration calibration;
+  double wall_seconds = 0;
+};
+
+/// Progress of a long run, reported every few seconds.
+struct TensionProgress {
+  std::string phase;
+  long cycles = 0;
+  double ratio = 0;
+  double elapsed_seconds = 0;  ///< on this coupon
+  /// Estimated seconds left on this coupon: exact cycle counts while loading, the observed
+  /// exponential decay of the ratio towards the tolerance while relaxing; negative when unknown.
+  double seconds_left = -1;
+};
+
+class TensionTest {
+ public:
+  explicit TensionTest(TensionSettings settings);
+  void on_progress(std::function<void(const TensionProgress&)> callback);
+  /// Both loadings; the strategy is taken from the default registry and given the settings'
+  /// strategy options.
+  TensionResult run() const;
+  /// One coupon pulled along x by `strategy`: the ply at `ply_angle`, or for a laminate every ply
+  /// turned by `ply_angle` - coupon.ply_angle.
+  PullResult pull(const Strategy& strategy, double ply_angle) const;
+  /// The specimen pull() loads, before grips are assigned.
+  Model build_specimen(const Strategy& strategy, double ply_angle) const;
+  /// That specimen with its grips assigned, solved statically at the target strain under the
+  /// test's grips (for VTU files and field maps; the moduli come from pull()).
+  Model solved_specimen(const Strategy& strategy, double ply_angle) const;
+  /// The grip length at each end [m]: settings.grip_length, or two particle diameters.
+  double grip_length() const;
+
+ private:
+  TensionSettings settings_;
+  std::function<void(const TensionProgress&)> progress_;
+};
+
+}  // namespace plydem

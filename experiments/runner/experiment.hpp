@@ -1,0 +1,131 @@
+#pragma once
+/// \file
+/// Experiments that `plydem run experiments/NAME.toml` runs: the paper's Tables 2-5 and the
+/// hole-in-plate. An experiment is a class registered under a kind; a config file names its kind
+/// with the key `experiment` and holds that kind's settings:
+///
+///   # experiments/table4.toml
+///   experiment = "laminate"
+///   description = "Table 4: the [0/90/0] laminate, DEM beside CLT, CalculiX and the paper"
+///   layup = "[0/90/0]"
+///
+/// Every run writes into one output folder: report.md (assembled from the experiments' sections),
+/// results.csv (one row per measured or reference value) and the figures and VTU files the
+/// experiment makes. Kinds are registered like strategies (strategies/registry.hpp), so a user adds an
+/// experiment without editing the runner.
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace plydem {
+
+/// A parsed experiment config (TOML). Keys may be dotted to reach into tables ("fem.element").
+/// Getters throw plydem::Error naming the file and the key when a value has the wrong type; a
+/// missing key gives the fallback.
+class ExperimentConfig {
+ public:
+  /// Throws plydem::Error naming the file (and line and column for a syntax error).
+  static ExperimentConfig load(const std::filesystem::path& path);
+  /// Parses TOML text; `origin` names it in messages.
+  static ExperimentConfig parse(const std::string& text, const std::string& origin);
+
+  const std::filesystem::path& path() const;
+  /// The file name without extension ("table2").
+  std::string name() const;
+  /// The `experiment` key: the registered kind. Throws if it is missing.
+  std::string kind() const;
+  /// The `description` key, or "".
+  std::string description() const;
+
+  bool contains(const std::string& key) const;
+  std::string string(const std::string& key, const std::string& fallback) const;
+  /// Integers are accepted as numbers; NaN and infinities are refused.
+  double number(const std::string& key, double fallback) const;
+  /// A non-negative integer (counts, seeds); refuses fractions.
+  long integer(const std::string& key, long fallback) const;
+  bool boolean(const std::string& key, bool fallback) const;
+  std::vector<std::string> strings(const std::string& key,
+                                   const std::vector<std::string>& fallback) const;
+  std::vector<double> numbers(const std::string& key, const std::vector<double>& fallback) const;
+  /// Throws plydem::Error naming every key (dotted, at any depth) that is not in `known` or below
+  /// a known table: a misspelt key is an error, not a silent default.
+  void require_known_keys(const std::vector<std::string>& known) const;
+
+ private:
+  struct Data;
+  std::shared_ptr<const Data> data_;
+  std::filesystem::path path_;
+};
+
+/// Where an experiment runs and writes.
+struct ExperimentContext {
+  std::filesystem::path out_dir;  ///< exists when run() is called
+  /// Smaller sizes and fewer cycles, for tests and a quick look (`plydem run --quick`); the
+  /// report says that it is a quick run.
+  bool quick = false;
+  /// CalculiX executable (`ccx`); when it is missing the FEM columns say so plainly.
+  std::string calculix = "ccx";
+};
+
+/// One value in results.csv: `experiment,case,quantity,source,value,unit`. `source` is where the
+/// value comes from ("dem hex2d", "clt", "calculix", "paper dem", "paper theory", "experiment").
+struct ResultRow {
+  std::string experiment;
+  std::string case_name;  ///< e.g. "0 deg", "[0/90/0]"
+  std::string quantity;   ///< e.g. "E1", "nu12", "static solve time", "ux L2 error"
+  std::string source;
+  double value = 0;
+  std::string unit;  ///< "GPa", "1", "s", ...: values are written in this unit
+};
+
+/// What an experiment produced. report_markdown is its section of report.md (tables with relative
+/// errors, figure links relative to the output folder); files lists what it wrote, relative to it.
+struct ExperimentOutput {
+  std::string title;
+  std::string report_markdown;
+  std::vector<ResultRow> rows;
+  std::vector<std::filesystem::path> files;
+};
+
+class Experiment {
+ public:
+  virtual ~Experiment() = default;
+  /// Runs the experiment of `config`. Throws plydem::Error for a bad config or a failed run.
+  virtual ExperimentOutput run(const ExperimentConfig& config,
+                               const ExperimentContext& context) const = 0;
+};
+
+using ExperimentFactory = std::function<std::unique_ptr<Experiment>()>;
+
+/// Experiment kinds by name, as strategies/registry.hpp does for strategies.
+class ExperimentRegistry {
+ public:
+  /// Throws plydem::Error if the kind is empty or taken.
+  void add(const std::string& kind, const std::string& description, ExperimentFactory factory);
+  bool contains(const std::string& kind) const;
+  /// Throws plydem::Error listing the registered kinds if `kind` is unknown.
+  std::unique_ptr<Experiment> create(const std::string& kind) const;
+  std::vector<std::string> kinds() const;
+  std::string description(const std::string& kind) const;
+
+ private:
+  struct Entry {
+    std::string description;
+    ExperimentFactory factory;
+  };
+  std::map<std::string, Entry> entries_;
+};
+
+/// The process-wide experiment registry, filled with the built-in kinds on first use.
+ExperimentRegistry& default_experiment_registry();
+
+/// Calls every built-in experiment file's register_<kind>_experiment() (see experiments.cmake
+/// list PLYDEM_EXPERIMENTS in CMakeLists.txt).
+void register_builtin_experiments(ExperimentRegistry& registry);
+
+}  // namespace plydem

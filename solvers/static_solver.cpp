@@ -1,0 +1,598 @@
+#include "solvers/static_solver.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/IterativeLinearSolvers>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "contacts/bond_kernel.hpp"
+#include "core/error.hpp"
+#include "solvers/sparse_cholesky.hpp"
+#include "solvers/stiffness_assembly.hpp"
+
+namespace plydem {
+namespace {
+
+using SparseMatrix = Eigen::SparseMatrix<double>;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+Eigen::Vector3d reference_of(const Particles& p, int i) {
+  return {p.reference_position(i, 0), p.reference_position(i, 1), p.reference_position(i, 2)};
+}
+
+std::string where(const Particles& p, int i) {
+  const Eigen::Vector3d x = 1e3 * reference_of(p, i);
+  return fmt::format("particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i, x.x(), x.y(), x.z());
+}
+
+std::string dof_at(const Particles& p, int dof) {
+  return fmt::format("{} of {}", dof_name(static_cast<Dof>(dof % kDofsPerParticle)),
+                     where(p, dof / kDofsPerParticle));
+}
+
+// Input checks that the linear algebra cannot explain well afterwards.
+void check_input(const Model& model, const DofConstraints& constraints) {
+  const Particles& p = model.particles;
+  const Bonds& b = model.bonds;
+  const int n = p.size();
+  require(n > 0, "static solve: the model has no particles");
+  require(p.reference_position.rows() == n && p.displacement.rows() == n &&
+              p.rotation.rows() == n && p.force.rows() == n && p.torque.rows() == n &&
+              p.radius.size() == n,
+          "static solve: the particle arrays differ in size");
+  require(p.reference_position.allFinite(), "static solve: a particle position is not finite");
+  require(constraints.fixed.rows() == n && constraints.value.rows() == n,
+          fmt::format("static solve: the constraints are for {} particles, the model has {}",
+                      constraints.fixed.rows(), n));
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < kDofsPerParticle; ++c)
+      if (constraints.fixed(i, c) && !std::isfinite(constraints.value(i, c)))
+        throw Error(
+            fmt::format("static solve: the prescribed {} is not finite", dof_at(p, 6 * i + c)));
+
+  const int m = b.size();
+  require(b.second.size() == m && b.normal_stiffness.size() == m && b.shear_stiffness.size() == m &&
+              b.bending_stiffness.size() == m && b.twisting_stiffness.size() == m &&
+              b.normal.rows() == m && b.lever_first.size() == m && b.lever_second.size() == m,
+          "static solve: the bond arrays differ in size");
+  for (int k = 0; k < m; ++k) {
+    const int i = b.first(k), j = b.second(k);
+    if (i < 0 || i >= n || j < 0 || j >= n || i == j)
+      throw Error(
+          fmt::format("static solve: bond {} joins particles {} and {}, which is not a pair of "
+                      "the model's {} particles",
+                      k, i, j, n));
+    const std::pair<const char*, double> stiffness[] = {{"normal", b.normal_stiffness(k)},
+                                                        {"shear", b.shear_stiffness(k)},
+                                                        {"bending", b.bending_stiffness(k)},
+                                                        {"twisting", b.twisting_stiffness(k)}};
+    for (const auto& [name, value] : stiffness) {
+      if (!std::isfinite(value))
+        throw Error(
+            fmt::format("static solve: bond {} (particles {} and {}) has a non-finite {} "
+                        "stiffness",
+                        k, i, j, name));
+      // A negative spring makes K indefinite: the "equilibrium" would be a saddle that the
+      // explicit integrator runs away from, so solving it would hide the real problem.
+      if (value < 0)
+        throw Error(
+            fmt::format("static solve: bond {} (particles {} and {}) has negative {} stiffness "
+                        "{:.6g}: unstable calibration (K is indefinite)",
+                        k, i, j, name, value));
+    }
+    if (!(b.normal.row(k).allFinite() && std::isfinite(b.lever_first(k)) &&
+          std::isfinite(b.lever_second(k))))
+      throw Error(fmt::format("static solve: bond {} has a non-finite normal or lever", k));
+  }
+
+  // A particle without bonds has an all-zero row in K: nothing determines its free dofs.
+  std::vector<int> bond_count(n, 0);
+  for (int k = 0; k < m; ++k) {
+    ++bond_count[b.first(k)];
+    ++bond_count[b.second(k)];
+  }
+  for (int i = 0; i < n; ++i) {
+    if (bond_count[i] == 0 && !constraints.fixed.row(i).all()) {
+      throw Error(
+          fmt::format("static solve: {} has no bonds: it floats freely (prescribe all six "
+                      "of its dofs or remove it)",
+                      where(p, i)));
+    }
+  }
+}
+
+// Clusters of bond-connected particles (union-find); each has its own six rigid-body modes.
+std::vector<std::vector<int>> bonded_clusters(const Model& model) {
+  const int n = model.particles.size();
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (int k = 0; k < model.bonds.size(); ++k) {
+    const int a = root(model.bonds.first(k)), b = root(model.bonds.second(k));
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  std::vector<int> index(n, -1);
+  std::vector<std::vector<int>> clusters;
+  for (int i = 0; i < n; ++i) {
+    const int r = root(i);
+    if (index[r] < 0) {
+      index[r] = static_cast<int>(clusters.size());
+      clusters.emplace_back();
+    }
+    clusters[index[r]].push_back(i);
+  }
+  return clusters;
+}
+
+using RigidRow = Eigen::Matrix<double, 6, 1>;
+
+constexpr const char* kRigidModeNames[6] = {"translation x",    "translation y",
+                                            "translation z",    "rotation about x",
+                                            "rotation about y", "rotation about z"};
+
+// The rigid modes of one cluster left free by the constraints, and the dofs that remove them.
+struct ClusterModes {
+  std::vector<int> particles;
+  std::vector<std::string> free_modes;  // named where a mode is a pure translation or rotation
+  int free_count = 0;
+  std::vector<PinnedDof> pins;
+};
+
+// Row of dof (i, c) in the matrix of the cluster's six rigid modes: translations e_k, and rotations
+// e_k / L about the centroid x_c, u = e_k x (x - x_c) / L. Rotation dofs are measured as L theta so
+// that every entry is O(1) and the rank decisions below do not depend on the units.
+RigidRow rigid_row(const Eigen::Vector3d& r_over_l, int c) {
+  RigidRow row = RigidRow::Zero();
+  row(c) = 1;
+  if (c < 3)
+    for (int k = 0; k < 3; ++k) row(3 + k) = Eigen::Vector3d::Unit(k).cross(r_over_l)(c);
+  return row;
+}
+
+ClusterModes analyse_cluster(const Particles& p, const DofConstraints& constraints,
+                             std::vector<int> cluster) {
+  ClusterModes out;
+  out.particles = std::move(cluster);
+  const std::vector<int>& members = out.particles;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (int i : members) centroid += reference_of(p, i);
+  centroid /= static_cast<double>(members.size());
+  double spread = 0, radius = 0;
+  for (int i : members) {
+    spread += (reference_of(p, i) - centroid).squaredNorm();
+    radius = std::max(radius, p.radius(i));
+  }
+  const double length = std::max(std::sqrt(spread / static_cast<double>(members.size())), radius);
+  const double scale = length > 0 ? length : 1.0;
+
+  Eigen::Matrix<double, 6, 6> gram = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int i : members) {
+    const Eigen::Vector3d r = (reference_of(p, i) - centroid) / scale;
+    for (int c = 0; c < kDofsPerParticle; ++c) {
+      if (!constraints.fixed(i, c)) continue;
+      const RigidRow row = rigid_row(r, c);
+      gram += row * row.transpose();
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(gram);
+  const double largest = eigen.eigenvalues().maxCoeff();
+  std::vector<int> null_columns;
+  for (int k = 0; k < 6; ++k)
+    if (eigen.eigenvalues()(k) <= 1e-10 * std::max(largest, 1.0)) null_columns.push_back(k);
+  out.free_count = static_cast<int>(null_columns.size());
+  if (out.free_count == 0) return out;
+  // At most six free modes: fixed-capacity matrices keep the loops below free of allocations.
+  using NullBasis = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6>;
+  using ModeVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+  NullBasis null(6, out.free_count);
+  for (int k = 0; k < out.free_count; ++k) null.col(k) = eigen.eigenvectors().col(null_columns[k]);
+
+  int named = 0;
+  for (int k = 0; k < 6; ++k) {
+    if (null.row(k).norm() > 1 - 1e-8) {  // the canonical mode k lies in the free space
+      out.free_modes.emplace_back(kRigidModeNames[k]);
+      ++named;
+    }
+  }
+  if (named < out.free_count) {
+    out.free_modes.push_back(fmt::format("{} combination{} of rigid motions",
+                                         out.free_count - named,
+                                         out.free_count - named > 1 ? "s" : ""));
+  }
+
+  // Greedy choice of one free dof per free mode: each time the dof whose row (in the free modes'
+  // coordinates) has the largest part outside the rows already chosen, i.e. a column-pivoted QR.
+  // Ties (a translation is the same at every particle) go to the particle nearest the centroid.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> chosen(out.free_count,
+                                                                        out.free_count);
+  for (int step = 0; step < out.free_count; ++step) {
+    double best = 0, best_distance = 0;
+    int best_particle = -1, best_dof = -1;
+    ModeVector best_residual;
+    for (int i : members) {
+      const Eigen::Vector3d r = (reference_of(p, i) - centroid) / scale;
+      const double distance = r.norm();
+      for (int c = 0; c < kDofsPerParticle; ++c) {
+        if (constraints.fixed(i, c)) continue;
+        const ModeVector a = null.transpose() * rigid_row(r, c);
+        const ModeVector residual =
+            a - chosen.leftCols(step) * (chosen.leftCols(step).transpose() * a);
+        const double norm = residual.norm();
+        const bool clearly_better = norm > best * (1 + 1e-9);
+        const bool tie = norm >= best * (1 - 1e-9) && distance < best_distance - 1e-12;
+        if (norm > 1e-9 && (best_particle < 0 || clearly_better || tie)) {
+          best = norm;
+          best_distance = distance;
+          best_particle = i;
+          best_dof = c;
+          best_residual = residual / norm;
+        }
+      }
+    }
+    // Cannot happen while modes are free (a free mode is non-zero on some free dof), but a
+    // silent partial pin would mislead: say so.
+    require(best_particle >= 0, "static solve: no free dof can remove a rigid-body mode");
+    out.pins.push_back({best_particle, static_cast<Dof>(best_dof)});
+    chosen.col(step) = best_residual;
+  }
+  return out;
+}
+
+std::vector<ClusterModes> free_rigid_modes(const Model& model, const DofConstraints& constraints) {
+  std::vector<ClusterModes> out;
+  for (std::vector<int>& cluster : bonded_clusters(model)) {
+    // A lone particle without bonds is not a rigid body of the lattice: check_input names it.
+    if (cluster.size() == 1) continue;
+    ClusterModes modes = analyse_cluster(model.particles, constraints, std::move(cluster));
+    if (modes.free_count > 0) out.push_back(std::move(modes));
+  }
+  return out;
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string s;
+  for (std::size_t k = 0; k < items.size(); ++k) s += (k ? ", " : "") + items[k];
+  return s;
+}
+
+[[noreturn]] void refuse_rigid_modes(const Particles& p, const std::vector<ClusterModes>& free) {
+  std::vector<std::string> clusters;
+  for (const ClusterModes& c : free) {
+    std::vector<std::string> pins;
+    for (const PinnedDof& pin : c.pins)
+      pins.push_back(fmt::format("{} of {}", dof_name(pin.dof), where(p, pin.particle)));
+    clusters.push_back(fmt::format(
+        "the cluster of {} bonded particles containing particle {} has {} free rigid-body "
+        "mode{} ({}); fixing {} would remove them",
+        c.particles.size(), c.particles.front(), c.free_count, c.free_count > 1 ? "s" : "",
+        join(c.free_modes), join(pins)));
+  }
+  throw Error(fmt::format(
+      "static solve: the constraints leave rigid-body modes free, so the stiffness matrix is "
+      "singular: {}. Prescribe those dofs, or set StaticSettings::pin_rigid_modes (or call "
+      "pin_rigid_modes) to fix them at zero",
+      join(clusters)));
+}
+
+// Zero pivots of the factor: the free dofs the bonds do not restrain (a mechanism). `zero` lists
+// them by free index; `pivots` are in the same numbering.
+[[noreturn]] void refuse_zero_pivots(const Particles& p, const std::vector<int>& free_dofs,
+                                     const Eigen::VectorXd& pivots, const std::vector<int>& zero,
+                                     double tolerance) {
+  bool negative = false;
+  for (int f : zero)
+    if (pivots(f) < -tolerance) negative = true;
+  std::vector<std::string> at;
+  for (std::size_t k = 0; k < zero.size() && k < 6; ++k)
+    at.push_back(dof_at(p, free_dofs[zero[k]]));
+  if (zero.size() > at.size()) at.push_back(fmt::format("and {} more", zero.size() - at.size()));
+  throw Error(fmt::format(
+      "static solve: the free dofs are not restrained: the LDL^T factor of the stiffness has {} "
+      "zero pivot{} (at most {:.3g} of the diagonal) among {} free dofs, at {}. {}"
+      "No rigid-body mode of a bonded cluster is free, so the bonds form a mechanism there "
+      "(springs with zero shear, bending or twisting stiffness, or a part held only through "
+      "one particle): prescribe those dofs or stiffen the bonds",
+      zero.size(), zero.size() > 1 ? "s" : "", tolerance, pivots.size(), join(at),
+      negative ? "Some pivots are negative: the system is indefinite or numerically singular. "
+               : ""));
+}
+
+// Runs CG with preconditioner Precond on A y = b from the guess y; throws if it does not converge.
+template <typename Precond>
+void solve_cg(const SparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& y,
+              const StaticSettings& settings, StaticResult& result) {
+  Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Precond> cg;
+  cg.setTolerance(settings.cg_tolerance);
+  if (settings.cg_max_iterations > 0) cg.setMaxIterations(settings.cg_max_iterations);
+  auto start = Clock::now();
+  cg.compute(a);
+  require(cg.info() == Eigen::Success,
+          "static solve: the preconditioner of the conjugate gradient could not be built");
+  result.seconds.factorization = seconds_since(start);
+  start = Clock::now();
+  y = cg.solveWithGuess(b, y);
+  result.seconds.solve = seconds_since(start);
+  result.iterations = static_cast<int>(cg.iterations());
+  require(cg.info() == Eigen::Success,
+          fmt::format("static solve: the conjugate gradient did not converge in {} iterations "
+                      "(relative residual {:.3g} > tolerance {:.3g}); the free dofs may form a "
+                      "mechanism (try StaticMethod::kDirect, which names it) or the tolerance is "
+                      "below round-off",
+                      cg.iterations(), cg.error(), settings.cg_tolerance));
+}
+
+}  // namespace
+
+const char* dof_name(Dof dof) {
+  switch (dof) {
+    case Dof::kUx:
+      return "ux";
+    case Dof::kUy:
+      return "uy";
+    case Dof::kUz:
+      return "uz";
+    case Dof::kThetaX:
+      return "theta_x";
+    case Dof::kThetaY:
+      return "theta_y";
+    case Dof::kThetaZ:
+      return "theta_z";
+  }
+  return "?";
+}
+
+DofConstraints::DofConstraints(int particles)
+    : fixed(DofFlags::Constant(particles, kDofsPerParticle, false)),
+      value(DofArray::Zero(particles, kDofsPerParticle)) {}
+
+void DofConstraints::fix(int particle, Dof dof, double v) {
+  if (particle < 0 || particle >= fixed.rows())
+    throw Error(fmt::format("constraint on particle {}, which does not exist", particle));
+  fixed(particle, static_cast<int>(dof)) = true;
+  value(particle, static_cast<int>(dof)) = v;
+}
+
+void DofConstraints::fix_particle(int particle, const Eigen::Vector3d& u,
+                                  const Eigen::Vector3d& theta) {
+  for (int c = 0; c < 3; ++c) {
+    fix(particle, static_cast<Dof>(c), u(c));
+    fix(particle, static_cast<Dof>(3 + c), theta(c));
+  }
+}
+
+int DofConstraints::fix_group(const Particles& particles, BoundaryGroup group, Dof dof, double v) {
+  require(particles.size() == fixed.rows(),
+          fmt::format("the constraints are for {} particles, the model has {}", fixed.rows(),
+                      particles.size()));
+  int count = 0;
+  for (int i = 0; i < particles.size(); ++i) {
+    if (particles.group(i) != static_cast<int>(group)) continue;
+    fix(i, dof, v);
+    ++count;
+  }
+  return count;
+}
+
+int DofConstraints::prescribed_count() const {
+  return static_cast<int>(fixed.count());
+}
+
+std::vector<PinnedDof> rigid_mode_pins(const Model& model, const DofConstraints& constraints) {
+  require(constraints.fixed.rows() == model.particles.size(),
+          fmt::format("the constraints are for {} particles, the model has {}",
+                      constraints.fixed.rows(), model.particles.size()));
+  std::vector<PinnedDof> pins;
+  for (const ClusterModes& c : free_rigid_modes(model, constraints))
+    pins.insert(pins.end(), c.pins.begin(), c.pins.end());
+  return pins;
+}
+
+std::vector<PinnedDof> pin_rigid_modes(const Model& model, DofConstraints& constraints) {
+  const std::vector<PinnedDof> pins = rigid_mode_pins(model, constraints);
+  for (const PinnedDof& pin : pins) constraints.fix(pin.particle, pin.dof, 0.0);
+  return pins;
+}
+
+namespace {
+
+// Generalized forces of the bonds, -K q, by the explicit kernel, in dof order.
+Eigen::VectorXd bond_generalized_forces(Particles& p, const Bonds& bonds, double* energy) {
+  const BondPass pass = compute_bond_forces(p, bonds);
+  if (energy) *energy = pass.strain_energy;
+  Eigen::VectorXd f(kDofsPerParticle * p.size());
+  for (int i = 0; i < p.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      f(kDofsPerParticle * i + c) = p.force(i, c);
+      f(kDofsPerParticle * i + 3 + c) = p.torque(i, c);
+    }
+  return f;
+}
+
+void set_state(Particles& p, const Eigen::VectorXd& u) {
+  for (int i = 0; i < p.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      p.displacement(i, c) = u(kDofsPerParticle * i + c);
+      p.rotation(i, c) = u(kDofsPerParticle * i + 3 + c);
+    }
+}
+
+}  // namespace
+
+SparseMatrix assemble_stiffness(const Model& model) {
+  const int dofs = kDofsPerParticle * model.particles.size();
+  std::vector<int> all(dofs);
+  std::iota(all.begin(), all.end(), 0);
+  const SparseMatrix lower =
+      compress_lower(block_stiffness(model, EliminationOrder::identity(model.particles.size())),
+                     all, dofs, Eigen::VectorXd::Ones(dofs));
+  const SparseMatrix strictly_lower = lower.triangularView<Eigen::StrictlyLower>();
+  return lower + SparseMatrix(strictly_lower.transpose());
+}
+
+void validate(const StaticSettings& settings) {
+  require(settings.direct_max_dofs >= 0 && settings.cg_max_iterations >= 0 &&
+              std::isfinite(settings.cg_tolerance) && settings.cg_tolerance > 0 &&
+              std::isfinite(settings.pivot_tolerance) && settings.pivot_tolerance > 0 &&
+              settings.pivot_tolerance < 1,
+          "static solver settings out of range (need direct_max_dofs >= 0, cg_max_iterations >= "
+          "0, cg_tolerance > 0, 0 < pivot_tolerance < 1)");
+}
+
+StaticResult solve_static(Model& model, const DofConstraints& given,
+                          const StaticSettings& settings) {
+  validate(settings);
+  StaticResult result;
+  auto start = Clock::now();
+  check_input(model, given);
+  DofConstraints constraints = given;
+  const std::vector<ClusterModes> free = free_rigid_modes(model, constraints);
+  if (!free.empty()) {
+    if (!settings.pin_rigid_modes) refuse_rigid_modes(model.particles, free);
+    for (const ClusterModes& c : free)
+      for (const PinnedDof& pin : c.pins) {
+        constraints.fix(pin.particle, pin.dof, 0.0);
+        result.pinned.push_back(pin);
+      }
+  }
+  result.seconds.checks = seconds_since(start);
+
+  Particles& p = model.particles;
+  const int n = p.size();
+  const int dofs = kDofsPerParticle * n;
+  result.dofs = dofs;
+  const int prescribed = constraints.prescribed_count();
+  const int nf = dofs - prescribed;
+  result.free_dofs = nf;
+  result.prescribed_dofs = prescribed;
+  const bool direct = settings.method == StaticMethod::kDirect ||
+                      (settings.method == StaticMethod::kAuto && nf <= settings.direct_max_dofs);
+  result.method = direct ? StaticMethod::kDirect : StaticMethod::kIterative;
+
+  // The direct solver factorizes in a fill-reducing order of the particles (counted with the
+  // factorization); CG needs none.
+  start = Clock::now();
+  const EliminationOrder order =
+      direct && nf > 0 ? EliminationOrder::minimum_degree(model) : EliminationOrder::identity(n);
+  const double ordering_seconds = seconds_since(start);
+
+  start = Clock::now();
+  // Dofs in rank order (dof 6 * rank + component): index among the free dofs, or -1 if
+  // prescribed; free_dofs[f] is the model's dof (6 * particle + component) of free index f.
+  std::vector<int> free_index(dofs, -1);
+  std::vector<int> free_dofs;
+  free_dofs.reserve(nf);
+  Eigen::VectorXd u_ranked = Eigen::VectorXd::Zero(dofs);
+  for (int r = 0; r < n; ++r) {
+    const int i = order.order[r];
+    for (int c = 0; c < kDofsPerParticle; ++c) {
+      if (constraints.fixed(i, c)) {
+        u_ranked(kDofsPerParticle * r + c) = constraints.value(i, c);
+      } else {
+        free_index[kDofsPerParticle * r + c] = static_cast<int>(free_dofs.size());
+        free_dofs.push_back(kDofsPerParticle * i + c);
+      }
+    }
+  }
+
+  // The blocks are released before the factorization, whose factor then reuses their memory.
+  Eigen::VectorXd s(nf), b(nf);
+  SparseMatrix a;
+  {
+    const BlockStiffness k = block_stiffness(model, order);
+    // Jacobi scaling A = S K_ff S with S = diag(K_ff)^-1/2. Rotational and translational
+    // stiffnesses differ by the squared particle radius (1e-10 in SI); with a unit diagonal the
+    // pivot test below means the same for both, and CG's preconditioners start better
+    // conditioned.
+    for (int f = 0; f < nf; ++f) {
+      const int i = free_dofs[f] / kDofsPerParticle, c = free_dofs[f] % kDofsPerParticle;
+      const double diagonal = k.diagonal(order.rank[i], c);
+      if (!(diagonal > 0))
+        throw Error(
+            fmt::format("static solve: nothing resists {}: every bond of the particle has zero "
+                        "stiffness in that direction; prescribe it or stiffen the bonds",
+                        dof_at(p, free_dofs[f])));
+      s(f) = 1 / std::sqrt(diagonal);
+    }
+    // The lower triangle only: all that the factorization, IC and CG read, at half the memory.
+    a = compress_lower(k, free_index, nf, s);
+    // Right-hand side -K_fp u_p, from the same blocks (the prescribed values, free dofs at zero).
+    const Eigen::VectorXd k_u = k.multiply(u_ranked);
+    for (int d = 0; d < dofs; ++d)
+      if (free_index[d] >= 0) b(free_index[d]) = -s(free_index[d]) * k_u(d);
+  }
+  result.stiffness_nonzeros = a.nonZeros();
+  result.seconds.assembly = seconds_since(start);
+
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);
+  if (nf == 0) {
+    result.method_name = "none (every dof prescribed)";
+  } else if (direct) {
+    result.method_name = "supernodal Cholesky (AMD on particles)";
+    start = Clock::now();
+    SupernodalCholesky cholesky;
+    cholesky.analyze(a);
+    // Round-off leaves a zero pivot far above machine epsilon, the more so the larger the
+    // system: on hex2d coupons with a free rigid mode we measured up to 4e-10 at 2.3e4 free dofs
+    // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold
+    // that grows with the size. The factorization collects every zero pivot in one pass.
+    const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
+    cholesky.factorize(a, threshold);
+    if (!cholesky.zero_pivots().empty())
+      refuse_zero_pivots(p, free_dofs, cholesky.pivots(), cholesky.zero_pivots(), threshold);
+    result.seconds.factorization = ordering_seconds + seconds_since(start);
+    start = Clock::now();
+    y = b;
+    cholesky.solve_in_place(y);
+    result.seconds.solve = seconds_since(start);
+  } else {
+    // Warm start from the current state: successive load stages then take few iterations.
+    for (int f = 0; f < nf; ++f) {
+      const int i = free_dofs[f] / kDofsPerParticle, c = free_dofs[f] % kDofsPerParticle;
+      y(f) = (c < 3 ? p.displacement(i, c) : p.rotation(i, c - 3)) / s(f);
+    }
+    if (!y.allFinite()) y.setZero();
+    if (settings.preconditioner == StaticPreconditioner::kIncompleteCholesky) {
+      result.method_name = "ConjugateGradient + IncompleteCholesky";
+      solve_cg<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(
+          a, b, y, settings, result);
+    } else {
+      result.method_name = "ConjugateGradient + Jacobi";
+      solve_cg<Eigen::DiagonalPreconditioner<double>>(a, b, y, settings, result);
+    }
+  }
+  require(y.allFinite(),
+          "static solve: the solution is not finite (the stiffness matrix is numerically "
+          "singular)");
+  const double b_norm = b.norm();
+  const Eigen::VectorXd ay = a.selfadjointView<Eigen::Lower>() * y;
+  result.relative_residual = b_norm > 0 ? (ay - b).norm() / b_norm : ay.norm();
+
+  // The solution, and the kernel's forces at it: ~0 on free dofs, -(K u)_p on prescribed ones.
+  Eigen::VectorXd u(dofs);
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < kDofsPerParticle; ++c)
+      u(kDofsPerParticle * i + c) = constraints.value(i, c);
+  for (int f = 0; f < nf; ++f) u(free_dofs[f]) = s(f) * y(f);
+  set_state(p, u);
+  const Eigen::VectorXd force = bond_generalized_forces(p, model.bonds, &result.strain_energy);
+  result.reaction = DofArray::Zero(n, kDofsPerParticle);
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < kDofsPerParticle; ++c)
+      if (constraints.fixed(i, c)) result.reaction(i, c) = -force(kDofsPerParticle * i + c);
+  return result;
+}
+
+}  // namespace plydem

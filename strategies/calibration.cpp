@@ -1,0 +1,177 @@
+#include "strategies/calibration.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace plydem {
+namespace {
+
+Eigen::Matrix<double, 6, 1> independent_entries(const Eigen::Matrix3d& c) {
+  Eigen::Matrix<double, 6, 1> v;
+  v << c(0, 0), c(1, 1), c(0, 1), c(0, 2), c(1, 2), c(2, 2);
+  return v;
+}
+
+}  // namespace
+
+RelaxedCalibration calibrate_relaxed_layer(const UnitCell& cell, const Eigen::Matrix3d& target,
+                                           const std::vector<FamilyStiffness>& start,
+                                           const FamilyStiffnessRule& rule, double tolerance,
+                                           int max_iterations) {
+  const int families = static_cast<int>(start.size());
+  require(families == cell.family_count, "relaxed calibration: one start value per bond family");
+  const int unknowns = 2 * families;
+  Eigen::VectorXd p(unknowns);
+  for (int f = 0; f < families; ++f) {
+    p(2 * f) = start[f].normal;
+    p(2 * f + 1) = start[f].shear;
+  }
+  const double scale = std::max(p.cwiseAbs().maxCoeff(), 1e-300);
+  auto stiffness_of = [&](const Eigen::VectorXd& q) {
+    std::vector<FamilyStiffness> k(families);
+    for (int f = 0; f < families; ++f) k[f] = rule(q(2 * f), q(2 * f + 1));
+    return k;
+  };
+  auto relaxed_of = [&](const Eigen::VectorXd& q) {
+    return in_plane_block(relaxed_stiffness(cell, stiffness_of(q)));
+  };
+  const Eigen::Matrix<double, 6, 1> goal = independent_entries(target);
+  const double goal_norm = target.norm();
+
+  RelaxedCalibration result;
+  Eigen::Matrix3d current = relaxed_of(p);
+  for (int iteration = 0;; ++iteration) {
+    result.iterations = iteration;
+    const Eigen::Matrix<double, 6, 1> residual = independent_entries(current) - goal;
+    result.relative_error = (current - target).norm() / goal_norm;
+    if (result.relative_error < tolerance || iteration >= max_iterations) break;
+    // Central differences: the map is smooth (rational in the stiffnesses).
+    Eigen::MatrixXd jacobian(6, unknowns);
+    const double h = 1e-6 * scale;
+    for (int k = 0; k < unknowns; ++k) {
+      Eigen::VectorXd plus = p, minus = p;
+      plus(k) += h;
+      minus(k) -= h;
+      jacobian.col(k) =
+          (independent_entries(relaxed_of(plus)) - independent_entries(relaxed_of(minus))) /
+          (2 * h);
+    }
+    const Eigen::VectorXd step = jacobian.completeOrthogonalDecomposition().solve(-residual);
+    // Halve the step until the error falls (robust far from the solution).
+    double lambda = 1.0;
+    bool improved = false;
+    for (int tries = 0; tries < 30; ++tries, lambda *= 0.5) {
+      const Eigen::VectorXd trial = p + lambda * step;
+      const Eigen::Matrix3d c = relaxed_of(trial);
+      if ((c - target).norm() < (current - target).norm()) {
+        p = trial;
+        current = c;
+        improved = true;
+        break;
+      }
+    }
+    if (!improved) break;
+  }
+  result.families = stiffness_of(p);
+  result.relaxed = current;
+  return result;
+}
+
+RelaxedCalibration nearest_non_negative_layer(const UnitCell& cell, const Eigen::Matrix3d& target,
+                                              const std::vector<FamilyStiffness>& start,
+                                              const FamilyStiffnessRule& rule, int max_iterations) {
+  const int families = static_cast<int>(start.size());
+  require(families == cell.family_count, "nearest stiffness: one start value per bond family");
+  const int unknowns = 2 * families;
+  Eigen::VectorXd p(unknowns);
+  for (int f = 0; f < families; ++f) {
+    p(2 * f) = std::max(start[f].normal, 0.0);
+    p(2 * f + 1) = std::max(start[f].shear, 0.0);
+  }
+  const double scale = std::max(p.cwiseAbs().maxCoeff(), 1e-300);
+  auto stiffness_of = [&](const Eigen::VectorXd& q) {
+    std::vector<FamilyStiffness> k(families);
+    for (int f = 0; f < families; ++f) k[f] = rule(q(2 * f), q(2 * f + 1));
+    return k;
+  };
+  auto relaxed_of = [&](const Eigen::VectorXd& q) {
+    return in_plane_block(relaxed_stiffness(cell, stiffness_of(q)));
+  };
+  const Eigen::Matrix<double, 6, 1> goal = independent_entries(target);
+  Eigen::Matrix3d current = relaxed_of(p);
+  RelaxedCalibration result;
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    result.iterations = iteration + 1;
+    const Eigen::Matrix<double, 6, 1> residual = independent_entries(current) - goal;
+    Eigen::MatrixXd jacobian(6, unknowns);
+    const double h = 1e-6 * scale;
+    for (int k = 0; k < unknowns; ++k) {
+      // One-sided at the bound, so that no spring is evaluated negative.
+      Eigen::VectorXd plus = p, minus = p;
+      plus(k) += h;
+      minus(k) = std::max(minus(k) - h, 0.0);
+      jacobian.col(k) =
+          (independent_entries(relaxed_of(plus)) - independent_entries(relaxed_of(minus))) /
+          (plus(k) - minus(k));
+    }
+    // Springs at zero whose gradient pushes them below zero stay there (the active set).
+    const Eigen::VectorXd gradient = jacobian.transpose() * residual;
+    std::vector<int> free;
+    for (int k = 0; k < unknowns; ++k) {
+      if (p(k) > 0 || gradient(k) < 0) free.push_back(k);
+    }
+    if (free.empty()) break;
+    Eigen::MatrixXd reduced(6, static_cast<int>(free.size()));
+    for (int c = 0; c < static_cast<int>(free.size()); ++c) reduced.col(c) = jacobian.col(free[c]);
+    const Eigen::VectorXd step = reduced.completeOrthogonalDecomposition().solve(-residual);
+    double lambda = 1.0;
+    bool improved = false;
+    for (int tries = 0; tries < 30 && !improved; ++tries, lambda *= 0.5) {
+      Eigen::VectorXd trial = p;
+      for (int c = 0; c < static_cast<int>(free.size()); ++c) {
+        // Bounded above too: a spring that no longer changes the relaxed stiffness (a shear
+        // spring whose work the spins take over) must not drift without limit.
+        trial(free[c]) = std::clamp(p(free[c]) + lambda * step(c), 0.0, 100 * scale);
+      }
+      const Eigen::Matrix3d c = relaxed_of(trial);
+      if ((c - target).norm() < (current - target).norm() * (1 - 1e-12)) {
+        p = trial;
+        current = c;
+        improved = true;
+      }
+    }
+    if (!improved) break;
+  }
+  result.families = stiffness_of(p);
+  result.relaxed = current;
+  result.relative_error = (current - target).norm() / target.norm();
+  return result;
+}
+
+std::string describe_unreachable(const Eigen::Matrix3d& reached, const Eigen::Matrix3d& target) {
+  const int rows[6] = {0, 1, 0, 0, 1, 2}, cols[6] = {0, 1, 1, 2, 2, 2};
+  const char* names[6] = {"C11", "C22", "C12", "C16", "C26", "C66"};
+  int worst = 0;
+  std::string entries;
+  for (int e = 0; e < 6; ++e) {
+    const double miss = std::abs(reached(rows[e], cols[e]) - target(rows[e], cols[e]));
+    if (miss > std::abs(reached(rows[worst], cols[worst]) - target(rows[worst], cols[worst]))) {
+      worst = e;
+    }
+    // + 0.0 turns -0 into 0 for printing.
+    entries +=
+        fmt::format("{}{} {:.4g} ({:.4g})", e ? ", " : "", names[e],
+                    reached(rows[e], cols[e]) * 1e-9 + 0.0, target(rows[e], cols[e]) * 1e-9 + 0.0);
+  }
+  return fmt::format(
+      "{} cannot be reached: the nearest stiffness with non-negative springs has {} = {:.4g} GPa "
+      "where the target is {:.4g} GPa (relative error {:.3g}); nearest (target) in GPa: {}",
+      names[worst], names[worst], reached(rows[worst], cols[worst]) * 1e-9,
+      target(rows[worst], cols[worst]) * 1e-9, (reached - target).norm() / target.norm(), entries);
+}
+
+}  // namespace plydem

@@ -1,0 +1,46 @@
+#pragma once
+/// \file
+/// Strategies registered by name at run time. The built-in ones are added by a CMake-generated
+/// function (register_builtin_strategies) that calls each strategy file's register_<name>(), so
+/// registration survives static linking; a user adds their own with registry.add() in their main:
+///
+///   plydem::Registry& registry = plydem::default_registry();
+///   registry.add("my-packing", "my own packing", [] { return std::make_unique<MyStrategy>(); });
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "strategies/strategy.hpp"
+
+namespace plydem {
+
+using StrategyFactory = std::function<std::unique_ptr<Strategy>()>;
+
+class Registry {
+ public:
+  /// Adds a strategy; throws plydem::Error if the name is empty or taken.
+  void add(const std::string& name, const std::string& description, StrategyFactory factory);
+  bool contains(const std::string& name) const;
+  /// A new instance; throws plydem::Error listing the registered names if `name` is unknown.
+  std::unique_ptr<Strategy> create(const std::string& name) const;
+  std::vector<std::string> names() const;
+  std::string description(const std::string& name) const;
+
+ private:
+  struct Entry {
+    std::string description;
+    StrategyFactory factory;
+  };
+  std::map<std::string, Entry> entries_;
+};
+
+/// Calls every built-in strategy's register_<name>() (generated from CMakeLists.txt).
+void register_builtin_strategies(Registry& registry);
+
+/// The process-wide registry, filled with the built-in strategies on first use.
+Registry& default_registry();
+
+}  // namespace plydem

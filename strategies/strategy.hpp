@@ -1,0 +1,78 @@
+#pragma once
+/// \file
+/// A strategy = a packing + the rule that turns a ply's target stiffness into bond stiffnesses
+/// (paper Sec. 3: Lattice, HCP, Hex2D, Square). Strategies are objects; what they build is plain
+/// arrays (core/model.hpp).
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "core/homogenizer.hpp"
+#include "core/material.hpp"
+#include "core/model.hpp"
+
+namespace plydem {
+
+/// The coupon a strategy is asked to build: one ply, a rectangle in the x-y plane, long along x.
+struct CouponSpec {
+  Material material;
+  double ply_angle = 0;                ///< fibre angle from +x [rad]
+  double length = 10e-3;               ///< along x [m]
+  double width = 0.83e-3;              ///< along y [m]
+  double thickness = 0.2e-3;           ///< the ply thickness the bonds stand for (delta) [m]
+  double particle_diameter = 0.05e-3;  ///< [m]
+  /// Let bonds at free edges carry the share of their missing partners (strategies/boundary_cells.hpp).
+  bool complete_boundary_cells = true;
+
+  /// Throws plydem::Error naming the first non-finite or non-positive size, or a coupon too small
+  /// to hold particles.
+  void validate() const;
+};
+
+/// One bond family's calibrated stiffness, for reports.
+struct FamilyCalibration {
+  std::string label;     ///< e.g. "1 (fibre)"
+  double direction = 0;  ///< angle of the family from +x in the specimen frame [rad]
+  FamilyStiffness stiffness;
+};
+
+/// The outcome of calibrating a ply: what each bond family gets, and the stiffness the model will
+/// have as the engine simulates it beside the target.
+struct Calibration {
+  std::string method;
+  double lattice_angle = 0;  ///< orientation of the packing from +x [rad]
+  std::vector<FamilyCalibration> families;
+  Eigen::Matrix3d target = Eigen::Matrix3d::Zero();   ///< plane-stress Q-bar [Pa]
+  Eigen::Matrix3d affine = Eigen::Matrix3d::Zero();   ///< eq. (5) lattice sum [Pa]
+  Eigen::Matrix3d relaxed = Eigen::Matrix3d::Zero();  ///< with spins and shifts relaxed [Pa]
+  double relaxed_error = 0;                           ///< |relaxed - target|_F / |target|_F
+};
+
+/// A strategy-specific parameter (hcp's layer spacing, lattice's seed), with its current value.
+/// Set from the command line with `--strategy-option NAME=VALUE`.
+struct StrategyOption {
+  std::string name;
+  double value = 0;
+  std::string description;  ///< one line, with the unit
+};
+
+class Strategy {
+ public:
+  virtual ~Strategy() = default;
+  /// The options this strategy takes, with their current values; none by default.
+  virtual std::vector<StrategyOption> options() const { return {}; }
+  /// Sets an option. Throws plydem::Error naming an unknown option (and listing the known ones)
+  /// or a value out of range. The default knows no options.
+  virtual void set_option(const std::string& name, double value);
+  /// One line for `plydem strategies`.
+  virtual std::string description() const = 0;
+  /// Bond stiffnesses for a ply of `material` at `ply_angle` with thickness `thickness`. Throws
+  /// plydem::Error if the target cannot be reached with a stable lattice.
+  virtual Calibration calibrate(const Material& material, double ply_angle,
+                                double thickness) const = 0;
+  /// Builds the coupon: particles with masses, bonds with the calibrated stiffnesses.
+  virtual Model build(const CouponSpec& coupon) const = 0;
+};
+
+}  // namespace plydem
