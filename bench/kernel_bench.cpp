@@ -27,8 +27,8 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "solvers/explicit_integrator.hpp"
 #include "core/material.hpp"
+#include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
 
 namespace {

@@ -4,16 +4,17 @@
 //
 // The coupon is E-glass/MY750 at 0 deg with particle diameter 0.05 mm, shaped like the paper's
 // 10 x 0.83 mm coupon (length/width = 10/0.83) and scaled to hold about the requested number of
-// particles. It is loaded as the tension test's static path loads it (experiments/protocols/tension_test.cpp,
-// free grips): particles within two diameters of each end are grips with ux prescribed (+-half the
-// travel of a 0.1 % nominal strain) and uz, theta_x, theta_y held; the remaining rigid-body modes
-// are pinned (StaticSettings::pin_rigid_modes). Timings are on one thread: the phases of the first
-// solve in wall-clock seconds (StaticTimings), the whole solve_static call in wall-clock and CPU
-// seconds (CPU time counts the kernel's page faults but not the time other processes take), and
-// its minor page faults. With --repeat N the solve runs N times on fresh copies of the model and
-// the best wall-clock and CPU times of the repeats are reported too: the first solve of a process
-// pays for fresh memory (a page fault per 4 KiB, expensive in a virtual machine), later ones
-// reuse it (glibc is told to keep freed memory, see main).
+// particles. It is loaded as the tension test's static path loads it
+// (experiments/protocols/tension_test.cpp, free grips): particles within two diameters of each end
+// are grips with ux prescribed (+-half the travel of a 0.1 % nominal strain) and uz, theta_x,
+// theta_y held; the remaining rigid-body modes are pinned (StaticSettings::pin_rigid_modes).
+// Timings are on one thread: the phases of the first solve in wall-clock seconds (StaticTimings),
+// the whole solve_static call in wall-clock and CPU seconds (CPU time counts the kernel's page
+// faults but not the time other processes take), and its minor page faults. With --repeat N the
+// solve runs N times on fresh copies of the model and the best wall-clock and CPU times of the
+// repeats are reported too: the first solve of a process pays for fresh memory (a page fault per 4
+// KiB, expensive in a virtual machine), later ones reuse it (glibc is told to keep freed memory,
+// see main).
 //
 // Sample runs:
 //   plydem_static_bench --particles 10000
@@ -36,8 +37,8 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "strategies/registry.hpp"
 #include "solvers/static_solver.hpp"
+#include "strategies/registry.hpp"
 
 namespace {
 

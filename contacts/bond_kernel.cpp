@@ -9,8 +9,8 @@
 #include <numeric>
 #include <unordered_map>
 
-#include "core/error.hpp"
 #include "contacts/particle_ordering.hpp"
+#include "core/error.hpp"
 
 namespace plydem {
 namespace {

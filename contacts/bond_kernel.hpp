@@ -25,8 +25,8 @@
 #include <new>
 #include <vector>
 
-#include "core/parallel_bond.hpp"
 #include "core/model.hpp"
+#include "core/parallel_bond.hpp"
 
 namespace plydem {
 

@@ -11,7 +11,9 @@
 namespace plydem {
 namespace {
 
-std::string format_number(double value) { return fmt::format("{:.6g}", value); }
+std::string format_number(double value) {
+  return fmt::format("{:.6g}", value);
+}
 
 // Stress transformation from global (x, y) to ply axes (1, 2) for a fibre at `angle`
 // counter-clockwise from +x, Voigt (xx, yy, xy) with tensor shear stress: sigma_12 = T sigma_xy.

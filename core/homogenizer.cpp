@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "core/parallel_bond.hpp"
 #include "core/error.hpp"
+#include "core/parallel_bond.hpp"
 
 namespace plydem {
 namespace {

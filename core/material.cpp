@@ -30,7 +30,9 @@ namespace plydem {
 namespace {
 
 // Six significant digits: enough to recognise the value the user gave.
-std::string format_number(double value) { return fmt::format("{:.6g}", value); }
+std::string format_number(double value) {
+  return fmt::format("{:.6g}", value);
+}
 
 // fmt, not operator+: GCC 12 at -O2 reports a false -Wrestrict on "'" + std::string + "'".
 std::string in_quotes(std::string_view text) {

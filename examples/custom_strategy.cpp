@@ -1,8 +1,8 @@
 // A strategy of your own, registered from outside the library.
 //
-// plydem's strategies are objects found by name in a registry (strategies/registry.hpp). This program
-// defines one in its own file, adds it to the registry in its own main(), and runs the library's
-// tension test with it: nothing in plydem is edited or recompiled.
+// plydem's strategies are objects found by name in a registry (strategies/registry.hpp). This
+// program defines one in its own file, adds it to the registry in its own main(), and runs the
+// library's tension test with it: nothing in plydem is edited or recompiled.
 //
 // The strategy here, `hex2d-affine`, is the Hex2D layer with the corrected eq. (27) springs as
 // they are, without the relaxed correction: the closed form assumes that particles do not spin
@@ -21,11 +21,11 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/output/report.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "packings/hexagonal_layer.hpp"
 #include "strategies/hex2d.hpp"
+#include "strategies/registry.hpp"
 
 namespace {
 

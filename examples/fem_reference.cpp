@@ -2,8 +2,8 @@
 // hole-in-plate specimen, with run times.
 //
 // Each laminate is a 20 x 10 mm coupon of 0.2 mm E-glass plies, pulled along x and, turned by
-// -90 deg, along y (experiments/fem/calculix.hpp); the table gives FEM/CLT - 1. Laminates differ from
-// CLT (an infinitely wide plate) by their free edges: Poisson's ratios by up to ~5% when the
+// -90 deg, along y (experiments/fem/calculix.hpp); the table gives FEM/CLT - 1. Laminates differ
+// from CLT (an infinitely wide plate) by their free edges: Poisson's ratios by up to ~5% when the
 // edge zones are fitted with the rest (--edge-band-mm leaves them out), and moduli by ~0.1-0.4%
 // that shrink as 1/W. The hole plate is the
 // 60 x 36 x 1.5 mm [0/90/0] plate with a 3 mm hole whose grips move apart 0.1 mm in total; it

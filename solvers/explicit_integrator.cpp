@@ -10,8 +10,8 @@
 #include <map>
 
 #include "contacts/bond_kernel.hpp"
-#include "core/error.hpp"
 #include "contacts/particle_ordering.hpp"
+#include "core/error.hpp"
 
 // The fused step is compiled for three instruction sets and the best one the processor has is
 // picked when the program starts (GCC function multi-versioning): one binary runs everywhere and

@@ -6,13 +6,13 @@
 /// every free degree of freedom.
 ///
 /// Two kernels run the same cycle. The fused kernel (default) renumbers the particles for locality
-/// (contacts/particle_ordering.hpp: lattice lines for a regular packing, else a Hilbert curve), keeps
-/// its own copy of the state in that order,
-/// and in one pass per cycle lets each particle sum its own bonds (contacts/bond_kernel.hpp,
-/// gather form) and advance, eight particles at a time in SIMD lanes, split between OpenMP threads
-/// (OMP_NUM_THREADS). Each particle's result is independent of the thread count, and a run is
-/// bitwise reproducible. The reference kernel is the plain loop: compute_bond_forces, then one
-/// update per degree of freedom; tests hold the fused kernel to it.
+/// (contacts/particle_ordering.hpp: lattice lines for a regular packing, else a Hilbert curve),
+/// keeps its own copy of the state in that order, and in one pass per cycle lets each particle sum
+/// its own bonds (contacts/bond_kernel.hpp, gather form) and advance, eight particles at a time in
+/// SIMD lanes, split between OpenMP threads (OMP_NUM_THREADS). Each particle's result is
+/// independent of the thread count, and a run is bitwise reproducible. The reference kernel is the
+/// plain loop: compute_bond_forces, then one update per degree of freedom; tests hold the fused
+/// kernel to it.
 
 #include <Eigen/Dense>
 #include <array>
@@ -20,8 +20,8 @@
 #include <memory>
 #include <vector>
 
-#include "core/model.hpp"
 #include "contacts/particle_ordering.hpp"
+#include "core/model.hpp"
 
 namespace plydem {
 

@@ -76,11 +76,11 @@ struct PeriodicHomogenization {
 /// lattice's sliding planes) do not change the stiffness; they are counted in zero_modes.
 ///
 /// H_ww (the fluctuation and rotation block) is the static solver's stiffness of `periodic.model`
-/// (solvers/stiffness_assembly.hpp), with one particle's translations fixed (the rigid translations);
-/// it is factorized with SupernodalCholesky up to settings.direct_max_dofs internal dofs and solved
-/// by conjugate gradients above (settings.method, preconditioner, cg_tolerance and pivot_tolerance
-/// as for solve_static). The six columns of H_wE are the right-hand sides; relaxed = (H_EE - H_Ew
-/// H_ww^-1 H_wE) / volume, affine = H_EE / volume.
+/// (solvers/stiffness_assembly.hpp), with one particle's translations fixed (the rigid
+/// translations); it is factorized with SupernodalCholesky up to settings.direct_max_dofs internal
+/// dofs and solved by conjugate gradients above (settings.method, preconditioner, cg_tolerance and
+/// pivot_tolerance as for solve_static). The six columns of H_wE are the right-hand sides; relaxed
+/// = (H_EE - H_Ew H_ww^-1 H_wE) / volume, affine = H_EE / volume.
 ///
 /// With `fluctuations`, also the relaxed motion per unit macro strain: a 6n x 6 matrix, row
 /// 6 i + c the translation (c < 3) or rotation (c >= 3) of particle i under unit strain s in

@@ -9,9 +9,9 @@
 /// (solvers/periodic_homogenization.hpp) solve with it.
 ///
 /// Ordering. The matrix is factorized in the order it is given: the caller chooses a fill-reducing
-/// order (plydem orders particles, not dofs, with AMD: see solvers/stiffness_assembly.hpp). Internally
-/// the columns are renumbered by a postorder of the elimination tree, which changes no fill but
-/// makes every supernode a contiguous range of columns.
+/// order (plydem orders particles, not dofs, with AMD: see solvers/stiffness_assembly.hpp).
+/// Internally the columns are renumbered by a postorder of the elimination tree, which changes no
+/// fill but makes every supernode a contiguous range of columns.
 ///
 /// Zero pivots. A pivot d_k (the pivot of the LDL^T form, L_kk^2) at or below tolerance * A_kk
 /// means that dof k is not restrained by the dofs eliminated before it. The factorization records

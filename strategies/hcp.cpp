@@ -6,11 +6,11 @@
 #include <cmath>
 #include <numbers>
 
-#include "strategies/calibration.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "strategies/registry.hpp"
 #include "packings/hcp_lamina.hpp"
+#include "strategies/calibration.hpp"
+#include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {

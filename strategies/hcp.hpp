@@ -53,9 +53,9 @@ double hcp_eq26_ratio(double layer_spacing_radii);
 /// over all layer spacings: max over x = sin^2(theta) of 4 x (1 - x) / (1 + x^2).
 double hcp_eq26_printed_ratio_bound();
 
-/// Boundary-cell completion by bond class (the idea of strategies/boundary_cells.hpp, where every family
-/// has the same bulk count): a bond of class k between i and j is scaled by
-/// 1/2 (bulk_count[k] / n_i^k) + 1/2 (bulk_count[k] / n_j^k), n_i^k counting i's bonds of class k.
+/// Boundary-cell completion by bond class (the idea of strategies/boundary_cells.hpp, where every
+/// family has the same bulk count): a bond of class k between i and j is scaled by 1/2
+/// (bulk_count[k] / n_i^k) + 1/2 (bulk_count[k] / n_j^k), n_i^k counting i's bonds of class k.
 /// Returns the number of bonds whose stiffness changed.
 int complete_boundary_cells_by_class(const Particles& particles, Bonds& bonds,
                                      const std::vector<int>& bond_class,

@@ -5,12 +5,12 @@
 #include <cmath>
 #include <numbers>
 
-#include "strategies/boundary_cells.hpp"
-#include "strategies/calibration.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "strategies/registry.hpp"
 #include "packings/hexagonal_layer.hpp"
+#include "strategies/boundary_cells.hpp"
+#include "strategies/calibration.hpp"
+#include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {

@@ -14,9 +14,9 @@
 #include <optional>
 
 #include "contacts/bond_kernel.hpp"
-#include "core/parallel_bond.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
+#include "core/parallel_bond.hpp"
 #include "strategies/registry.hpp"
 
 namespace plydem {

@@ -35,9 +35,9 @@
 #include <string>
 #include <vector>
 
+#include "packings/random_packing.hpp"
 #include "solvers/periodic_homogenization.hpp"
 #include "strategies/strategy.hpp"
-#include "packings/random_packing.hpp"
 
 namespace plydem {
 

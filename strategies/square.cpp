@@ -9,12 +9,12 @@
 #include <numbers>
 #include <optional>
 
-#include "strategies/boundary_cells.hpp"
-#include "strategies/calibration.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "strategies/registry.hpp"
 #include "packings/square_layer.hpp"
+#include "strategies/boundary_cells.hpp"
+#include "strategies/calibration.hpp"
+#include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {

@@ -22,7 +22,8 @@ struct CouponSpec {
   double width = 0.83e-3;              ///< along y [m]
   double thickness = 0.2e-3;           ///< the ply thickness the bonds stand for (delta) [m]
   double particle_diameter = 0.05e-3;  ///< [m]
-  /// Let bonds at free edges carry the share of their missing partners (strategies/boundary_cells.hpp).
+  /// Let bonds at free edges carry the share of their missing partners
+  /// (strategies/boundary_cells.hpp).
   bool complete_boundary_cells = true;
 
   /// Throws plydem::Error naming the first non-finite or non-positive size, or a coupon too small

@@ -5,8 +5,8 @@
 #include <filesystem>
 
 #include "core/error.hpp"
-#include "experiments/runner/experiment.hpp"
 #include "experiments/output/external_tool.hpp"
+#include "experiments/runner/experiment.hpp"
 
 using plydem::Error;
 using plydem::ExperimentConfig;

@@ -12,10 +12,10 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "packings/hcp_lamina.hpp"
 #include "strategies/hcp.hpp"
+#include "strategies/registry.hpp"
 
 using namespace plydem;
 

@@ -5,13 +5,13 @@
 #include <cmath>
 #include <numbers>
 
-#include "strategies/calibration.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
-#include "strategies/registry.hpp"
 #include "packings/hexagonal_layer.hpp"
+#include "strategies/calibration.hpp"
 #include "strategies/hex2d.hpp"
+#include "strategies/registry.hpp"
 
 using namespace plydem;
 

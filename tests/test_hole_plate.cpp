@@ -1,5 +1,5 @@
-// The hole-in-plate experiment (experiments/runner/hole_plate.hpp): hole cutting, the quick run of the
-// registered kind with its files, and the DEM field against CalculiX with a check that a wrong
+// The hole-in-plate experiment (experiments/runner/hole_plate.hpp): hole cutting, the quick run of
+// the registered kind with its files, and the DEM field against CalculiX with a check that a wrong
 // field fails the bound.
 #include <doctest/doctest.h>
 #include <fmt/format.h>
@@ -11,11 +11,11 @@
 #include <optional>
 
 #include "core/error.hpp"
-#include "strategies/laminate.hpp"
 #include "core/material.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/runner/hole_plate.hpp"
+#include "strategies/laminate.hpp"
+#include "strategies/registry.hpp"
 
 using namespace plydem;
 namespace fs = std::filesystem;

@@ -6,8 +6,8 @@
 #include <random>
 
 #include "core/error.hpp"
-#include "solvers/explicit_integrator.hpp"
 #include "core/material.hpp"
+#include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
 
 using namespace plydem;

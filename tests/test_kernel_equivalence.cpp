@@ -11,10 +11,10 @@
 #include <set>
 
 #include "contacts/bond_kernel.hpp"
-#include "core/error.hpp"
-#include "solvers/explicit_integrator.hpp"
-#include "core/material.hpp"
 #include "contacts/particle_ordering.hpp"
+#include "core/error.hpp"
+#include "core/material.hpp"
+#include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
 
 using namespace plydem;

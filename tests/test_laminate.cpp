@@ -6,9 +6,9 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "experiments/protocols/tension_test.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
-#include "experiments/protocols/tension_test.hpp"
 
 using namespace plydem;
 

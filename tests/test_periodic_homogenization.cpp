@@ -11,8 +11,8 @@
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
 #include "core/material.hpp"
-#include "solvers/periodic_homogenization.hpp"
 #include "packings/hexagonal_layer.hpp"
+#include "solvers/periodic_homogenization.hpp"
 #include "strategies/hex2d.hpp"
 
 using namespace plydem;

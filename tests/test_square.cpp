@@ -14,9 +14,9 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "packings/square_layer.hpp"
+#include "strategies/registry.hpp"
 #include "strategies/square.hpp"
 
 using namespace plydem;

@@ -9,8 +9,8 @@
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/protocols/stiffness_test.hpp"
+#include "strategies/registry.hpp"
 
 using namespace plydem;
 

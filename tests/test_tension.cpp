@@ -7,9 +7,9 @@
 #include <numbers>
 
 #include "core/material.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/protocols/stiffness_test.hpp"
 #include "experiments/protocols/tension_test.hpp"
+#include "strategies/registry.hpp"
 
 using namespace plydem;
 

@@ -16,8 +16,8 @@
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/output/vtk_output.hpp"
+#include "strategies/registry.hpp"
 
 using namespace plydem;
 namespace fs = std::filesystem;

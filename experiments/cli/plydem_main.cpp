@@ -21,10 +21,10 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/output/report.hpp"
-#include "experiments/runner/run_experiment.hpp"
 #include "experiments/protocols/tension_test.hpp"
+#include "experiments/runner/run_experiment.hpp"
+#include "strategies/registry.hpp"
 
 namespace {
 

@@ -4,10 +4,10 @@
 /// hexahedra, one or more elements through each ply, each ply with its own orthotropic material
 /// and orientation. plydem writes the input deck, runs `ccx -i job` in a temporary directory, reads
 /// the `.dat` file and measures the specimen the way the DEM tension test does
-/// (experiments/protocols/tension_test.hpp): grips at both ends moved apart along x, the reaction force, and
-/// strains from a least-squares fit of the mid-plane displacements of the central gauge section.
-/// The facts this relies on (input conventions, output traps, boundary conditions) are collected
-/// in shared/FEM_NOTES.md.
+/// (experiments/protocols/tension_test.hpp): grips at both ends moved apart along x, the reaction
+/// force, and strains from a least-squares fit of the mid-plane displacements of the central gauge
+/// section. The facts this relies on (input conventions, output traps, boundary conditions) are
+/// collected in shared/FEM_NOTES.md.
 ///
 /// Frame and units. SI throughout (m, Pa, N). The specimen occupies x in [0, L], y in [0, W] like a
 /// DEM coupon, and z in [-h/2, h/2] with the laminate's mid-plane at z = 0; plies are stacked from
@@ -225,8 +225,8 @@ struct FieldComparison {
 /// Samples `fem` at each particle's reference position (x, y, z - z_offset) and compares with the
 /// particle's displacement: the relative L2 errors of ux and uy. `z_offset` is the particle
 /// model's mid-plane z: 0 for a single layer, (n - 1) t / 2 for build_laminate's n plies of
-/// thickness t (strategies/laminate.hpp puts ply k at z = k t). Throws plydem::Error if fewer than 2
-/// particles lie in the FEM plate or the FEM field is empty.
+/// thickness t (strategies/laminate.hpp puts ply k at z = k t). Throws plydem::Error if fewer than
+/// 2 particles lie in the FEM plate or the FEM field is empty.
 FieldComparison compare_displacements(const FemDisplacementField& fem, const Particles& particles,
                                       double z_offset = 0);
 

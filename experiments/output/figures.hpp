@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Figures of experiment runs, drawn by gnuplot (experiments/output/external_tool.hpp) as PNG files:
+/// Figures of experiment runs, drawn by gnuplot (experiments/output/external_tool.hpp) as PNG
+/// files:
 ///   - a model's bonds in plan view coloured by their normal stiffness, like the paper's
 ///     Figs. 10-13 (fibre bonds red, matrix bonds blue); the plies of a laminate side by side;
 ///   - curves (stress-strain), lines and points;

@@ -137,7 +137,8 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
   j["loading_y"] = pull_json(r.along_y);
   if (r.specimen.volume > 0) {
     j["specimen_stiffness"] = {
-        {"method", "affine boundary displacements, static solves (experiments/protocols/stiffness_test.hpp)"},
+        {"method",
+         "affine boundary displacements, static solves (experiments/protocols/stiffness_test.hpp)"},
         {"stiffness", matrix_json(r.specimen.stiffness)},
         {"constants", constants_json(r.specimen.constants)},
         {"frame_particles", r.specimen.frame_particles},

@@ -1,11 +1,11 @@
 #pragma once
 /// \file
 /// The in-plane stiffness of a built specimen, measured with the engine's own bonds: three static
-/// solves (solvers/static_solver.hpp) in which the particles of a boundary frame (within `band` of the
-/// specimen's x and y extremes) follow the affine displacements of the unit strains eps_xx, eps_yy
-/// and gamma_xy, and every other degree of freedom (interior displacements, all rotations, the
-/// frame's z motion) settles to equilibrium. The volume-averaged stress of each solve follows from
-/// the frame's reactions, sigma = (1/V) sum_i r_i (x) x_i (the average-stress theorem; V = the
+/// solves (solvers/static_solver.hpp) in which the particles of a boundary frame (within `band` of
+/// the specimen's x and y extremes) follow the affine displacements of the unit strains eps_xx,
+/// eps_yy and gamma_xy, and every other degree of freedom (interior displacements, all rotations,
+/// the frame's z motion) settles to equilibrium. The volume-averaged stress of each solve follows
+/// from the frame's reactions, sigma = (1/V) sum_i r_i (x) x_i (the average-stress theorem; V = the
 /// particles' material volume), which gives the 3x3 membrane stiffness column by column.
 ///
 /// Prescribed boundary displacements bound the stiffness from above; the bound closes as the frame

@@ -11,8 +11,8 @@
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
 #include "core/measurements.hpp"
-#include "strategies/registry.hpp"
 #include "solvers/static_solver.hpp"
+#include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {

@@ -25,10 +25,10 @@
 #include <vector>
 
 #include "core/elasticity.hpp"
+#include "experiments/protocols/stiffness_test.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/strategy.hpp"
-#include "experiments/protocols/stiffness_test.hpp"
 
 namespace plydem {
 
@@ -42,8 +42,8 @@ struct TensionSettings {
   /// Strategy options (Strategy::set_option), applied in order before calibration.
   std::vector<std::pair<std::string, double>> strategy_options;
   CouponSpec coupon;  ///< material, ply angle and the coupon's size (thickness: per ply)
-  /// Ply angles of a laminate, bottom to top [rad] (strategies/laminate.hpp parse_layup); empty = the
-  /// single ply at coupon.ply_angle. A laminate's theory is CLT from its A matrix.
+  /// Ply angles of a laminate, bottom to top [rad] (strategies/laminate.hpp parse_layup); empty =
+  /// the single ply at coupon.ply_angle. A laminate's theory is CLT from its A matrix.
   std::vector<double> layup;
   InterfaceStiffness interface;  ///< between the plies of a laminate
   double grip_length = 0;        ///< [m]; 0 = two particle diameters

@@ -11,8 +11,8 @@
 ///
 /// Every run writes into one output folder: report.md (assembled from the experiments' sections),
 /// results.csv (one row per measured or reference value) and the figures and VTU files the
-/// experiment makes. Kinds are registered like strategies (strategies/registry.hpp), so a user adds an
-/// experiment without editing the runner.
+/// experiment makes. Kinds are registered like strategies (strategies/registry.hpp), so a user adds
+/// an experiment without editing the runner.
 
 #include <filesystem>
 #include <functional>

@@ -9,14 +9,14 @@
 #include <limits>
 #include <numeric>
 
-#include "strategies/boundary_cells.hpp"
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "strategies/registry.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/output/vtk_output.hpp"
 #include "packings/hexagonal_layer.hpp"
 #include "packings/square_layer.hpp"
+#include "strategies/boundary_cells.hpp"
+#include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {

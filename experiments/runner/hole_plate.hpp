@@ -38,22 +38,22 @@
 #include <string>
 #include <vector>
 
-#include "strategies/laminate.hpp"
-#include "solvers/static_solver.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/runner/experiment.hpp"
+#include "solvers/static_solver.hpp"
+#include "strategies/laminate.hpp"
 
 namespace plydem {
 
 /// Everything the hole-in-plate experiment needs, in SI units. Defaults are the paper's plate.
 struct HolePlateSettings {
   std::string material = "eglass-my750";  ///< a name or a TOML file (core/material.hpp)
-  std::string layup = "[0/90/0]";         ///< bottom ply first (strategies/laminate.hpp parse_layup)
-  double length = 60e-3;                  ///< L, along x [m]
-  double width = 36e-3;                   ///< W, along y [m]
-  double thickness = 1.5e-3;              ///< laminate thickness h; every ply h / n [m]
-  double hole_diameter = 3e-3;            ///< D, centred at (L/2, W/2) [m]
-  double grip_travel = 0.1e-3;            ///< how far the grips move apart in total [m]
+  std::string layup = "[0/90/0]";  ///< bottom ply first (strategies/laminate.hpp parse_layup)
+  double length = 60e-3;           ///< L, along x [m]
+  double width = 36e-3;            ///< W, along y [m]
+  double thickness = 1.5e-3;       ///< laminate thickness h; every ply h / n [m]
+  double hole_diameter = 3e-3;     ///< D, centred at (L/2, W/2) [m]
+  double grip_travel = 0.1e-3;     ///< how far the grips move apart in total [m]
 
   // The particle model.
   std::string strategy = "hex2d";     ///< hex2d or square (one layer per ply)

@@ -11,14 +11,14 @@
 #include <optional>
 
 #include "core/error.hpp"
-#include "strategies/laminate.hpp"
 #include "core/material.hpp"
-#include "strategies/registry.hpp"
-#include "solvers/static_solver.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
-#include "experiments/protocols/tension_test.hpp"
 #include "experiments/output/vtk_output.hpp"
+#include "experiments/protocols/tension_test.hpp"
+#include "solvers/static_solver.hpp"
+#include "strategies/laminate.hpp"
+#include "strategies/registry.hpp"
 
 namespace plydem {
 namespace fs = std::filesystem;
@@ -645,8 +645,8 @@ class LaminateExperiment : public Experiment {
         {name, case_name, "wall time", fmt::format("dem {}", s.strategy), dem_seconds, "s"});
     if (r.specimen.stiffness.norm() > 0) {
       // The same coupon's membrane stiffness under affine boundary displacements
-      // (experiments/protocols/stiffness_test.hpp): no grips, no free edges, the laminate's A/h as the
-      // bonds carry it.
+      // (experiments/protocols/stiffness_test.hpp): no grips, no free edges, the laminate's A/h as
+      // the bonds carry it.
       Values membrane = values_of(r.specimen.constants);
       t += constants_line(fmt::format("DEM {} (membrane stiffness, affine boundary)", s.strategy),
                           membrane, clt);

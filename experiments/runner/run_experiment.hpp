@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// The runner behind `plydem run experiments/NAME.toml [--out DIR] [--quick]`: loads the config,
-/// creates the output folder, runs the registered kind (experiments/runner/experiment.hpp) and writes
+/// creates the output folder, runs the registered kind (experiments/runner/experiment.hpp) and
+/// writes
 ///   DIR/report.md    title, date, machine, plydem version, the experiment's section, the files;
 ///   DIR/results.csv  one row per value: experiment,case,quantity,source,value,unit;
 /// beside the figures and VTU files the experiment wrote itself.
