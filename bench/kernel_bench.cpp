@@ -5,12 +5,17 @@
 //   plydem_kernel_bench layer --particles 100000 --steps 500 --threads 2   # one JSON line
 //   plydem_kernel_bench layer --particles 10000 --lammps-data layer.data --yade-layer layer.txt
 //   plydem_kernel_bench coupon --cycles 200000     # the paper's Table 2 Hex2D coupon, timed
+//   plydem_kernel_bench tension --cycles 200000    # the same coupon through the tension test
 //   plydem_kernel_bench table < rows.jsonl         # the table bench/run prints
 //
 // The layer is the Hex2D model of the paper's 0 deg E-glass/MY750 ply (0.05 mm particles, full
 // parallel bonds: normal, shear, bending and twisting, particles spinning), square, pulled by grips
 // at both ends that move apart while PFC local damping (0.7) acts, as in the tension test. Only
-// the cycles are timed; building the model and the kernel's gather lists is not.
+// the cycles are timed; building the model and the kernel's gather lists is not. The cycles run
+// through ExplicitIntegrator::run(), the run loop users run (`--api advance`: the bare advance(N)),
+// with a check every --report-every cycles in coupon mode. `tension` times the tension test's own
+// explicit fixed-cycle pull of the coupon (`plydem tension --solver explicit --cycles N`, one
+// loading along x; building the coupon included), the figure to hold beside `coupon`.
 #include <fmt/format.h>
 #include <omp.h>
 #include <CLI/CLI.hpp>
@@ -28,6 +33,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "experiments/protocols/tension_test.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
 
@@ -93,6 +99,32 @@ double process_cpu_seconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+// `cycles` cycles with a check every `check_every`, through run() or (api "advance") through
+// advance(check_every) calls; the timers of run() go into `r` (when given).
+CycleReport timed_cycles(ExplicitIntegrator& integrator, const std::string& api, long cycles,
+                         long check_every, nlohmann::json* r) {
+  if (api == "advance") {
+    CycleReport report;
+    for (long done = 0; done < cycles;) {
+      const long chunk = std::min(check_every, cycles - done);
+      report = integrator.advance(chunk);
+      done += chunk;
+    }
+    return report;
+  }
+  RunControl control;
+  control.check_interval = check_every;
+  control.max_cycles = cycles;
+  const RunReport run = integrator.run(control);
+  if (r) {
+    (*r)["kernel_seconds"] = run.kernel_seconds;
+    (*r)["check_seconds"] = run.check_seconds;
+    (*r)["transfer_seconds"] = run.transfer_seconds;
+    (*r)["checks"] = run.checks;
+  }
+  return run.last;
+}
+
 nlohmann::json row(const std::string& engine, long particles, long bonds, int threads, long steps,
                    double seconds, double cpu_seconds, double bytes_per_particle) {
   nlohmann::json r;
@@ -155,7 +187,8 @@ ParticleOrder order_named(const std::string& name) {
 }
 
 int run_layer(long particles, long steps, int threads, const std::string& order,
-              const std::string& lammps_data, const std::string& yade_layer, bool describe) {
+              const std::string& api, const std::string& lammps_data, const std::string& yade_layer,
+              bool describe) {
   Model model = square_layer(particles);
   const long n = model.particles.size(), bonds = model.bonds.size();
   if (!lammps_data.empty()) write_lammps_data(model, lammps_data);
@@ -181,17 +214,21 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   integrator.advance(1);  // first touch of the kernel's arrays, not timed
   const double cpu = process_cpu_seconds();
   const auto start = Clock::now();
-  const CycleReport report = integrator.advance(steps);
+  nlohmann::json timers;
+  const CycleReport report = timed_cycles(integrator, api, steps, steps, &timers);
   const double seconds = seconds_since(start);
   require(std::isfinite(report.strain_energy), "the benchmark run diverged");
   nlohmann::json r = row("plydem", n, bonds, threads, steps, seconds, process_cpu_seconds() - cpu,
                          static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(n));
   r["order"] = order;
+  r["api"] = api;
+  if (timers.is_object()) r.update(timers);
   std::cout << r.dump() << "\n";
   return 0;
 }
 
-int run_coupon(long cycles, int threads, const std::string& order, long report_every) {
+int run_coupon(long cycles, int threads, const std::string& order, const std::string& api,
+               long report_every) {
   require(cycles >= 1 && report_every >= 1, "--cycles and --report-every must be at least 1");
   Model model = table2_coupon();
   omp_set_num_threads(threads);
@@ -201,12 +238,8 @@ int run_coupon(long cycles, int threads, const std::string& order, long report_e
   pull_with_grips(model, integrator, cycles);
   const double cpu = process_cpu_seconds();
   const auto start = Clock::now();
-  CycleReport report;
-  for (long done = 0; done < cycles;) {
-    const long chunk = std::min(report_every, cycles - done);
-    report = integrator.advance(chunk);
-    done += chunk;
-  }
+  nlohmann::json timers;
+  const CycleReport report = timed_cycles(integrator, api, cycles, report_every, &timers);
   const double seconds = seconds_since(start);
   require(std::isfinite(report.strain_energy) && report.strain_energy > 0,
           "the coupon run did not load the coupon");
@@ -216,8 +249,32 @@ int run_coupon(long cycles, int threads, const std::string& order, long report_e
       static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(model.particles.size()));
   r["case"] = "table2-hex2d-coupon";
   r["order"] = order;
+  r["api"] = api;
   r["report_every"] = report_every;
   r["unbalanced_force_ratio"] = report.unbalanced_force_ratio;
+  if (timers.is_object()) r.update(timers);
+  std::cout << r.dump() << "\n";
+  return 0;
+}
+
+// The same coupon through the tension test: its explicit fixed-cycle pull along x, as
+// `plydem tension --solver explicit --cycles N` runs it (free grips, 1e-3 nominal strain, a sample
+// every 1% of the run), timed whole: building the coupon, the gauge and the samples included.
+int run_tension(long cycles, int threads) {
+  require(cycles >= 1, "--cycles must be at least 1");
+  omp_set_num_threads(threads);
+  TensionSettings settings;
+  settings.coupon.material = load_material("eglass-my750");
+  settings.solver = TensionSolver::kExplicit;
+  settings.fixed_cycles = cycles;
+  const double cpu = process_cpu_seconds();
+  const PullResult pull = TensionTest(settings).pull(Hex2dStrategy(), 0.0);
+  nlohmann::json r = row("plydem", pull.particles, pull.bonds, threads, pull.cycles,
+                         pull.wall_seconds, process_cpu_seconds() - cpu, std::nan(""));
+  r.erase("bytes_per_particle");  // the kernel is the tension test's own
+  r["case"] = "table2-hex2d-coupon-tension-test";
+  r["modulus"] = pull.modulus;
+  r["unbalanced_force_ratio"] = pull.final_ratio;
   std::cout << r.dump() << "\n";
   return 0;
 }
@@ -300,7 +357,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   long particles = 10000, steps = 100, cycles = 200'000, report_every = 2000;
   int threads = 1;
-  std::string lammps_data, yade_layer, order = "auto";
+  std::string lammps_data, yade_layer, order = "auto", api = "run";
   bool describe = false;
   CLI::App* layer = app.add_subcommand("layer", "time the kernel on a square hexagonal layer");
   layer->add_option("--particles", particles, "about this many particles")->capture_default_str();
@@ -309,6 +366,10 @@ int main(int argc, char** argv) {
   const auto orders = CLI::IsMember({"auto", "hilbert", "built"});
   layer->add_option("--order", order, "kernel particle order: auto (lattice lines), hilbert, built")
       ->check(orders)
+      ->capture_default_str();
+  const auto apis = CLI::IsMember({"run", "advance"});
+  layer->add_option("--api", api, "run: ExplicitIntegrator::run(); advance: advance(N)")
+      ->check(apis)
       ->capture_default_str();
   layer->add_option("--lammps-data", lammps_data, "also write the layer as a LAMMPS data file");
   layer->add_option("--yade-layer", yade_layer, "also write x y z radius per particle for YADE");
@@ -325,6 +386,13 @@ int main(int argc, char** argv) {
                    "cycles between unbalanced-force reports (the tension test samples every "
                    "1% of the run)")
       ->capture_default_str();
+  coupon->add_option("--api", api, "run: ExplicitIntegrator::run(); advance: advance(N) calls")
+      ->check(apis)
+      ->capture_default_str();
+  CLI::App* tension =
+      app.add_subcommand("tension", "the same coupon through the tension test's explicit path");
+  tension->add_option("--cycles", cycles, "fixed explicit cycles")->capture_default_str();
+  tension->add_option("--threads", threads, "OpenMP threads")->capture_default_str();
   CLI::App* table = app.add_subcommand("table", "print JSON lines from stdin as the bench table");
   try {
     app.parse(argc, argv);
@@ -334,8 +402,9 @@ int main(int argc, char** argv) {
   try {
     require(threads >= 1, "--threads must be at least 1");
     if (*layer)
-      return run_layer(particles, steps, threads, order, lammps_data, yade_layer, describe);
-    if (*coupon) return run_coupon(cycles, threads, order, report_every);
+      return run_layer(particles, steps, threads, order, api, lammps_data, yade_layer, describe);
+    if (*coupon) return run_coupon(cycles, threads, order, api, report_every);
+    if (*tension) return run_tension(cycles, threads);
     if (*table) return print_table();
   } catch (const std::exception& e) {
     std::cerr << "plydem_kernel_bench: error: " << e.what() << "\n";

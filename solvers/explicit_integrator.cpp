@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -90,6 +91,7 @@ struct MotionClass {
 // `parity` (every particle needs its neighbours' state before the update) and writes the other.
 struct FusedState {
   std::vector<int> order;
+  std::vector<int> position;  // inverse of order: kernel index of model particle i
   GatherBonds bonds;
   int particles = 0;
   int blocks = 0;
@@ -98,6 +100,7 @@ struct FusedState {
   std::vector<std::uint8_t> motion;            // class per particle; 0 = free
   std::vector<MotionClass> classes;
   std::vector<double> partial;  // per block: energy, bond force norm, 2 x kinetic, unbalanced
+  int parity = 0;               // the buffer holding the current displacements and rotations
 
   std::size_t bytes() const {
     std::size_t arrays = 0;
@@ -105,7 +108,7 @@ struct FusedState {
       for (int c = 0; c < 3; ++c) arrays += displacement[b][c].bytes() + rotation[b][c].bytes();
     for (int c = 0; c < 3; ++c) arrays += velocity[c].bytes() + angular_velocity[c].bytes();
     arrays += inverse_mass.bytes() + inverse_inertia.bytes();
-    return arrays + bonds.bytes() + order.size() * sizeof(int) + motion.size() +
+    return arrays + bonds.bytes() + (order.size() + position.size()) * sizeof(int) + motion.size() +
            classes.size() * sizeof(MotionClass) + partial.size() * sizeof(double);
   }
 };
@@ -268,6 +271,8 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     FusedState& k = fused_->state;
     const Particles& p = model.particles;
     k.order = kernel_order(model, settings.particle_order);
+    k.position.assign(k.order.size(), 0);
+    for (std::size_t i = 0; i < k.order.size(); ++i) k.position[k.order[i]] = static_cast<int>(i);
     k.bonds = GatherBonds(model.bonds, k.order);
     k.particles = p.size();
     const int padded = k.bonds.padded_count();
@@ -354,22 +359,54 @@ void ExplicitIntegrator::set_prescribed_motions(const std::vector<PrescribedMoti
   }
 }
 
+std::string_view to_string(RunStop stop) {
+  switch (stop) {
+    case RunStop::kQuasiStatic:
+      return "quasi-static";
+    case RunStop::kCycleLimit:
+      return "cycle limit";
+    case RunStop::kTimeLimit:
+      return "time limit";
+    case RunStop::kHook:
+      return "hook";
+  }
+  return "?";
+}
+
+void RunControl::validate() const {
+  require(check_interval >= 1,
+          fmt::format("the check interval must be at least one cycle, got {}", check_interval));
+  require(max_cycles >= 0,
+          fmt::format("max cycles must be >= 0 (0 = no limit), got {}", max_cycles));
+  require(std::isfinite(tolerance) && tolerance >= 0,
+          fmt::format("the quasi-static tolerance must be >= 0 (0 = off), got {}", tolerance));
+  require(std::isfinite(time_limit_seconds) && time_limit_seconds >= 0,
+          fmt::format("the time limit must be >= 0 s (0 = none), got {}", time_limit_seconds));
+  require(std::isfinite(progress_seconds) && progress_seconds >= 0,
+          fmt::format("the progress interval must be >= 0 s, got {}", progress_seconds));
+  require(max_cycles > 0 || tolerance > 0 || time_limit_seconds > 0,
+          "a run needs a stop condition: max cycles, a quasi-static tolerance or a time limit");
+}
+
 CycleReport ExplicitIntegrator::cycle() {
   return advance(1);
 }
 
 CycleReport ExplicitIntegrator::advance(long cycles) {
   if (!(cycles >= 1)) throw Error(fmt::format("cannot advance {} cycles: at least one", cycles));
-  if (!fused_) {
-    CycleReport report;
-    for (long c = 0; c < cycles; ++c) report = reference_cycle();
-    return report;
-  }
+  RunControl control;
+  control.check_interval = cycles;
+  control.max_cycles = cycles;
+  return run(control).last;
+}
+
+void ExplicitIntegrator::load_kernel() {
+  if (!fused_) return;
   FusedState& k = fused_->state;
-  Particles& p = model_.particles;
-  const int n = k.particles;
+  const Particles& p = model_.particles;
+  k.parity = 0;
   for (int c = 0; c < 3; ++c) {
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < k.particles; ++i) {
       const int m = k.order[i];
       k.displacement[0][c][i] = p.displacement(m, c);
       k.rotation[0][c][i] = p.rotation(m, c);
@@ -377,6 +414,37 @@ CycleReport ExplicitIntegrator::advance(long cycles) {
       k.angular_velocity[c][i] = p.angular_velocity(m, c);
     }
   }
+}
+
+void ExplicitIntegrator::store_kernel() {
+  if (!fused_) return;
+  const FusedState& k = fused_->state;
+  Particles& p = model_.particles;
+  for (int c = 0; c < 3; ++c) {
+    for (int i = 0; i < k.particles; ++i) {
+      const int m = k.order[i];
+      p.displacement(m, c) = k.displacement[k.parity][c][i];
+      p.rotation(m, c) = k.rotation[k.parity][c][i];
+      p.velocity(m, c) = k.velocity[c][i];
+      p.angular_velocity(m, c) = k.angular_velocity[c][i];
+    }
+  }
+}
+
+CycleReport ExplicitIntegrator::step(long cycles) {
+  if (!fused_) {
+    CycleReport report;
+    for (long c = 0; c < cycles; ++c) {
+      if (c + 1 == cycles) {
+        previous_displacement_ = model_.particles.displacement;
+        previous_rotation_ = model_.particles.rotation;
+      }
+      report = reference_cycle();
+    }
+    return report;
+  }
+  FusedState& k = fused_->state;
+  Particles& p = model_.particles;
   StepArgs args;
   args.state = &k;
   args.dt = time_step_;
@@ -387,6 +455,7 @@ CycleReport ExplicitIntegrator::advance(long cycles) {
   }
   args.partial = k.partial.data();
   const int blocks = k.blocks;
+  const int first_parity = k.parity;
 #pragma omp parallel if (blocks >= 2 * kMinBlocksPerThread)
   {
     const long threads = omp_get_num_threads();
@@ -395,21 +464,12 @@ CycleReport ExplicitIntegrator::advance(long cycles) {
     const int end = static_cast<int>(blocks * (thread + 1) / threads);
     StepArgs mine = args;
     for (long s = 0; s < cycles; ++s) {
-      mine.parity = static_cast<int>(s & 1);
+      mine.parity = static_cast<int>((first_parity + s) & 1);
       step_blocks(mine, s + 1 == cycles, begin, end);
 #pragma omp barrier
     }
   }
-  const int last = static_cast<int>(cycles & 1);
-  for (int c = 0; c < 3; ++c) {
-    for (int i = 0; i < n; ++i) {
-      const int m = k.order[i];
-      p.displacement(m, c) = k.displacement[last][c][i];
-      p.rotation(m, c) = k.rotation[last][c][i];
-      p.velocity(m, c) = k.velocity[c][i];
-      p.angular_velocity(m, c) = k.angular_velocity[c][i];
-    }
-  }
+  k.parity = static_cast<int>((first_parity + cycles) & 1);
   // Block sums in block order: the report does not depend on the number of threads.
   double sums[kPartials] = {0, 0, 0, 0};
   for (int b = 0; b < blocks; ++b)
@@ -424,6 +484,135 @@ CycleReport ExplicitIntegrator::advance(long cycles) {
   for (long c = 0; c < cycles; ++c) time_ += time_step_;
   cycles_ += cycles;
   return report;
+}
+
+RunReport ExplicitIntegrator::run(const RunControl& control) {
+  using Clock = std::chrono::steady_clock;
+  auto seconds = [](Clock::time_point from, Clock::time_point to) {
+    return std::chrono::duration<double>(to - from).count();
+  };
+  require(!running_, "run() was called from one of its own hooks");
+  control.validate();
+  const Clock::time_point start = Clock::now();
+  RunReport report;
+  running_ = true;
+  load_kernel();
+  // The model gets the state back however the run ends (an exception from a hook included).
+  struct Finish {
+    ExplicitIntegrator& integrator;
+    RunReport& report;
+    Clock::time_point start;
+    ~Finish() {
+      const Clock::time_point t = Clock::now();
+      integrator.store_kernel();
+      integrator.running_ = false;
+      const Clock::time_point end = Clock::now();
+      report.transfer_seconds += std::chrono::duration<double>(end - t).count();
+      report.wall_seconds = std::chrono::duration<double>(end - start).count();
+    }
+  } finish{*this, report, start};
+  report.transfer_seconds = seconds(start, Clock::now());
+
+  Clock::time_point last_progress = start;
+  long previous_check_cycles = 0;
+  double previous_ratio = 0;
+  while (true) {
+    long chunk = control.check_interval;
+    if (control.max_cycles > 0) chunk = std::min(chunk, control.max_cycles - report.cycles);
+    const Clock::time_point kernel_start = Clock::now();
+    report.last = step(chunk);
+    const Clock::time_point check_start = Clock::now();
+    report.kernel_seconds += seconds(kernel_start, check_start);
+    report.cycles += chunk;
+    ++report.checks;
+
+    RunCheck check;
+    check.cycles = cycles_;
+    check.run_cycles = report.cycles;
+    check.report = report.last;
+    check.elapsed_seconds = seconds(start, check_start);
+    const double ratio = report.last.unbalanced_force_ratio;
+    const double per_cycle =
+        (report.kernel_seconds + report.check_seconds) / static_cast<double>(report.cycles);
+    auto estimate = [&](double left) {
+      if (left >= 0 && (check.seconds_left < 0 || left < check.seconds_left))
+        check.seconds_left = left;
+    };
+    if (control.max_cycles > 0)
+      estimate(static_cast<double>(control.max_cycles - report.cycles) * per_cycle);
+    if (control.tolerance > 0 && previous_check_cycles > 0 && ratio < previous_ratio &&
+        ratio > control.tolerance) {
+      const double decay = std::log(previous_ratio / ratio) /
+                           static_cast<double>(report.cycles - previous_check_cycles);
+      estimate(std::log(ratio / control.tolerance) / decay * per_cycle);
+    }
+    if (control.time_limit_seconds > 0)
+      estimate(std::max(0.0, control.time_limit_seconds - check.elapsed_seconds));
+    previous_check_cycles = report.cycles;
+    previous_ratio = ratio;
+
+    const bool go_on = control.on_check ? control.on_check(check) : true;
+    if (control.on_progress && seconds(last_progress, Clock::now()) > control.progress_seconds) {
+      control.on_progress(check);
+      last_progress = Clock::now();
+    }
+    const Clock::time_point check_end = Clock::now();
+    report.check_seconds += seconds(check_start, check_end);
+    if (control.tolerance > 0 && ratio <= control.tolerance) {
+      report.stop = RunStop::kQuasiStatic;
+      break;
+    }
+    if (control.max_cycles > 0 && report.cycles >= control.max_cycles) {
+      report.stop = RunStop::kCycleLimit;
+      break;
+    }
+    if (control.time_limit_seconds > 0 && seconds(start, check_end) >= control.time_limit_seconds) {
+      report.stop = RunStop::kTimeLimit;
+      break;
+    }
+    if (!go_on) {
+      report.stop = RunStop::kHook;
+      break;
+    }
+  }
+  return report;
+}
+
+void ExplicitIntegrator::gather(std::span<const int> particles, Particles& into, StateAt at) const {
+  const Particles& p = model_.particles;
+  require(into.size() == p.size(),
+          fmt::format("gather() into {} particles: the model has {}", into.size(), p.size()));
+  require(at == StateAt::kCurrent || running_,
+          "the state the forces belong to can be gathered during a run only (from a hook)");
+  require(at == StateAt::kCurrent || &into != &p,
+          "the state the forces belong to cannot be gathered into the model's own particles");
+  for (int i : particles)
+    if (i < 0 || i >= p.size()) throw Error(fmt::format("gather(): no particle {}", i));
+  const bool own = &into == &p;
+  const bool from_kernel = fused_ && running_;
+  for (int i : particles) {
+    for (int c = 0; c < 3; ++c) {
+      if (from_kernel) {
+        const FusedState& k = fused_->state;
+        const int j = k.position[i];
+        const int buffer = at == StateAt::kCurrent ? k.parity : 1 - k.parity;
+        into.displacement(i, c) = k.displacement[buffer][c][j];
+        into.rotation(i, c) = k.rotation[buffer][c][j];
+        into.velocity(i, c) = k.velocity[c][j];
+        into.angular_velocity(i, c) = k.angular_velocity[c][j];
+      } else if (!own) {
+        into.displacement(i, c) =
+            at == StateAt::kCurrent ? p.displacement(i, c) : previous_displacement_(i, c);
+        into.rotation(i, c) = at == StateAt::kCurrent ? p.rotation(i, c) : previous_rotation_(i, c);
+        into.velocity(i, c) = p.velocity(i, c);
+        into.angular_velocity(i, c) = p.angular_velocity(i, c);
+      }
+      if (!own) {
+        into.force(i, c) = p.force(i, c);
+        into.torque(i, c) = p.torque(i, c);
+      }
+    }
+  }
 }
 
 std::size_t ExplicitIntegrator::kernel_bytes() const {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -77,6 +78,12 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
+
+// Cycles between the explicit run's checks where only progress reports need them (a check costs
+// about one cycle), and while relaxing, where the stage ends at the first cycle within the
+// tolerance.
+constexpr long kProgressCheckCycles = 1000;
+constexpr long kRelaxationCheckCycles = 1;
 
 // The specimen's response at the current state: gauge strain and grip stress.
 struct Sample {
@@ -198,6 +205,12 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
       if (y >= y_min + band && y <= y_max - band) gauge.push_back(i);
     }
   }
+  // What a sample reads (sample() below): the gauge particles' displacements, the grips' forces.
+  std::vector<int> sampled = gauge;
+  for (int i = 0; i < p.size(); ++i)
+    if (p.group(i) != static_cast<int>(BoundaryGroup::kFree)) sampled.push_back(i);
+  std::sort(sampled.begin(), sampled.end());
+  sampled.erase(std::unique(sampled.begin(), sampled.end()), sampled.end());
   const double area = cross_section_area(p, x_mid - gauge_half, x_mid + gauge_half,
                                          std::min(4.0 * spec.particle_diameter, 0.25 * gauge_half));
 
@@ -309,18 +322,26 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
     result.grip_velocity = v;
     result.loading_transits = loading_transits(total_grip_travel / v);
     grips_moving(v);
+    // One check per sample (every 1% of the run), the samples from the second half.
     const long every = std::max(1L, s.fixed_cycles / 100);
-    CycleReport cycle;
-    for (long c = 1; c <= s.fixed_cycles; ++c) {
-      cycle = integrator->cycle();
-      report("loading", cycle, s.fixed_cycles - c);
-      // Forces in p.force belong to the state before this cycle's update: sample both together.
+    Particles seen = p;  // the sampled particles' state, gathered from the kernel
+    RunControl control;
+    control.check_interval = every;
+    control.max_cycles = s.fixed_cycles;
+    control.progress_seconds = 0;  // report() keeps its own two seconds
+    control.on_progress = [&](const RunCheck& check) {
+      report("loading", check.report, s.fixed_cycles - check.run_cycles);
+    };
+    control.on_check = [&](const RunCheck& check) {
+      const long c = check.run_cycles;
+      // The forces belong to the state before the last cycle's update: sample both together.
       if (c % every == 0 && c > s.fixed_cycles / 2) {
-        Particles before = p;
-        before.displacement -= dt * before.velocity;
-        record(sample(before));
+        integrator->gather(sampled, seen, StateAt::kForces);
+        record(sample(seen));
       }
-    }
+      return true;
+    };
+    const CycleReport cycle = integrator->run(control).last;
     result.final_ratio = cycle.unbalanced_force_ratio;
     if (result.final_ratio > s.tolerance) {
       spdlog::warn(
@@ -339,25 +360,33 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
       const long stage_start = integrator->cycles();
       stages_left = s.load_stages - stage;
       grips_moving(v);
-      for (long c = 0; c < ramp; ++c) {
-        const CycleReport cycle = integrator->cycle();
-        const long done = integrator->cycles() - stage_start;
-        report("loading", cycle,
+      RunControl loading;
+      loading.check_interval = kProgressCheckCycles;
+      loading.max_cycles = ramp;
+      loading.progress_seconds = 0;  // report() keeps its own two seconds
+      loading.on_progress = [&](const RunCheck& check) {
+        const long done = check.cycles - stage_start;
+        report("loading", check.report,
                cycles_per_finished_stage > 0 ? std::max(0L, cycles_per_finished_stage - done) : -1);
-      }
+      };
+      integrator->run(loading);
       grips_moving(0.0);
-      CycleReport cycle = integrator->cycle();
-      while (cycle.unbalanced_force_ratio > s.tolerance) {
-        // Not require(): this runs every cycle, and the message is needed only on failure.
-        if (integrator->cycles() >= s.max_cycles) {
-          throw Error(fmt::format(
-              "the tension test did not reach a quasi-static state within {} cycles "
-              "(unbalanced-force ratio {:.3g} > tolerance {:.3g}); raise --max-cycles or the "
-              "tolerance",
-              s.max_cycles, cycle.unbalanced_force_ratio, s.tolerance));
-        }
-        cycle = integrator->cycle();
-        report("relaxing", cycle, -1);
+      // Relaxation, the ratio checked after every cycle: the stage ends at the first cycle whose
+      // ratio is within the tolerance (and after one cycle at least).
+      RunControl relaxing;
+      relaxing.check_interval = kRelaxationCheckCycles;
+      relaxing.tolerance = s.tolerance;
+      relaxing.max_cycles = std::max(1L, s.max_cycles - integrator->cycles());
+      relaxing.progress_seconds = 0;
+      relaxing.on_progress = [&](const RunCheck& check) { report("relaxing", check.report, -1); };
+      const RunReport relaxed = integrator->run(relaxing);
+      const CycleReport& cycle = relaxed.last;
+      if (relaxed.stop != RunStop::kQuasiStatic) {
+        throw Error(fmt::format(
+            "the tension test did not reach a quasi-static state within {} cycles "
+            "(unbalanced-force ratio {:.3g} > tolerance {:.3g}); raise --max-cycles or the "
+            "tolerance",
+            s.max_cycles, cycle.unbalanced_force_ratio, s.tolerance));
       }
       cycles_per_finished_stage = integrator->cycles() - stage_start;
       result.final_ratio = cycle.unbalanced_force_ratio;
