@@ -426,6 +426,25 @@ CycleReport ExplicitIntegrator::advance(long cycles) {
   return report;
 }
 
+void ExplicitIntegrator::drop_bond(int bond) {
+  Bonds& bonds = model_.bonds;
+  require(bond >= 0 && bond < bonds.size(),
+          fmt::format("cannot drop bond {}: the model has {} bonds", bond, bonds.size()));
+  if (fused_) {
+    const std::vector<int>& order = fused_->state.order;
+    auto kernel_index = [&](int i) {
+      return static_cast<int>(std::find(order.begin(), order.end(), i) - order.begin());
+    };
+    fused_->state.bonds.drop_bond(kernel_index(bonds.first(bond)),
+                                  kernel_index(bonds.second(bond)));
+  }
+  std::vector<int> kept;
+  kept.reserve(static_cast<std::size_t>(bonds.size()));
+  for (int b = 0; b < bonds.size(); ++b)
+    if (b != bond) kept.push_back(b);
+  bonds = bonds.select(kept);
+}
+
 std::size_t ExplicitIntegrator::kernel_bytes() const {
   return fused_ ? fused_->state.bytes() : 0;
 }
