@@ -276,16 +276,51 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
   for (int b = 0; b < blocks; ++b) {
     for (int s = 0; s < width_; ++s) {
       const std::int32_t* type = types(s) + b * lanes::kCount;
-      const std::int32_t* other = neighbours(s) + b * lanes::kCount;
-      bool same_type = true, consecutive = other[0] + lanes::kCount <= padded_;
-      for (int l = 1; l < lanes::kCount; ++l) {
-        same_type &= type[l] == type[0];
-        consecutive &= other[l] == other[0] + l;
-      }
+      bool same_type = true;
+      for (int l = 1; l < lanes::kCount; ++l) same_type &= type[l] == type[0];
       const std::size_t cell = static_cast<std::size_t>(b) * width_ + s;
       block_type_[cell] = same_type ? (type[0] == 0 ? 0 : uniform_of(type[0])) : -1;
-      block_run_[cell] = consecutive ? other[0] : -1;
+      block_run_[cell] = block_run_of(b, s);
     }
+  }
+}
+
+std::int32_t GatherBonds::block_run_of(int block, int slot) const {
+  const std::int32_t* other = neighbours(slot) + block * lanes::kCount;
+  bool consecutive = other[0] + lanes::kCount <= padded_;
+  for (int l = 1; l < lanes::kCount; ++l) consecutive &= other[l] == other[0] + l;
+  return consecutive ? other[0] : -1;
+}
+
+void GatherBonds::drop_bond(int first, int second) {
+  if (!(first >= 0 && first < particles_ && second >= 0 && second < particles_ && first != second))
+    throw Error(
+        fmt::format("cannot drop a bond between kernel particles {} and {}: not two "
+                    "distinct particles of the {}",
+                    first, second, particles_));
+  auto slot_of = [&](int own, int other) {
+    for (int s = 0; s < width_; ++s) {
+      const std::size_t cell = static_cast<std::size_t>(s) * padded_ + own;
+      if (type_[cell] != 0 && neighbour_[cell] == other) return s;
+    }
+    throw Error(fmt::format("kernel particles {} and {} have no bond to drop", first, second));
+  };
+  const int slots[2] = {slot_of(first, second), slot_of(second, first)};
+  const int ends[2] = {first, second};
+  for (int e = 0; e < 2; ++e) {
+    const int own = ends[e], s = slots[e];
+    const std::size_t cell = static_cast<std::size_t>(s) * padded_ + own;
+    type_[cell] = 0;
+    neighbour_[cell] = own;
+    // The block's slot was uniform or mixed; with one lane now empty it is mixed, or empty if no
+    // lane has a bond left (a uniform type needs every lane to hold it).
+    const int block = own / lanes::kCount;
+    const std::int32_t* type = types(s) + block * lanes::kCount;
+    bool empty = true;
+    for (int l = 0; l < lanes::kCount; ++l) empty &= type[l] == 0;
+    const std::size_t block_cell = static_cast<std::size_t>(block) * width_ + s;
+    block_type_[block_cell] = empty ? 0 : -1;
+    block_run_[block_cell] = block_run_of(block, s);
   }
 }
 

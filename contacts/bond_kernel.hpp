@@ -185,7 +185,18 @@ class GatherBonds {
   /// Bytes held by the lists and the type table.
   std::size_t bytes() const;
 
+  /// Removes the bond between kernel particles `first` and `second` without rebuilding the
+  /// table: its slot at both ends becomes the empty slot (type 0, neighbour = the particle
+  /// itself), as LAMMPS keeps a broken bond's slot with bond type 0, and the two blocks'
+  /// block_types() and block_runs() of that slot are updated (a uniform slot turns mixed, or empty
+  /// when no particle of the block has a bond in it). The forces are then those of a table built
+  /// without the bond. Throws plydem::Error if the two particles have no bond.
+  void drop_bond(int first, int second);
+
  private:
+  // block_runs() of one block and slot, from the neighbours.
+  std::int32_t block_run_of(int block, int slot) const;
+
   int particles_ = 0;
   int padded_ = 0;
   int width_ = 0;

@@ -232,49 +232,20 @@ void renumber(Model& model, const std::vector<int>& order) {
   Particles& p = model.particles;
   const int n = p.size();
   check_permutation(order, n);
-  for (Vector3Array* a : {&p.reference_position, &p.displacement, &p.velocity, &p.rotation,
-                          &p.angular_velocity, &p.force, &p.torque}) {
-    const Vector3Array old = *a;
-    for (int k = 0; k < n; ++k) a->row(k) = old.row(order[k]);
-  }
-  for (Eigen::ArrayXd* a : {&p.mass, &p.moment_of_inertia, &p.radius, &p.volume}) {
-    const Eigen::ArrayXd old = *a;
-    for (int k = 0; k < n; ++k) (*a)(k) = old(order[k]);
-  }
-  for (Eigen::ArrayXi* a : {&p.ply, &p.group}) {
-    const Eigen::ArrayXi old = *a;
-    for (int k = 0; k < n; ++k) (*a)(k) = old(order[k]);
-  }
+  p.permute(order);
 
   Bonds& b = model.bonds;
-  const int m = b.size();
   std::vector<int> new_index(n);
   for (int k = 0; k < n; ++k) new_index[order[k]] = k;
-  for (int e = 0; e < m; ++e) {
-    if (!(b.first(e) >= 0 && b.first(e) < n && b.second(e) >= 0 && b.second(e) < n))
-      throw Error(
-          fmt::format("bond {} refers to a missing particle ({}, {})", e, b.first(e), b.second(e)));
-    b.first(e) = new_index[b.first(e)];
-    b.second(e) = new_index[b.second(e)];
-  }
-  std::vector<int> bond_order(m);
+  b.rename_particles(new_index);
+  std::vector<int> bond_order(b.size());
   std::iota(bond_order.begin(), bond_order.end(), 0);
   auto low_high = [&](int e) {
     return std::pair(std::min(b.first(e), b.second(e)), std::max(b.first(e), b.second(e)));
   };
   std::stable_sort(bond_order.begin(), bond_order.end(),
                    [&](int x, int y) { return low_high(x) < low_high(y); });
-  for (Eigen::ArrayXi* a : {&b.first, &b.second, &b.family}) {
-    const Eigen::ArrayXi old = *a;
-    for (int e = 0; e < m; ++e) (*a)(e) = old(bond_order[e]);
-  }
-  for (Eigen::ArrayXd* a : {&b.normal_stiffness, &b.shear_stiffness, &b.bending_stiffness,
-                            &b.twisting_stiffness, &b.length, &b.lever_first, &b.lever_second}) {
-    const Eigen::ArrayXd old = *a;
-    for (int e = 0; e < m; ++e) (*a)(e) = old(bond_order[e]);
-  }
-  const Vector3Array old_normal = b.normal;
-  for (int e = 0; e < m; ++e) b.normal.row(e) = old_normal.row(bond_order[e]);
+  b.permute(bond_order);
 }
 
 }  // namespace plydem

@@ -3,32 +3,185 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstddef>
 #include <set>
+#include <string>
 #include <utility>
 
 #include "core/error.hpp"
 
 namespace plydem {
 
-void Particles::resize(int n) {
-  for (Vector3Array* a : {&reference_position, &displacement, &velocity, &rotation,
-                          &angular_velocity, &force, &torque}) {
-    a->setZero(n, 3);
+namespace {
+
+// The generic row operations, once for every field of a struct (Particles or Bonds).
+
+template <class S>
+void resize_fields(S& s, int n) {
+  S::for_each_field([&](FieldInfo, auto member) {
+    auto& a = s.*member;
+    a.setZero(n, a.cols());
+  });
+}
+
+template <class S>
+void append_fields(S& to, const S& from, int particle_offset) {
+  S::for_each_field([&](FieldInfo info, auto member) {
+    auto& a = to.*member;
+    const auto& b = from.*member;
+    FieldType<decltype(member)> joined(a.rows() + b.rows(), a.cols());
+    joined.topRows(a.rows()) = a;
+    joined.bottomRows(b.rows()) = b;
+    if constexpr (field_kind<FieldType<decltype(member)>>() == FieldKind::kInt) {
+      if (info.particle_index) joined.bottomRows(b.rows()) += particle_offset;
+    }
+    a = std::move(joined);
+  });
+}
+
+template <class S>
+S select_fields(const S& s, const std::vector<int>& rows, const char* what) {
+  const int n = s.size();
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    if (!(rows[r] >= 0 && rows[r] < n))
+      throw Error(
+          fmt::format("selecting {}: entry {} names {} {} of {}", what, r, what, rows[r], n));
   }
-  for (Eigen::ArrayXd* a : {&mass, &moment_of_inertia, &radius, &volume}) a->setZero(n);
-  ply.setZero(n);
-  group.setZero(n);
+  S out;
+  S::for_each_field([&](FieldInfo, auto member) {
+    const auto& a = s.*member;
+    auto& b = out.*member;
+    b.resize(static_cast<Eigen::Index>(rows.size()), a.cols());
+    for (std::size_t r = 0; r < rows.size(); ++r)
+      b.row(static_cast<Eigen::Index>(r)) = a.row(rows[r]);
+  });
+  return out;
+}
+
+void require_permutation(const std::vector<int>& order, int count, const char* what) {
+  if (static_cast<int>(order.size()) != count)
+    throw Error(
+        fmt::format("a permutation of {} lists {}, there are {}", what, order.size(), count));
+  std::vector<char> seen(static_cast<std::size_t>(count), 0);
+  for (int k = 0; k < count; ++k) {
+    const int i = order[k];
+    if (!(i >= 0 && i < count) || seen[i])
+      throw Error(fmt::format("a permutation of {} is not one: entry {} names {} {}", what, k, i,
+                              (i >= 0 && i < count) ? "twice" : "that does not exist"));
+    seen[i] = 1;
+  }
+}
+
+template <class S>
+void check_field_sizes(const S& s, const char* what) {
+  const int n = s.size();
+  S::for_each_field([&](FieldInfo info, auto member) {
+    const auto rows = (s.*member).rows();
+    if (rows != n)
+      throw Error(fmt::format("{} arrays differ in size: '{}' has {} rows, there are {} {}", what,
+                              info.name, rows, n, what));
+  });
+}
+
+}  // namespace
+
+void Particles::resize(int n) {
+  resize_fields(*this, n);
+}
+
+void Particles::append(const Particles& other) {
+  append_fields(*this, other, 0);
+}
+
+Particles Particles::select(const std::vector<int>& rows) const {
+  return select_fields(*this, rows, "particle");
+}
+
+void Particles::permute(const std::vector<int>& order) {
+  require_permutation(order, size(), "particles");
+  *this = select(order);
+}
+
+void Particles::check_sizes() const {
+  check_field_sizes(*this, "particle");
 }
 
 void Bonds::resize(int n) {
-  first.setZero(n);
-  second.setZero(n);
-  family.setZero(n);
-  for (Eigen::ArrayXd* a : {&normal_stiffness, &shear_stiffness, &bending_stiffness,
-                            &twisting_stiffness, &length, &lever_first, &lever_second}) {
-    a->setZero(n);
+  resize_fields(*this, n);
+}
+
+void Bonds::append(const Bonds& other, int particle_offset) {
+  append_fields(*this, other, particle_offset);
+}
+
+Bonds Bonds::select(const std::vector<int>& rows) const {
+  return select_fields(*this, rows, "bond");
+}
+
+void Bonds::permute(const std::vector<int>& order) {
+  require_permutation(order, size(), "bonds");
+  *this = select(order);
+}
+
+void Bonds::rename_particles(const std::vector<int>& new_index) {
+  const int n = static_cast<int>(new_index.size());
+  for_each_field([&](FieldInfo info, auto member) {
+    if constexpr (field_kind<FieldType<decltype(member)>>() == FieldKind::kInt) {
+      if (!info.particle_index) return;
+      auto& a = this->*member;
+      for (Eigen::Index b = 0; b < a.size(); ++b) {
+        if (!(a(b) >= 0 && a(b) < n && new_index[a(b)] >= 0))
+          throw Error(
+              fmt::format("bond {} refers to a missing particle ({}, {})", b, first(b), second(b)));
+      }
+      for (Eigen::Index b = 0; b < a.size(); ++b) a(b) = new_index[a(b)];
+    }
+  });
+}
+
+void Bonds::assign_rows(const std::vector<int>& rows, const Bonds& from) {
+  require(static_cast<int>(rows.size()) == from.size(),
+          fmt::format("assigning {} bonds to {} rows", from.size(), rows.size()));
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    require(rows[r] >= 0 && rows[r] < size(),
+            fmt::format("assigning bonds: row {} is not one of the {} bonds", rows[r], size()));
+  for_each_field([&](FieldInfo, auto member) {
+    auto& a = this->*member;
+    const auto& b = from.*member;
+    for (std::size_t r = 0; r < rows.size(); ++r)
+      a.row(rows[r]) = b.row(static_cast<Eigen::Index>(r));
+  });
+}
+
+void Bonds::check_sizes() const {
+  check_field_sizes(*this, "bond");
+}
+
+Model select_particles(const Model& model, const std::vector<int>& kept) {
+  const int n = model.particles.size();
+  std::vector<int> new_index(static_cast<std::size_t>(n), -1);
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const int i = kept[k];
+    if (!(i >= 0 && i < n) || new_index[i] >= 0)
+      throw Error(fmt::format("selecting particles: entry {} names particle {} {}", k, i,
+                              (i >= 0 && i < n) ? "twice" : "that does not exist"));
+    new_index[i] = static_cast<int>(k);
   }
-  normal.setZero(n, 3);
+  const Bonds& b = model.bonds;
+  std::vector<int> kept_bonds;
+  for (int c = 0; c < b.size(); ++c) {
+    const int i = b.first(c), j = b.second(c);
+    if (!(i >= 0 && i < n && j >= 0 && j < n))
+      throw Error(fmt::format("bond {} refers to a missing particle ({}, {})", c, i, j));
+    if (new_index[i] >= 0 && new_index[j] >= 0) kept_bonds.push_back(c);
+  }
+  Model out;
+  out.thickness = model.thickness;
+  out.description = model.description;
+  out.particles = model.particles.select(kept);
+  out.bonds = b.select(kept_bonds);
+  out.bonds.rename_particles(new_index);
+  return out;
 }
 
 void set_bond_geometry(const Particles& particles, Bonds& bonds, int b) {
@@ -53,13 +206,7 @@ void Model::check_consistency() const {
   const int n = particles.size();
   const auto& p = particles;
   require(n > 0, "the model has no particles");
-  for (const Vector3Array* a : {&p.reference_position, &p.displacement, &p.velocity, &p.rotation,
-                                &p.angular_velocity, &p.force, &p.torque}) {
-    require(a->rows() == n, "particle arrays differ in size");
-  }
-  require(p.moment_of_inertia.size() == n && p.radius.size() == n && p.volume.size() == n &&
-              p.ply.size() == n && p.group.size() == n,
-          "particle arrays differ in size");
+  p.check_sizes();
   for (int i = 0; i < n; ++i) {
     if (!(p.reference_position.row(i).isFinite().all()))
       throw Error(fmt::format("particle {} has a non-finite position", i));
@@ -72,11 +219,7 @@ void Model::check_consistency() const {
   }
   const Bonds& b = bonds;
   const int m = b.size();
-  require(b.second.size() == m && b.normal_stiffness.size() == m && b.shear_stiffness.size() == m &&
-              b.bending_stiffness.size() == m && b.twisting_stiffness.size() == m &&
-              b.normal.rows() == m && b.length.size() == m && b.lever_first.size() == m &&
-              b.lever_second.size() == m && b.family.size() == m,
-          "bond arrays differ in size");
+  b.check_sizes();
   std::set<std::pair<int, int>> seen;
   for (int k = 0; k < m; ++k) {
     const int i = b.first(k), j = b.second(k);
@@ -98,6 +241,10 @@ void Model::check_consistency() const {
       throw Error(fmt::format("bond {} has a non-positive length", k));
     if (!(std::abs(b.normal.row(k).matrix().norm() - 1.0) < 1e-12))
       throw Error(fmt::format("bond {} has a normal that is not a unit vector", k));
+    if (!(b.kind(k) == static_cast<int>(BondKind::kInPly) ||
+          b.kind(k) == static_cast<int>(BondKind::kInterface)))
+      throw Error(fmt::format("bond {} has kind {}, which is no BondKind (0 in-ply, 1 interface)",
+                              k, b.kind(k)));
   }
 }
 

@@ -3,9 +3,16 @@
 /// The model as the engine sees it: particles and bonds as plain arrays (structure of arrays).
 /// Strategies fill these; the bond kernel, the integrator and the solvers read and advance them.
 /// SI units throughout (m, kg, N, s, rad).
+///
+/// Each struct declares its fields once, in `for_each_field`; every operation on whole rows
+/// (resize, append, select, permute, the size check) runs over that list, so a new field is one
+/// member plus its line in the list, and the build fails (a static_assert below each struct) if
+/// the line is forgotten.
 
 #include <Eigen/Dense>
+#include <cstddef>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace plydem {
@@ -14,6 +21,47 @@ using Vector3Array = Eigen::Array<double, Eigen::Dynamic, 3>;
 
 /// Boundary groups of particles. A tension test moves kLeftGrip and kRightGrip.
 enum class BoundaryGroup : int { kFree = 0, kLeftGrip = 1, kRightGrip = 2 };
+
+/// What a bond joins. In-ply bonds come from a ply's packing, interface bonds join two adjacent
+/// plies (strategies/laminate.hpp). Stored as int in Bonds::kind.
+enum class BondKind : int { kInPly = 0, kInterface = 1 };
+
+/// What one row of a field holds.
+enum class FieldKind { kVector3, kScalar, kInt };
+
+/// A field's entry in the declaration: the name outputs and messages use, and whether its values
+/// are particle indices (bond ends), which append() shifts and rename_particles() renames.
+struct FieldInfo {
+  const char* name = "";
+  bool particle_index = false;
+};
+
+namespace detail {
+template <class T>
+struct FieldOf;
+template <class T, class Owner>
+struct FieldOf<T Owner::*> {
+  using type = T;
+};
+}  // namespace detail
+
+/// The array type of a field, from its pointer to member.
+template <class MemberPointer>
+using FieldType = typename detail::FieldOf<MemberPointer>::type;
+
+/// The kind of a field's array type.
+template <class Array>
+constexpr FieldKind field_kind() {
+  if constexpr (std::is_same_v<Array, Vector3Array>) {
+    return FieldKind::kVector3;
+  } else if constexpr (std::is_same_v<Array, Eigen::ArrayXd>) {
+    return FieldKind::kScalar;
+  } else {
+    static_assert(std::is_same_v<Array, Eigen::ArrayXi>,
+                  "a field is a Vector3Array, ArrayXd or ArrayXi");
+    return FieldKind::kInt;
+  }
+}
 
 /// Particles, one row per particle. The state is small-displacement: `displacement` and `rotation`
 /// are measured from the reference configuration, so the current position is
@@ -33,9 +81,38 @@ struct Particles {
   Eigen::ArrayXi ply;                ///< ply index, 0 = bottom
   Eigen::ArrayXi group;              ///< BoundaryGroup as int
 
+  /// The declaration of the fields above: f(FieldInfo, &Particles::field) for each, in order.
+  template <class F>
+  static constexpr void for_each_field(F&& f) {
+    f(FieldInfo{"reference_position"}, &Particles::reference_position);
+    f(FieldInfo{"displacement"}, &Particles::displacement);
+    f(FieldInfo{"velocity"}, &Particles::velocity);
+    f(FieldInfo{"rotation"}, &Particles::rotation);
+    f(FieldInfo{"angular_velocity"}, &Particles::angular_velocity);
+    f(FieldInfo{"force"}, &Particles::force);
+    f(FieldInfo{"torque"}, &Particles::torque);
+    f(FieldInfo{"mass"}, &Particles::mass);
+    f(FieldInfo{"moment_of_inertia"}, &Particles::moment_of_inertia);
+    f(FieldInfo{"radius"}, &Particles::radius);
+    f(FieldInfo{"volume"}, &Particles::volume);
+    f(FieldInfo{"ply"}, &Particles::ply);
+    f(FieldInfo{"group"}, &Particles::group);
+  }
+
   int size() const { return static_cast<int>(mass.size()); }
-  /// Allocates n particles with every array zeroed.
+  /// Allocates n particles with every field zeroed.
   void resize(int n);
+  /// Appends `other`'s particles after this one's (particle i of other becomes size() + i).
+  void append(const Particles& other);
+  /// The particles rows[0], rows[1], ... (in that order, repeats allowed). Throws plydem::Error
+  /// for an index out of range.
+  Particles select(const std::vector<int>& rows) const;
+  /// Renumbers in place: new particle k is old particle order[k]. Throws plydem::Error unless
+  /// `order` is a permutation of 0 .. size()-1. Bonds are not touched (see renumber() in
+  /// contacts/particle_ordering.hpp for a whole model).
+  void permute(const std::vector<int>& order);
+  /// Throws plydem::Error naming the first field whose row count is not size().
+  void check_sizes() const;
   Vector3Array position() const { return reference_position + displacement; }
 };
 
@@ -54,11 +131,65 @@ struct Bonds {
   Eigen::ArrayXd length;              ///< reference centre distance [m]
   Eigen::ArrayXd lever_first;         ///< [m]
   Eigen::ArrayXd lever_second;        ///< [m]
-  Eigen::ArrayXi family;              ///< bond family of the packing (for reports and plots)
+  /// For an in-ply bond, its bond family in the packing (for reports and plots); for an
+  /// interface bond, the interface: k for the one above ply k (both >= 0).
+  Eigen::ArrayXi family;
+  Eigen::ArrayXi kind;  ///< BondKind as int
+
+  /// The declaration of the fields above: f(FieldInfo, &Bonds::field) for each, in order.
+  template <class F>
+  static constexpr void for_each_field(F&& f) {
+    f(FieldInfo{"first", true}, &Bonds::first);
+    f(FieldInfo{"second", true}, &Bonds::second);
+    f(FieldInfo{"normal_stiffness"}, &Bonds::normal_stiffness);
+    f(FieldInfo{"shear_stiffness"}, &Bonds::shear_stiffness);
+    f(FieldInfo{"bending_stiffness"}, &Bonds::bending_stiffness);
+    f(FieldInfo{"twisting_stiffness"}, &Bonds::twisting_stiffness);
+    f(FieldInfo{"normal"}, &Bonds::normal);
+    f(FieldInfo{"length"}, &Bonds::length);
+    f(FieldInfo{"lever_first"}, &Bonds::lever_first);
+    f(FieldInfo{"lever_second"}, &Bonds::lever_second);
+    f(FieldInfo{"family"}, &Bonds::family);
+    f(FieldInfo{"kind"}, &Bonds::kind);
+  }
 
   int size() const { return static_cast<int>(first.size()); }
+  /// Allocates n bonds with every field zeroed (in-ply, family 0).
   void resize(int n);
+  /// Appends `other`'s bonds after this one's, their ends shifted by `particle_offset` (the
+  /// number of particles before other's first one, as Particles::append places them).
+  void append(const Bonds& other, int particle_offset = 0);
+  /// The bonds rows[0], rows[1], ... (in that order), their ends unchanged. Throws plydem::Error
+  /// for an index out of range.
+  Bonds select(const std::vector<int>& rows) const;
+  /// Reorders in place: new bond k is old bond order[k]. Throws plydem::Error unless `order` is a
+  /// permutation of 0 .. size()-1.
+  void permute(const std::vector<int>& order);
+  /// Renames the ends: particle i becomes new_index[i]. Throws plydem::Error if an end is outside
+  /// new_index or is renamed to a negative index (a removed particle).
+  void rename_particles(const std::vector<int>& new_index);
+  /// Writes the bonds of `from` back to rows rows[0], rows[1], ... (the inverse of select()):
+  /// every field of row rows[k] becomes that of bond k of `from`.
+  void assign_rows(const std::vector<int>& rows, const Bonds& from);
+  /// Throws plydem::Error naming the first field whose row count is not size().
+  void check_sizes() const;
+
+  bool is_interface(int b) const { return kind(b) == static_cast<int>(BondKind::kInterface); }
 };
+
+namespace detail {
+template <class S>
+constexpr std::size_t declared_field_bytes() {
+  std::size_t bytes = 0;
+  S::for_each_field([&](FieldInfo, auto member) { bytes += sizeof(FieldType<decltype(member)>); });
+  return bytes;
+}
+}  // namespace detail
+
+static_assert(sizeof(Particles) == detail::declared_field_bytes<Particles>(),
+              "a member of Particles is missing from Particles::for_each_field");
+static_assert(sizeof(Bonds) == detail::declared_field_bytes<Bonds>(),
+              "a member of Bonds is missing from Bonds::for_each_field");
 
 /// A built specimen: particles, bonds, and what a report needs to know about them.
 struct Model {
@@ -69,9 +200,15 @@ struct Model {
 
   /// Throws plydem::Error naming the first inconsistency: mismatched array sizes, a bond to a
   /// missing or the same particle, a duplicate bond, a non-finite or negative stiffness, a
-  /// non-positive mass, radius or length, a normal that is not a unit vector.
+  /// non-positive mass, radius or length, a normal that is not a unit vector, a kind that is no
+  /// BondKind.
   void check_consistency() const;
 };
+
+/// The particles kept[0], kept[1], ... of `model` (in that order, each at most once) and the bonds
+/// whose two ends are both kept (in their order), their ends renumbered; thickness and description
+/// are copied. Throws plydem::Error for an index out of range or listed twice.
+Model select_particles(const Model& model, const std::vector<int>& kept);
 
 /// Fills normal, length and levers of bond b from the particles' reference positions and radii:
 /// the contact point sits midway in the gap between the two surfaces.

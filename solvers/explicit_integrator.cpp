@@ -615,6 +615,21 @@ void ExplicitIntegrator::gather(std::span<const int> particles, Particles& into,
   }
 }
 
+void ExplicitIntegrator::drop_bond(int bond) {
+  Bonds& bonds = model_.bonds;
+  require(bond >= 0 && bond < bonds.size(),
+          fmt::format("cannot drop bond {}: the model has {} bonds", bond, bonds.size()));
+  if (fused_) {
+    const std::vector<int>& position = fused_->state.position;
+    fused_->state.bonds.drop_bond(position[bonds.first(bond)], position[bonds.second(bond)]);
+  }
+  std::vector<int> kept;
+  kept.reserve(static_cast<std::size_t>(bonds.size()));
+  for (int b = 0; b < bonds.size(); ++b)
+    if (b != bond) kept.push_back(b);
+  bonds = bonds.select(kept);
+}
+
 std::size_t ExplicitIntegrator::kernel_bytes() const {
   return fused_ ? fused_->state.bytes() : 0;
 }

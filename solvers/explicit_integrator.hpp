@@ -185,6 +185,13 @@ class ExplicitIntegrator {
   void gather(std::span<const int> particles, Particles& into,
               StateAt at = StateAt::kCurrent) const;
 
+  /// Removes bond `bond` (an index into the model's bonds) for the rest of the run: the model's
+  /// bonds lose it (the later ones move down by one; the reference kernel reads them), and the
+  /// fused kernel empties its slots without rebuilding its table (GatherBonds::drop_bond). The
+  /// time step is kept: a bond fewer leaves the model no stiffer. Throws plydem::Error for a bond
+  /// that does not exist.
+  void drop_bond(int bond);
+
   /// Bytes the fused kernel holds for the run (its state, the gather lists, the bond types, the
   /// renumbering), or 0 for the reference kernel. The model's own arrays are not counted.
   std::size_t kernel_bytes() const;

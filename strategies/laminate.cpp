@@ -141,7 +141,7 @@ Model build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
 
   // The plies, each built and calibrated at its own angle, stacked along z.
   std::vector<Model> ply_models;
-  int particles = 0, bonds = 0;
+  int particles = 0;
   for (int k = 0; k < plies; ++k) {
     CouponSpec coupon = spec.coupon;
     coupon.ply_angle = spec.ply_angles[k];
@@ -149,7 +149,6 @@ Model build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
     ply.particles.reference_position.col(2) += k * t;
     ply.particles.ply.setConstant(k);
     particles += ply.particles.size();
-    bonds += ply.bonds.size();
     ply_models.push_back(std::move(ply));
   }
 
@@ -208,38 +207,10 @@ Model build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
                   format_layup(spec.ply_angles), plies, ply_models.front().description, particles,
                   interface.normal, interface.shear);
   Particles& p = model.particles;
-  p.resize(particles);
   Bonds& b = model.bonds;
-  b.resize(bonds + static_cast<int>(interface_bonds.size()));
-  int bond = 0;
   for (int k = 0; k < plies; ++k) {
-    const Particles& q = ply_models[k].particles;
-    const Eigen::Index n = q.size(), at = offset[k];
-    p.reference_position.middleRows(at, n) = q.reference_position;
-    p.displacement.middleRows(at, n) = q.displacement;
-    p.velocity.middleRows(at, n) = q.velocity;
-    p.rotation.middleRows(at, n) = q.rotation;
-    p.angular_velocity.middleRows(at, n) = q.angular_velocity;
-    p.mass.segment(at, n) = q.mass;
-    p.moment_of_inertia.segment(at, n) = q.moment_of_inertia;
-    p.radius.segment(at, n) = q.radius;
-    p.volume.segment(at, n) = q.volume;
-    p.ply.segment(at, n) = q.ply;
-    p.group.segment(at, n) = q.group;
-    const Bonds& c = ply_models[k].bonds;
-    const Eigen::Index m = c.size();
-    b.first.segment(bond, m) = c.first + offset[k];
-    b.second.segment(bond, m) = c.second + offset[k];
-    b.normal_stiffness.segment(bond, m) = c.normal_stiffness;
-    b.shear_stiffness.segment(bond, m) = c.shear_stiffness;
-    b.bending_stiffness.segment(bond, m) = c.bending_stiffness;
-    b.twisting_stiffness.segment(bond, m) = c.twisting_stiffness;
-    b.normal.middleRows(bond, m) = c.normal;
-    b.length.segment(bond, m) = c.length;
-    b.lever_first.segment(bond, m) = c.lever_first;
-    b.lever_second.segment(bond, m) = c.lever_second;
-    b.family.segment(bond, m) = c.family;
-    bond += static_cast<int>(m);
+    p.append(ply_models[k].particles);
+    b.append(ply_models[k].bonds, offset[k]);
   }
   // Each particle's interface area (its volume over the ply thickness), split over its bonds.
   std::vector<int> count(particles, 0);
@@ -247,19 +218,23 @@ Model build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
     ++count[ib.first];
     ++count[ib.second];
   }
-  for (const InterfaceBond& ib : interface_bonds) {
+  Bonds between;
+  between.resize(static_cast<int>(interface_bonds.size()));
+  for (int c = 0; c < between.size(); ++c) {
+    const InterfaceBond& ib = interface_bonds[c];
     const double area = 0.5 * (p.volume(ib.first) / t / count[ib.first] +
                                p.volume(ib.second) / t / count[ib.second]);
-    b.first(bond) = ib.first;
-    b.second(bond) = ib.second;
-    b.normal_stiffness(bond) = interface.normal * area;
-    b.shear_stiffness(bond) = interface.shear * area;
-    b.bending_stiffness(bond) = 0;
-    b.twisting_stiffness(bond) = 0;
-    b.family(bond) = -1 - ib.interface;
-    set_bond_geometry(p, b, bond);
-    ++bond;
+    between.first(c) = ib.first;
+    between.second(c) = ib.second;
+    between.normal_stiffness(c) = interface.normal * area;
+    between.shear_stiffness(c) = interface.shear * area;
+    between.bending_stiffness(c) = 0;
+    between.twisting_stiffness(c) = 0;
+    between.family(c) = ib.interface;
+    between.kind(c) = static_cast<int>(BondKind::kInterface);
+    set_bond_geometry(p, between, c);
   }
+  b.append(between);
   model.check_consistency();
   return model;
 }

@@ -65,9 +65,9 @@ struct LaminateSpec {
 std::vector<Ply> laminate_plies(const LaminateSpec& spec);
 
 /// Builds every ply with `strategy` (ply k shifted by k * ply thickness along z, particles'
-/// `ply` = k), then the interface bonds (family = -1 - k for the interface above ply k). The
-/// model's thickness is the laminate's. Throws plydem::Error for an empty layup, a bad interface
-/// stiffness, or an interface with no bonds.
+/// `ply` = k), then the interface bonds (kind BondKind::kInterface, family = k for the interface
+/// above ply k). The model's thickness is the laminate's. Throws plydem::Error for an empty layup,
+/// a bad interface stiffness, or an interface with no bonds.
 Model build_laminate(const Strategy& strategy, const LaminateSpec& spec);
 
 }  // namespace plydem

@@ -57,13 +57,14 @@ TEST_CASE("a laminate stacks its plies and bonds every facing surface particle a
   double volume = 0;
   for (int b = 0; b < model.bonds.size(); ++b) {
     const int i = model.bonds.first(b), j = model.bonds.second(b);
-    if (model.bonds.family(b) < 0) {
+    if (model.bonds.is_interface(b)) {
       CHECK(std::abs(p.ply(i) - p.ply(j)) == 1);  // only adjacent plies
-      CHECK(model.bonds.family(b) == -1 - std::min(p.ply(i), p.ply(j)));
+      CHECK(model.bonds.family(b) == std::min(p.ply(i), p.ply(j)));
       CHECK(model.bonds.bending_stiffness(b) == 0);
       ++interface_bonds[i];
       ++interface_bonds[j];
     } else {
+      CHECK(model.bonds.kind(b) == static_cast<int>(BondKind::kInPly));
       CHECK(p.ply(i) == p.ply(j));
     }
   }

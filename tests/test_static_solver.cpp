@@ -390,20 +390,9 @@ TEST_CASE("a particle without bonds is refused: it floats") {
   Model m = chain(3, {1e6, 1e6}, 1e5, 1e-4, 1e-4);
   // Particle 3 far from the chain, with no bond.
   Particles& p = m.particles;
-  const int n = p.size() + 1;
-  for (Vector3Array* a : {&p.reference_position, &p.displacement, &p.velocity, &p.rotation,
-                          &p.angular_velocity, &p.force, &p.torque}) {
-    a->conservativeResize(n, 3);
-    a->row(n - 1).setZero();
-  }
-  for (Eigen::ArrayXd* a : {&p.mass, &p.moment_of_inertia, &p.radius, &p.volume}) {
-    a->conservativeResize(n);
-    (*a)(n - 1) = (*a)(0);
-  }
-  for (Eigen::ArrayXi* a : {&p.ply, &p.group}) {
-    a->conservativeResize(n);
-    (*a)(n - 1) = 0;
-  }
+  p.append(p.select({0}));  // particle 1's mass, radius and volume
+  const int n = p.size();
+  p.group(n - 1) = static_cast<int>(BoundaryGroup::kFree);
   p.reference_position.row(n - 1) << 1e-3, 2e-3, 0;
   DofConstraints c(n);
   c.fix_particle(0);

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -17,6 +18,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "experiments/output/vtk_output.hpp"
+#include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
 
 using namespace plydem;
@@ -255,6 +257,7 @@ TEST_CASE("particles and bonds .vtu files hold the model's arrays, readable by V
         0.5 * (bonds.normal_stiffness(b) * dn * dn + bonds.shear_stiffness(b) * ds.squaredNorm());
     CHECK(written.cell_data.at("strain_energy")[b] == doctest::Approx(e).epsilon(1e-9));
     CHECK(written.cell_data.at("family")[b] == bonds.family(b));
+    CHECK(written.cell_data.at("kind")[b] == static_cast<int>(BondKind::kInPly));
     CHECK(written.cell_data.at("normal_stiffness")[b] == bonds.normal_stiffness(b));
     CHECK(written.connectivity[2 * b] == bonds.first(b));
     CHECK(written.connectivity[2 * b + 1] == bonds.second(b));
@@ -295,6 +298,38 @@ TEST_CASE("particles and bonds .vtu files hold the model's arrays, readable by V
   const std::string wrong = fmt::format("{} {} {} {} {} 1 > /dev/null", python, script,
                                         particles_file.string(), p.size(), p.size() + 1);
   CHECK(std::system(wrong.c_str()) != 0);
+}
+
+TEST_CASE("a laminate's bonds file marks interface bonds by kind, family -1 - k as before") {
+  LaminateSpec spec;
+  spec.coupon.material = load_material("eglass-my750");
+  spec.coupon.length = 0.4e-3;
+  spec.coupon.width = 0.3e-3;
+  spec.ply_angles = parse_layup("[0/90/0]");
+  const Model model = build_laminate(*default_registry().create("hex2d"), spec);
+  const Bonds& bonds = model.bonds;
+  TemporaryDirectory dir;
+  const fs::path bonds_file = dir.path / "laminate_bonds.vtu";
+  write_bonds_vtu(model, bonds_file.string(), VtkOptions{});
+  const VtuContent written = check_vtu_structure(read_file(bonds_file));
+  REQUIRE(written.cells == bonds.size());
+  int interface_bonds[2] = {0, 0};
+  for (int b = 0; b < bonds.size(); ++b) {
+    const int lower =
+        std::min(model.particles.ply(bonds.first(b)), model.particles.ply(bonds.second(b)));
+    if (bonds.is_interface(b)) {
+      CHECK(bonds.family(b) == lower);
+      CHECK(written.cell_data.at("kind")[b] == 1);
+      CHECK(written.cell_data.at("family")[b] == -1 - lower);
+      ++interface_bonds[lower];
+    } else {
+      CHECK(written.cell_data.at("kind")[b] == 0);
+      CHECK(written.cell_data.at("family")[b] == bonds.family(b));
+      CHECK(bonds.family(b) >= 0);
+    }
+  }
+  CHECK(interface_bonds[0] > 0);
+  CHECK(interface_bonds[1] > 0);
 }
 
 TEST_CASE("a .pvd series lists each state's particles and bonds files") {

@@ -79,7 +79,7 @@ Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, cons
   int drawn = 0;
   double k_min = INFINITY, k_max = -INFINITY;
   for (int k = 0; k < b.size(); ++k) {
-    if (b.family(k) < 0) continue;  // interface bonds stand along z
+    if (b.is_interface(k)) continue;  // interface bonds stand along z
     const int i = b.first(k), j = b.second(k);
     if (std::max(p.reference_position(i, 0), p.reference_position(j, 0)) > x_end) continue;
     const double shift = p.ply(i) * ply_shift;
@@ -99,7 +99,7 @@ Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, cons
     // (strategies/boundary_cells.hpp) are stiffer than the bulk and would wash out the families.
     std::vector<double> kn;
     for (int k = 0; k < b.size(); ++k) {
-      if (b.family(k) >= 0) kn.push_back(b.normal_stiffness(k) * 1e-6);
+      if (!b.is_interface(k)) kn.push_back(b.normal_stiffness(k) * 1e-6);
     }
     std::sort(kn.begin(), kn.end());
     const auto at = [&](double q) {

@@ -30,9 +30,9 @@ struct Figure {
 
 /// The bonds of `model` in plan view (x-y, mm), each a line coloured by its normal stiffness
 /// [MN/m]. Ply k of a laminate is drawn shifted along y by k times 1.15 widths, so that every ply
-/// shows, labelled by `ply_labels` (default "ply k"); interface bonds (family < 0) are left out.
-/// Only the part x_min <= x <= x_min + `window` is drawn (0 = all): the full coupon is a thin
-/// strip in which single bonds cannot be seen. Colours span the 1st to 97th percentile of k_n
+/// shows, labelled by `ply_labels` (default "ply k"); interface bonds (BondKind::kInterface) are
+/// left out. Only the part x_min <= x <= x_min + `window` is drawn (0 = all): the full coupon is a
+/// thin strip in which single bonds cannot be seen. Colours span the 1st to 97th percentile of k_n
 /// (the stiffer completed edge bonds saturate).
 Figure plot_bonds_by_stiffness(const Model& model, const std::filesystem::path& out_dir,
                                const std::string& stem, const std::string& title, double window = 0,

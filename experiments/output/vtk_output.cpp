@@ -159,7 +159,13 @@ void write_bonds_vtu(const Model& model, const std::string& path, const VtkOptio
   vtu.doubles("displacement", p.displacement);
   vtu.close("PointData");
   vtu.open("CellData Scalars=\"force\"");
-  vtu.ints("Int32", "family", bonds.family);
+  // "family" keeps the meaning it had before bonds had a kind: an interface bond's family is
+  // written as -1 - k for the interface above ply k (Bonds::family holds k).
+  Eigen::ArrayXi family = bonds.family;
+  for (int b = 0; b < m; ++b)
+    if (bonds.is_interface(b)) family(b) = -1 - bonds.family(b);
+  vtu.ints("Int32", "family", family);
+  vtu.ints("Int32", "kind", bonds.kind);
   vtu.doubles("normal_stiffness", bonds.normal_stiffness);
   vtu.doubles("shear_stiffness", bonds.shear_stiffness);
   vtu.doubles("bending_stiffness", bonds.bending_stiffness);

@@ -7,11 +7,13 @@
 ///   - particles: one VTK_VERTEX cell per particle; point data displacement, velocity, rotation
 ///     (3 components each), radius, ply, group (BoundaryGroup), and optionally force and torque
 ///     (what Particles::force and ::torque hold: the last evaluation of the kernel or a solver);
-///   - bonds: one VTK_LINE cell per bond between its two particles; cell data family,
-///     normal_stiffness, shear_stiffness, bending_stiffness, twisting_stiffness, and the bond's
-///     response at the current state through the one bond law (core/parallel_bond.hpp):
-///     force (|F| [N]), normal_force (n.F, positive in tension [N]) and strain_energy [J]; the
-///     point data repeats the particles' displacement so that ParaView's "Warp By Vector" works.
+///   - bonds: one VTK_LINE cell per bond between its two particles; cell data family (the
+///     packing's bond family of an in-ply bond, -1 - k for an interface bond above ply k), kind
+///     (BondKind: 0 in-ply, 1 interface), normal_stiffness, shear_stiffness, bending_stiffness,
+///     twisting_stiffness, and the bond's response at the current state through the one bond law
+///     (core/parallel_bond.hpp): force (|F| [N]), normal_force (n.F, positive in tension [N]) and
+///     strain_energy [J]; the point data repeats the particles' displacement so that ParaView's
+///     "Warp By Vector" works.
 ///
 /// Points sit at the reference positions plus `displacement_scale` times the displacements
 /// (0 = reference configuration, 1 = current; elastic micro-strains are invisible at 1).

@@ -54,13 +54,6 @@ struct DisjointSets {
   void join(int a, int b) { parent[find(a)] = find(b); }
 };
 
-template <typename Array>
-Array keep_rows(const Array& a, const std::vector<int>& rows) {
-  Array out(static_cast<Eigen::Index>(rows.size()), a.cols());
-  for (size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = a.row(rows[r]);
-  return out;
-}
-
 // Points of one ply, bucketed for the moving-least-squares interpolation.
 class PlyInterpolator {
  public:
@@ -263,7 +256,7 @@ HoleRemoval remove_hole(Model& model, double centre_x, double centre_y, double d
   DisjointSets sets(n);
   std::vector<int> in_ply_bonds(static_cast<size_t>(n), 0);
   for (int c : kept_bonds) {
-    if (b.family(c) < 0) continue;
+    if (b.is_interface(c)) continue;
     const int i = new_index[b.first(c)], j = new_index[b.second(c)];
     sets.join(i, j);
     ++in_ply_bonds[i];
@@ -294,40 +287,9 @@ HoleRemoval remove_hole(Model& model, double centre_x, double centre_y, double d
     }
   }
 
-  Model out;
-  out.thickness = model.thickness;
+  Model out = select_particles(model, kept);
   out.description = fmt::format("{}, {} mm hole cut ({} particles removed)", model.description,
                                 diameter * 1e3, removal.particles);
-  Particles& q = out.particles;
-  q.reference_position = keep_rows(p.reference_position, kept);
-  q.displacement = keep_rows(p.displacement, kept);
-  q.velocity = keep_rows(p.velocity, kept);
-  q.rotation = keep_rows(p.rotation, kept);
-  q.angular_velocity = keep_rows(p.angular_velocity, kept);
-  q.force = keep_rows(p.force, kept);
-  q.torque = keep_rows(p.torque, kept);
-  q.mass = keep_rows(p.mass, kept);
-  q.moment_of_inertia = keep_rows(p.moment_of_inertia, kept);
-  q.radius = keep_rows(p.radius, kept);
-  q.volume = keep_rows(p.volume, kept);
-  q.ply = keep_rows(p.ply, kept);
-  q.group = keep_rows(p.group, kept);
-  Bonds& c = out.bonds;
-  c.first = keep_rows(b.first, kept_bonds);
-  c.second = keep_rows(b.second, kept_bonds);
-  for (int k = 0; k < c.size(); ++k) {
-    c.first(k) = new_index[c.first(k)];
-    c.second(k) = new_index[c.second(k)];
-  }
-  c.normal_stiffness = keep_rows(b.normal_stiffness, kept_bonds);
-  c.shear_stiffness = keep_rows(b.shear_stiffness, kept_bonds);
-  c.bending_stiffness = keep_rows(b.bending_stiffness, kept_bonds);
-  c.twisting_stiffness = keep_rows(b.twisting_stiffness, kept_bonds);
-  c.normal = keep_rows(b.normal, kept_bonds);
-  c.length = keep_rows(b.length, kept_bonds);
-  c.lever_first = keep_rows(b.lever_first, kept_bonds);
-  c.lever_second = keep_rows(b.lever_second, kept_bonds);
-  c.family = keep_rows(b.family, kept_bonds);
   out.check_consistency();
   model = std::move(out);
   return removal;
@@ -367,26 +329,13 @@ HolePlateDem solve_hole_plate_dem(const HolePlateSettings& settings) {
   Particles& p = dem.model.particles;
   Bonds& bonds = dem.model.bonds;
   if (settings.complete_boundary_cells) {
-    // Only the in-ply bonds (family >= 0) take part; interface bonds keep their stiffness.
+    // Only the in-ply bonds take part; interface bonds keep their stiffness.
     std::vector<int> in_ply;
     for (int c = 0; c < bonds.size(); ++c)
-      if (bonds.family(c) >= 0) in_ply.push_back(c);
-    Bonds layer;
-    layer.first = keep_rows(bonds.first, in_ply);
-    layer.second = keep_rows(bonds.second, in_ply);
-    layer.family = keep_rows(bonds.family, in_ply);
-    layer.normal_stiffness = keep_rows(bonds.normal_stiffness, in_ply);
-    layer.shear_stiffness = keep_rows(bonds.shear_stiffness, in_ply);
-    layer.bending_stiffness = keep_rows(bonds.bending_stiffness, in_ply);
-    layer.twisting_stiffness = keep_rows(bonds.twisting_stiffness, in_ply);
+      if (!bonds.is_interface(c)) in_ply.push_back(c);
+    Bonds layer = bonds.select(in_ply);
     complete_boundary_cells(p, layer, family_count(settings.strategy), 2);
-    for (size_t k = 0; k < in_ply.size(); ++k) {
-      const auto c = static_cast<Eigen::Index>(k);
-      bonds.normal_stiffness(in_ply[k]) = layer.normal_stiffness(c);
-      bonds.shear_stiffness(in_ply[k]) = layer.shear_stiffness(c);
-      bonds.bending_stiffness(in_ply[k]) = layer.bending_stiffness(c);
-      bonds.twisting_stiffness(in_ply[k]) = layer.twisting_stiffness(c);
-    }
+    bonds.assign_rows(in_ply, layer);
   }
 
   // Grips: per ply, the particles within grip_length of that ply's outermost centres (the plies'
@@ -787,7 +736,7 @@ ExperimentOutput HolePlateExperiment::run(const ExperimentConfig& config,
   const InPlaneConstants clt = laminate_constants(hole_plate_specimen(s).plies);
   const double clt_stiffness = clt.Ex * s.width * s.thickness / s.length;  // no hole
   int in_ply_bonds = 0;
-  for (int c = 0; c < dem.model.bonds.size(); ++c) in_ply_bonds += dem.model.bonds.family(c) >= 0;
+  for (int c = 0; c < dem.model.bonds.size(); ++c) in_ply_bonds += !dem.model.bonds.is_interface(c);
   const int interface_bonds = dem.model.bonds.size() - in_ply_bonds;
   auto max_abs = [&](const std::vector<Eigen::ArrayXXd>& fields, double shift) {
     double m = 0;

@@ -89,10 +89,10 @@ struct HoleRemoval {
 
 /// Removes every particle whose centre lies inside the circle of `diameter` centred at
 /// (centre_x, centre_y) in the x-y plane (|x - c| < D/2), together with its bonds; the rest keep
-/// their order. Then checks that every ply is still one piece through its own bonds (family >= 0;
-/// interface bonds do not count): throws plydem::Error, leaving the model unchanged, if the hole
-/// removes no particle or every particle, leaves a loose particle (no in-ply bond), or cuts a ply
-/// apart (a hole as wide as the plate).
+/// their order. Then checks that every ply is still one piece through its own bonds (in-ply
+/// bonds; interface bonds do not count): throws plydem::Error, leaving the model unchanged, if the
+/// hole removes no particle or every particle, leaves a loose particle (no in-ply bond), or cuts a
+/// ply apart (a hole as wide as the plate).
 HoleRemoval remove_hole(Model& model, double centre_x, double centre_y, double diameter);
 
 /// The solved particle model of the plate.
