@@ -181,7 +181,7 @@ Model stretched_coupon() {
   spec.ply_angle = 30 * std::numbers::pi / 180;
   spec.length = 0.6e-3;
   spec.width = 0.3e-3;
-  Model model = default_registry().create("hex2d")->build(spec);
+  Model model = default_registry().create("hex2d")->build(spec).model;
   Particles& p = model.particles;
   for (int i = 0; i < p.size(); ++i) {
     const double x = p.reference_position(i, 0), y = p.reference_position(i, 1);
