@@ -2,7 +2,11 @@
 // each distinct ply once and builds each coupon once, and reuses the solved models.
 #include <doctest/doctest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 
 #include "core/elasticity.hpp"
@@ -10,6 +14,7 @@
 #include "core/material.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "experiments/runner/hole_plate.hpp"
+#include "experiments/runner/run_experiment.hpp"
 #include "strategies/hex2d.hpp"
 #include "strategies/lattice.hpp"
 #include "strategies/registry.hpp"
@@ -181,4 +186,36 @@ TEST_CASE("the hole plate asks the strategy how to complete the cut edges") {
   CHECK_THROWS_WITH_AS(s.validate(), doctest::Contains("its own way"), Error);
   s.strategy = "square";
   CHECK_NOTHROW(s.validate());
+}
+
+TEST_CASE("a Table 2 row calibrates each ply once and builds each coupon once") {
+  // The static test, the fixed-cycle probe, the staged explicit run and the VTU file of one
+  // strategy: before, 8 calibrations and 7 builds; now the explicit runs and the files reuse the
+  // static test's coupon and solved model.
+  namespace fs = std::filesystem;
+  const fs::path dir =
+      fs::temp_directory_path() / ("plydem_table2_row_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "row.toml") << R"(experiment = "lamina-strategies"
+material = "eglass-my750"
+strategies = ["hex2d"]
+[coupon]
+length_mm = 1.5
+width_mm = 0.5
+[explicit]
+quick_cycles = 50
+ramp_cycles = 200
+load_stages = 1
+tolerance = 1e-4
+)";
+  RunOptions options;
+  options.config = dir / "row.toml";
+  options.out_dir = dir / "out";
+  options.quick = true;
+  const BuildStatistics before = build_statistics();
+  run_experiment(options);
+  const BuildStatistics work = since(before);
+  CHECK(work.calibrations == 2);
+  CHECK(work.builds == 2);
+  fs::remove_all(dir);
 }
