@@ -144,7 +144,8 @@ class TensionTest {
   /// coupon along x also gives the specimen stiffness).
   TensionResult run() const;
   /// The same with `builder`'s strategy and calibrations (a builder shared by several tests
-  /// calibrates each ply once over all of them).
+  /// calibrates each ply once over all of them); the settings' strategy options are not applied
+  /// to it (set them on the strategy before making the builder).
   TensionResult run(SpecimenBuilder& builder) const;
   /// One coupon pulled along x by `strategy`: the ply at `ply_angle`, or for a laminate every ply
   /// turned by `ply_angle` - coupon.ply_angle.
