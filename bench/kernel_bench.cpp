@@ -50,14 +50,14 @@ Model square_layer(long particles) {
   const double side = std::sqrt(static_cast<double>(particles) * std::sqrt(3.0) / 2.0) * d;
   spec.length = side;
   spec.width = side;
-  return Hex2dStrategy().build(spec);
+  return Hex2dStrategy().build(spec).model;
 }
 
 // The paper's Table 2 coupon: 0 deg E-glass/MY750, 10 x 0.83 mm, 200 x 19 particles.
 Model table2_coupon() {
   CouponSpec spec;
   spec.material = load_material("eglass-my750");
-  return Hex2dStrategy().build(spec);
+  return Hex2dStrategy().build(spec).model;
 }
 
 // Grips within two diameters of either end move apart along x (free laterally), reaching a

@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
 
     auto start = Clock::now();
-    const plydem::Model built = plydem::default_registry().create("hex2d")->build(spec);
+    const plydem::Model built = plydem::default_registry().create("hex2d")->build(spec).model;
     const double build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     const plydem::DofConstraints constraints = tension_constraints(built);
     plydem::StaticSettings settings;

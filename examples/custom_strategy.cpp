@@ -29,7 +29,8 @@
 
 namespace {
 
-// Hex2dStrategy::build() asks calibrate() for the springs, so overriding calibrate() is enough.
+// Hex2dStrategy builds each coupon with calibrate_coupon(), which asks calibrate() for the springs
+// by default, so overriding calibrate() is enough.
 class AffineHex2dStrategy : public plydem::Hex2dStrategy {
  public:
   std::string description() const override {

@@ -11,6 +11,7 @@
 #include "packings/hcp_lamina.hpp"
 #include "strategies/calibration.hpp"
 #include "strategies/registry.hpp"
+#include "strategies/specimen.hpp"
 
 namespace plydem {
 namespace {
@@ -21,13 +22,6 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 // k_s (eqs. 1-2): k_b = k_n R^2/4, k_t = k_s R^2/2, as for hex2d. In the three-particle cell the
 // particles of different layers turn differently under a uniform strain, so these enter the
 // relaxed stiffness and the calibration.
-FamilyStiffnessRule parallel_bond_rule(double bond_radius) {
-  return [bond_radius](double normal, double shear) {
-    const double r2 = bond_radius * bond_radius;
-    return FamilyStiffness{normal, shear, normal * r2 / 4.0, shear * r2 / 2.0};
-  };
-}
-
 // Eq. (24): the in-plane bonds along the fibre (family 0) form group 0, every other bond group 1.
 constexpr int kGroupCount = 2;
 int group_of(int family) {
@@ -203,59 +197,38 @@ void HcpStrategyBase::set_option(const std::string& name, double value) {
   layer_spacing_radii_ = value;
 }
 
-Model HcpStrategyBase::build(const CouponSpec& coupon) const {
-  coupon.validate();
-  const Calibration cal = calibrate(coupon.material, coupon.ply_angle, coupon.thickness);
+Model HcpStrategyBase::assemble(const CouponSpec& coupon, const Calibration& cal) const {
   const double radius = 0.5 * coupon.particle_diameter;
   const HcpLamina lamina(coupon.particle_diameter, layer_spacing_radii_ * radius,
                          cal.lattice_angle);
   const HcpLamina::Sites sites = lamina.fill_rectangle(coupon.length, coupon.width);
-  const int n = static_cast<int>(sites.position.rows());
-  require(n >= 2, "the coupon holds fewer than two particles");
-
-  Model model;
-  model.thickness = coupon.thickness;
-  model.description = fmt::format(
+  const HcpLamina::Graph graph = lamina.bond_graph(sites);
+  SpecimenLayout layout;
+  layout.position = sites.position;
+  layout.pairs = graph.pairs;
+  layout.family = graph.family;
+  layout.radius = radius;
+  // The three layers stand for the ply thickness: each particle for a third of its cell's column.
+  layout.particle_volume = lamina.cell_area() * coupon.thickness / HcpLamina::kLayerCount;
+  layout.density = coupon.material.density;
+  layout.thickness = coupon.thickness;
+  layout.description = fmt::format(
       "three-layer HCP lamina (c = {:.4g} radii), ply angle {:.4g} deg, "
       "{} particles",
-      layer_spacing_radii_, coupon.ply_angle / kDegree, n);
-  Particles& p = model.particles;
-  p.resize(n);
-  p.reference_position = sites.position;
-  // The three layers stand for the ply thickness: each particle for a third of its cell's column.
-  const double volume = lamina.cell_area() * coupon.thickness / HcpLamina::kLayerCount;
-  const double mass = coupon.material.density * volume;
-  p.radius.setConstant(radius);
-  p.volume.setConstant(volume);
-  p.mass.setConstant(mass);
-  p.moment_of_inertia.setConstant(0.4 * mass * radius * radius);  // solid sphere
-
-  const HcpLamina::Graph graph = lamina.bond_graph(sites);
-  Bonds& bonds = model.bonds;
-  bonds.resize(static_cast<int>(graph.pairs.size()));
-  const FamilyStiffnessRule rule = parallel_bond_rule(radius);
-  // Completion classes: each in-plane family (2 bonds per particle in the bulk) and the inclined
-  // bonds between each pair of adjacent layers (3 per particle in the bulk of the lamina).
-  std::vector<int> bond_class(graph.pairs.size());
-  for (int b = 0; b < bonds.size(); ++b) {
-    const auto [i, j] = graph.pairs[b];
-    const int f = graph.family[b];
-    bonds.first(b) = i;
-    bonds.second(b) = j;
-    bonds.family(b) = f;
-    const FamilyStiffness& k = cal.families[f].stiffness;
-    const FamilyStiffness full = rule(k.normal, k.shear);
-    bonds.normal_stiffness(b) = full.normal;
-    bonds.shear_stiffness(b) = full.shear;
-    bonds.bending_stiffness(b) = full.bending;
-    bonds.twisting_stiffness(b) = full.twisting;
-    set_bond_geometry(p, bonds, b);
-    bond_class[b] = HcpLamina::is_inclined(f)
-                        ? HcpLamina::kInPlaneFamilyCount + std::min(sites.layer(i), sites.layer(j))
-                        : f;
-  }
+      layer_spacing_radii_, coupon.ply_angle / kDegree, sites.position.rows());
+  Model model = assemble_specimen(layout, &cal.families);
   if (coupon.complete_boundary_cells) {
-    complete_boundary_cells_by_class(p, bonds, bond_class, {2, 2, 2, 3, 3});
+    // Completion classes: each in-plane family (2 bonds per particle in the bulk) and the inclined
+    // bonds between each pair of adjacent layers (3 per particle in the bulk of the lamina).
+    std::vector<int> bond_class(graph.pairs.size());
+    for (std::size_t b = 0; b < graph.pairs.size(); ++b) {
+      const auto [i, j] = graph.pairs[b];
+      const int f = graph.family[b];
+      bond_class[b] = HcpLamina::is_inclined(f) ? HcpLamina::kInPlaneFamilyCount +
+                                                      std::min(sites.layer(i), sites.layer(j))
+                                                : f;
+    }
+    complete_boundary_cells_by_class(model.particles, model.bonds, bond_class, {2, 2, 2, 3, 3});
   }
   model.check_consistency();
   return model;

@@ -67,7 +67,7 @@ class HcpStrategyBase : public Strategy {
   HcpStrategyBase();
   std::vector<StrategyOption> options() const override;
   void set_option(const std::string& name, double value) override;
-  Model build(const CouponSpec& coupon) const override;
+  Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
 
   /// Layer spacing c in particle radii (default the close-packed 2 sqrt(2/3)).
   double layer_spacing_radii() const { return layer_spacing_radii_; }

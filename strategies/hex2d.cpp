@@ -11,20 +11,10 @@
 #include "strategies/boundary_cells.hpp"
 #include "strategies/calibration.hpp"
 #include "strategies/registry.hpp"
+#include "strategies/specimen.hpp"
 
 namespace plydem {
 namespace {
-
-// Bending and twisting of a circular parallel bond of radius R carrying contact stiffnesses
-// k_n = A kbar_n, k_s = A kbar_s (eqs. 1-2): k_b = kbar_n I = k_n R^2/4, k_t = kbar_s J = k_s
-// R^2/2. They resist relative rotation of neighbours (non-uniform fields); a uniform strain of a
-// one-particle lattice never loads them, so they do not enter the calibration.
-FamilyStiffnessRule parallel_bond_rule(double bond_radius) {
-  return [bond_radius](double normal, double shear) {
-    const double r2 = bond_radius * bond_radius;
-    return FamilyStiffness{normal, shear, normal * r2 / 4.0, shear * r2 / 2.0};
-  };
-}
 
 constexpr double kDegree = std::numbers::pi / 180.0;
 
@@ -124,51 +114,29 @@ Calibration Hex2dStrategy::calibrate(const Material& material, double ply_angle,
   return cal;
 }
 
-Model Hex2dStrategy::build(const CouponSpec& coupon) const {
-  coupon.validate();
-  const Calibration cal = calibrate(coupon.material, coupon.ply_angle, coupon.thickness);
+Model Hex2dStrategy::assemble(const CouponSpec& coupon, const Calibration& cal) const {
   const HexagonalLayer layer(coupon.particle_diameter, cal.lattice_angle);
-  const PositionArray position = layer.fill_rectangle(coupon.length, coupon.width);
-  const int n = static_cast<int>(position.rows());
-  require(n >= 2, "the coupon holds fewer than two particles");
-
-  Model model;
-  model.thickness = coupon.thickness;
-  model.description =
-      fmt::format("hex2d layer, ply angle {:.4g} deg, {} particles", coupon.ply_angle / kDegree, n);
-  Particles& p = model.particles;
-  p.resize(n);
-  p.reference_position = position;
-  const double radius = 0.5 * coupon.particle_diameter;
-  const double volume = layer.cell_area() * coupon.thickness;
-  const double mass = coupon.material.density * volume;
-  p.radius.setConstant(radius);
-  p.volume.setConstant(volume);
-  p.mass.setConstant(mass);
-  p.moment_of_inertia.setConstant(0.4 * mass * radius * radius);  // solid sphere
-
-  const HexagonalLayer::Graph graph = layer.bond_graph(position);
-  Bonds& bonds = model.bonds;
-  bonds.resize(static_cast<int>(graph.pairs.size()));
-  // The springs scale with the bond radius only through bending and twisting.
-  const FamilyStiffnessRule rule = parallel_bond_rule(radius);
-  for (int b = 0; b < bonds.size(); ++b) {
-    bonds.first(b) = graph.pairs[b].first;
-    bonds.second(b) = graph.pairs[b].second;
-    bonds.family(b) = graph.family[b];
-    const FamilyStiffness& k = cal.families[graph.family[b]].stiffness;
-    const FamilyStiffness full = rule(k.normal, k.shear);
-    bonds.normal_stiffness(b) = full.normal;
-    bonds.shear_stiffness(b) = full.shear;
-    bonds.bending_stiffness(b) = full.bending;
-    bonds.twisting_stiffness(b) = full.twisting;
-    set_bond_geometry(p, bonds, b);
-  }
+  SpecimenLayout layout;
+  layout.position = layer.fill_rectangle(coupon.length, coupon.width);
+  const HexagonalLayer::Graph graph = layer.bond_graph(layout.position);
+  layout.pairs = graph.pairs;
+  layout.family = graph.family;
+  layout.radius = 0.5 * coupon.particle_diameter;
+  layout.particle_volume = layer.cell_area() * coupon.thickness;
+  layout.density = coupon.material.density;
+  layout.thickness = coupon.thickness;
+  layout.description = fmt::format("hex2d layer, ply angle {:.4g} deg, {} particles",
+                                   coupon.ply_angle / kDegree, layout.position.rows());
+  Model model = assemble_specimen(layout, &cal.families);
   if (coupon.complete_boundary_cells) {
-    complete_boundary_cells(p, bonds, HexagonalLayer::kFamilyCount, 2);
+    complete_boundary_cells(model.particles, model.bonds, HexagonalLayer::kFamilyCount, 2);
   }
   model.check_consistency();
   return model;
+}
+
+BoundaryCompletion Hex2dStrategy::boundary_completion() const {
+  return {HexagonalLayer::kFamilyCount, 2};
 }
 
 std::string Hex2dPaperStrategy::description() const {

@@ -28,7 +28,8 @@ class Hex2dStrategy : public Strategy {
   std::string description() const override;
   Calibration calibrate(const Material& material, double ply_angle,
                         double thickness) const override;
-  Model build(const CouponSpec& coupon) const override;
+  Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
+  BoundaryCompletion boundary_completion() const override;
 };
 
 /// `hex2d-paper`: the paper's Hex2D as printed: the lattice fixed with family 1 along x

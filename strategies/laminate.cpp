@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 
@@ -130,7 +131,13 @@ std::vector<Ply> laminate_plies(const LaminateSpec& spec) {
   return plies;
 }
 
-Model build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
+Specimen build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
+  SpecimenBuilder builder(strategy);
+  return build_laminate(builder, spec);
+}
+
+Specimen build_laminate(SpecimenBuilder& builder, const LaminateSpec& spec) {
+  const auto start = std::chrono::steady_clock::now();
   require(!spec.ply_angles.empty(), "a laminate needs at least one ply");
   spec.coupon.validate();
   spec.interface.validate();
@@ -139,13 +146,17 @@ Model build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
   const int plies = static_cast<int>(spec.ply_angles.size());
   const InterfaceStiffness interface = spec.interface.resolved(spec.coupon.material, t);
 
-  // The plies, each built and calibrated at its own angle, stacked along z.
+  // The plies, each built with its own angle's calibration (once per distinct ply), stacked
+  // along z.
+  Specimen specimen;
   std::vector<Model> ply_models;
   int particles = 0;
   for (int k = 0; k < plies; ++k) {
     CouponSpec coupon = spec.coupon;
     coupon.ply_angle = spec.ply_angles[k];
-    Model ply = strategy.build(coupon);
+    Specimen built = builder.build(coupon);
+    specimen.ply_calibrations.push_back(std::move(built.ply_calibrations.front()));
+    Model ply = std::move(built.model);
     ply.particles.reference_position.col(2) += k * t;
     ply.particles.ply.setConstant(k);
     particles += ply.particles.size();
@@ -200,7 +211,7 @@ Model build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
             fmt::format("no interface bonds between plies {} and {}", k + 1, k + 2));
   }
 
-  Model model;
+  Model& model = specimen.model;
   model.thickness = plies * t;
   model.description =
       fmt::format("{} laminate of {} plies ({}), {} particles, interface {:.3g} / {:.3g} N/m^3",
@@ -236,7 +247,9 @@ Model build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
   }
   b.append(between);
   model.check_consistency();
-  return model;
+  specimen.build_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return specimen;
 }
 
 }  // namespace plydem

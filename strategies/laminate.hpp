@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "strategies/specimen.hpp"
 #include "strategies/strategy.hpp"
 
 namespace plydem {
@@ -67,7 +68,11 @@ std::vector<Ply> laminate_plies(const LaminateSpec& spec);
 /// Builds every ply with `strategy` (ply k shifted by k * ply thickness along z, particles'
 /// `ply` = k), then the interface bonds (kind BondKind::kInterface, family = k for the interface
 /// above ply k). The model's thickness is the laminate's. Throws plydem::Error for an empty layup,
-/// a bad interface stiffness, or an interface with no bonds.
-Model build_laminate(const Strategy& strategy, const LaminateSpec& spec);
+/// a bad interface stiffness, or an interface with no bonds. The specimen's ply_calibrations are
+/// the plies', bottom to top; `builder` calibrates each distinct ply once (and remembers it for
+/// later builds).
+Specimen build_laminate(SpecimenBuilder& builder, const LaminateSpec& spec);
+/// The same with a builder of its own.
+Specimen build_laminate(const Strategy& strategy, const LaminateSpec& spec);
 
 }  // namespace plydem

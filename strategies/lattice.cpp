@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "core/parallel_bond.hpp"
 #include "strategies/registry.hpp"
+#include "strategies/specimen.hpp"
 
 namespace plydem {
 namespace {
@@ -237,25 +238,19 @@ std::vector<FamilyCalibration> orientation_families(const Bonds& bonds, const Bo
 }
 
 // A model of the packing's spheres with bond geometry (stiffnesses zero); masses and volumes share
-// the box volume equally.
+// the box volume equally. Bonds across a periodic face get the branch to the neighbour's image.
 Model packing_model(const RandomPacking& packing, const PackingBonds& bonds, double density) {
-  Model model;
-  const int n = static_cast<int>(packing.position.rows());
-  Particles& p = model.particles;
-  p.resize(n);
-  p.reference_position = packing.position;
-  const double radius = 0.5 * packing.diameter;
-  const double volume = packing.box.prod() / n;
-  p.radius.setConstant(radius);
-  p.volume.setConstant(volume);
-  p.mass.setConstant(density * volume);
-  p.moment_of_inertia.setConstant(0.4 * density * volume * radius * radius);
+  SpecimenLayout layout;
+  layout.position = packing.position;
+  layout.radius = 0.5 * packing.diameter;
+  layout.particle_volume = packing.box.prod() / static_cast<double>(packing.position.rows());
+  layout.density = density;
+  layout.pairs = bonds.pairs;
+  layout.thickness = packing.box(2);
+  Model model = assemble_specimen(layout);
   Bonds& b = model.bonds;
-  b.resize(bonds.size());
   for (int k = 0; k < bonds.size(); ++k) {
     const auto [i, j] = bonds.pairs[k];
-    b.first(k) = i;
-    b.second(k) = j;
     const Eigen::Vector3d branch =
         (packing.position.row(j) - packing.position.row(i)).transpose().matrix() +
         packing.box.cwiseProduct(bonds.image.row(k).transpose().cast<double>().matrix());
@@ -264,9 +259,16 @@ Model packing_model(const RandomPacking& packing, const PackingBonds& bonds, dou
     b.length(k) = length;
     b.lever_first(k) = b.lever_second(k) = 0.5 * length;  // equal radii: mid-gap = mid-branch
   }
-  model.thickness = packing.box(2);
   return model;
 }
+
+// What a lattice coupon's bonds get beyond the report: the calibrated orientation law, the volume
+// per bond of the coupon's own periodic packing, and which coupon it was calibrated for.
+struct LatticeLaw : CalibrationDetail {
+  OrientationModuli moduli;
+  double volume_per_bond = 0;
+  std::string coupon_key;
+};
 
 // Fraction of the ball of radius `reach` around x inside `box`, and inside the slab 0 <= z <=
 // box.z (the calibration sample's domain), from a fixed grid of points in the unit ball.
@@ -862,7 +864,13 @@ Calibration LatticeStrategy::calibrate(const Material& material, double ply_angl
   return cal.calibration;
 }
 
-Model LatticeStrategy::build(const CouponSpec& coupon) const {
+std::string LatticeStrategy::calibration_key(const CouponSpec& coupon) const {
+  // The coupon's own packing is the calibration sample: its size and sphere diameter belong to it.
+  return fmt::format("{}|size {:a} x {:a}|diameter {:a}", Strategy::calibration_key(coupon),
+                     coupon.length, coupon.width, coupon.particle_diameter);
+}
+
+Calibration LatticeStrategy::calibrate_coupon(const CouponSpec& coupon) const {
   coupon.validate();
   // The coupon's packing is made periodic in x and y, so that it is its own calibration sample:
   // a random network's stiffness differs from one realization to the next by several percent at
@@ -886,6 +894,22 @@ Model LatticeStrategy::build(const CouponSpec& coupon) const {
                             coupon.particle_diameter, &size);
   }
   check_reached(cal, coupon.material, coupon.ply_angle);
+  auto law = std::make_shared<LatticeLaw>();
+  law->moduli = cal.moduli;
+  law->volume_per_bond = cal.volume_per_bond;
+  law->coupon_key = calibration_key(coupon);
+  cal.calibration.detail = std::move(law);
+  return cal.calibration;
+}
+
+Model LatticeStrategy::assemble(const CouponSpec& coupon, const Calibration& calibration) const {
+  const auto* law = dynamic_cast<const LatticeLaw*>(calibration.detail.get());
+  require(law != nullptr,
+          "lattice: a coupon is built with the calibration of its own packing "
+          "(LatticeStrategy::calibrate_coupon), which this calibration is not");
+  require(law->coupon_key == calibration_key(coupon),
+          "lattice: the calibration given was computed for another coupon (size, particle "
+          "diameter, ply or options differ); the coupon's own packing is its calibration sample");
   RandomPackingSpec spec = coupon_packing(coupon);
   RandomPacking packing = random_sequential_addition(spec);
   PackingBonds all_bonds = bonds_within(packing, contact_radius_);
@@ -901,7 +925,7 @@ Model LatticeStrategy::build(const CouponSpec& coupon) const {
 
   Model model = packing_model(packing, bonds, coupon.material.density);
   // The sample's volume per bond: the periodic packing, before its periodic bonds were cut.
-  const double volume_per_bond = cal.volume_per_bond;
+  const double volume_per_bond = law->volume_per_bond;
   const Eigen::Vector3d fibre = fibre_at(coupon.ply_angle);
   const BondLawGeometry g = law_geometry(model.bonds, fibre, volume_per_bond);
   std::optional<Eigen::ArrayXd> scale;
@@ -920,7 +944,7 @@ Model LatticeStrategy::build(const CouponSpec& coupon) const {
       (*scale)(b) = 0.5 * (s(model.bonds.first(b)) + s(model.bonds.second(b)));
     }
   }
-  const auto [min_normal, min_shear] = apply_law(cal.moduli, g, 0.5 * coupon.particle_diameter,
+  const auto [min_normal, min_shear] = apply_law(law->moduli, g, 0.5 * coupon.particle_diameter,
                                                  scale ? &*scale : nullptr, model.bonds);
   // apply_law set slightly negative k_n to zero; a clearly negative one is refused.
   const double mean_normal = model.bonds.normal_stiffness.mean();

@@ -132,11 +132,17 @@ class LatticeStrategy : public Strategy {
   std::vector<StrategyOption> options() const override;
   void set_option(const std::string& name, double value) override;
   std::string description() const override;
-  /// The calibration for particles of the `particle_diameter` option (the Strategy interface does
-  /// not pass the coupon's diameter; build() calibrates with the coupon's own).
+  /// The calibration for particles of the `particle_diameter` option on the periodic calibration
+  /// sample (`plydem calibrate`; a coupon is calibrated on its own packing: calibrate_coupon).
   Calibration calibrate(const Material& material, double ply_angle,
                         double thickness) const override;
-  Model build(const CouponSpec& coupon) const override;
+  /// The coupon's own packing, periodic in x and y, corrected from the start the small periodic
+  /// sample gives: the calibration its bonds get.
+  Calibration calibrate_coupon(const CouponSpec& coupon) const override;
+  /// Adds the coupon's size and particle diameter: they make its packing.
+  std::string calibration_key(const CouponSpec& coupon) const override;
+  /// Throws plydem::Error unless `calibration` is calibrate_coupon() of this coupon's packing.
+  Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
 
   /// The calibration for spheres of `diameter` in a ply of `thickness`.
   /// With `sample_size` (x and y [m]), the sample is a packing of that size (build() passes the

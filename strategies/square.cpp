@@ -15,6 +15,7 @@
 #include "strategies/boundary_cells.hpp"
 #include "strategies/calibration.hpp"
 #include "strategies/registry.hpp"
+#include "strategies/specimen.hpp"
 
 namespace plydem {
 namespace {
@@ -25,13 +26,6 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 // hex2d, also on the diagonals) carrying contact stiffnesses k_n = A kbar_n, k_s = A kbar_s
 // (eqs. 1-2): k_b = k_n R^2/4, k_t = k_s R^2/2. A uniform strain of a one-particle lattice never
 // loads them, so they do not enter the calibration.
-FamilyStiffnessRule parallel_bond_rule(double bond_radius) {
-  return [bond_radius](double normal, double shear) {
-    const double r2 = bond_radius * bond_radius;
-    return FamilyStiffness{normal, shear, normal * r2 / 4.0, shear * r2 / 2.0};
-  };
-}
-
 const char* family_name(int family) {
   static const char* names[SquareLayer::kFamilyCount] = {"axial x", "axial y", "diagonal +45",
                                                          "diagonal 135"};
@@ -158,45 +152,21 @@ void fill_stiffness(Calibration& cal, double thickness) {
 Model build_square_coupon(const CouponSpec& coupon, const Calibration& cal,
                           const std::string& name) {
   const SquareLayer layer(coupon.particle_diameter, cal.lattice_angle);
-  const PositionArray position = layer.fill_rectangle(coupon.length, coupon.width);
-  const int n = static_cast<int>(position.rows());
-  require(n >= 2, "the coupon holds fewer than two particles");
-
-  Model model;
-  model.thickness = coupon.thickness;
-  model.description =
+  SpecimenLayout layout;
+  layout.position = layer.fill_rectangle(coupon.length, coupon.width);
+  const SquareLayer::Graph graph = layer.bond_graph(layout.position);
+  layout.pairs = graph.pairs;
+  layout.family = graph.family;
+  layout.radius = 0.5 * coupon.particle_diameter;
+  layout.particle_volume = layer.cell_area() * coupon.thickness;
+  layout.density = coupon.material.density;
+  layout.thickness = coupon.thickness;
+  layout.description =
       fmt::format("{} layer, ply angle {:.4g} deg, lattice at {:.4g} deg, {} particles", name,
-                  coupon.ply_angle / kDegree, cal.lattice_angle / kDegree, n);
-  Particles& p = model.particles;
-  p.resize(n);
-  p.reference_position = position;
-  const double radius = 0.5 * coupon.particle_diameter;
-  const double volume = layer.cell_area() * coupon.thickness;
-  const double mass = coupon.material.density * volume;
-  p.radius.setConstant(radius);
-  p.volume.setConstant(volume);
-  p.mass.setConstant(mass);
-  p.moment_of_inertia.setConstant(0.4 * mass * radius * radius);  // solid sphere
-
-  const SquareLayer::Graph graph = layer.bond_graph(position);
-  Bonds& bonds = model.bonds;
-  bonds.resize(static_cast<int>(graph.pairs.size()));
-  // The springs scale with the bond radius only through bending and twisting.
-  const FamilyStiffnessRule rule = parallel_bond_rule(radius);
-  for (int b = 0; b < bonds.size(); ++b) {
-    bonds.first(b) = graph.pairs[b].first;
-    bonds.second(b) = graph.pairs[b].second;
-    bonds.family(b) = graph.family[b];
-    const FamilyStiffness& k = cal.families[graph.family[b]].stiffness;
-    const FamilyStiffness full = rule(k.normal, k.shear);
-    bonds.normal_stiffness(b) = full.normal;
-    bonds.shear_stiffness(b) = full.shear;
-    bonds.bending_stiffness(b) = full.bending;
-    bonds.twisting_stiffness(b) = full.twisting;
-    set_bond_geometry(p, bonds, b);
-  }
+                  coupon.ply_angle / kDegree, cal.lattice_angle / kDegree, layout.position.rows());
+  Model model = assemble_specimen(layout, &cal.families);
   if (coupon.complete_boundary_cells) {
-    complete_boundary_cells(p, bonds, SquareLayer::kFamilyCount, 2);
+    complete_boundary_cells(model.particles, model.bonds, SquareLayer::kFamilyCount, 2);
   }
   model.check_consistency();
   return model;
@@ -369,10 +339,12 @@ Calibration SquareStrategy::calibrate(const Material& material, double ply_angle
                   reasons, describe_unreachable(nearest, q)));
 }
 
-Model SquareStrategy::build(const CouponSpec& coupon) const {
-  coupon.validate();
-  return build_square_coupon(coupon, calibrate(coupon.material, coupon.ply_angle, coupon.thickness),
-                             "square");
+Model SquareStrategy::assemble(const CouponSpec& coupon, const Calibration& calibration) const {
+  return build_square_coupon(coupon, calibration, "square");
+}
+
+BoundaryCompletion SquareStrategy::boundary_completion() const {
+  return {SquareLayer::kFamilyCount, 2};
 }
 
 std::string SquarePaperStrategy::description() const {
@@ -402,10 +374,13 @@ Calibration SquarePaperStrategy::calibrate(const Material& material, double ply_
   return cal;
 }
 
-Model SquarePaperStrategy::build(const CouponSpec& coupon) const {
-  coupon.validate();
-  return build_square_coupon(coupon, calibrate(coupon.material, coupon.ply_angle, coupon.thickness),
-                             "square-paper");
+Model SquarePaperStrategy::assemble(const CouponSpec& coupon,
+                                    const Calibration& calibration) const {
+  return build_square_coupon(coupon, calibration, "square-paper");
+}
+
+BoundaryCompletion SquarePaperStrategy::boundary_completion() const {
+  return {SquareLayer::kFamilyCount, 2};
 }
 
 void register_square(Registry& registry) {

@@ -74,7 +74,8 @@ class SquareStrategy : public Strategy {
   /// and the nearest stiffness a square layer with non-negative springs reaches.
   Calibration calibrate(const Material& material, double ply_angle,
                         double thickness) const override;
-  Model build(const CouponSpec& coupon) const override;
+  Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
+  BoundaryCompletion boundary_completion() const override;
 
  private:
   double fibre_offset_deg_ = -1;
@@ -88,7 +89,8 @@ class SquarePaperStrategy : public Strategy {
   /// is negative (the engine cannot simulate it).
   Calibration calibrate(const Material& material, double ply_angle,
                         double thickness) const override;
-  Model build(const CouponSpec& coupon) const override;
+  Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
+  BoundaryCompletion boundary_completion() const override;
 };
 
 }  // namespace plydem

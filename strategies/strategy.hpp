@@ -5,6 +5,7 @@
 /// arrays (core/model.hpp).
 
 #include <Eigen/Dense>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,12 @@ struct FamilyCalibration {
   FamilyStiffness stiffness;
 };
 
+/// What a strategy needs to build with a calibration beyond its families (lattice: the orientation
+/// law and the sample's volume per bond). Strategies derive from it; reports do not read it.
+struct CalibrationDetail {
+  virtual ~CalibrationDetail() = default;
+};
+
 /// The outcome of calibrating a ply: what each bond family gets, and the stiffness the model will
 /// have as the engine simulates it beside the target.
 struct Calibration {
@@ -48,7 +55,37 @@ struct Calibration {
   Eigen::Matrix3d affine = Eigen::Matrix3d::Zero();   ///< eq. (5) lattice sum [Pa]
   Eigen::Matrix3d relaxed = Eigen::Matrix3d::Zero();  ///< with spins and shifts relaxed [Pa]
   double relaxed_error = 0;                           ///< |relaxed - target|_F / |target|_F
+  std::shared_ptr<const CalibrationDetail> detail;    ///< strategy-specific, may be empty
 };
+
+/// What a build made: the model and the calibration each of its plies got (one for a single ply,
+/// bottom to top for a laminate), for reports.
+struct Specimen {
+  Model model;
+  std::vector<Calibration> ply_calibrations;
+  /// Wall-clock time of the build, the calibrations it computed included (not those it was given
+  /// or found already computed) [s].
+  double build_seconds = 0;
+};
+
+/// How a strategy completes its boundary cells, for an experiment that cuts the coupon after
+/// building it (the hole plate): every in-ply bond family has `bulk_bonds` bonds per bulk particle
+/// (strategies/boundary_cells.hpp). family_count = 0: the strategy completes its edges its own
+/// way, which cannot be redone on a cut coupon.
+struct BoundaryCompletion {
+  int family_count = 0;
+  int bulk_bonds = 0;
+};
+
+/// Counts of the work Strategy::build() and SpecimenBuilder did in this process: ply calibrations
+/// computed for coupons, and coupons built (each ply of a laminate is one).
+struct BuildStatistics {
+  long calibrations = 0;
+  long builds = 0;
+};
+BuildStatistics build_statistics();
+/// Adds to the process counts (Strategy::build and SpecimenBuilder call it).
+void count_build_work(long calibrations, long builds);
 
 /// A strategy-specific parameter (hcp's layer spacing, lattice's seed), with its current value.
 /// Set from the command line with `--strategy-option NAME=VALUE`.
@@ -72,8 +109,24 @@ class Strategy {
   /// plydem::Error if the target cannot be reached with a stable lattice.
   virtual Calibration calibrate(const Material& material, double ply_angle,
                                 double thickness) const = 0;
-  /// Builds the coupon: particles with masses, bonds with the calibrated stiffnesses.
-  virtual Model build(const CouponSpec& coupon) const = 0;
+  /// The calibration `coupon`'s bonds get. By default calibrate(material, ply_angle, thickness);
+  /// lattice calibrates the coupon's own packing.
+  virtual Calibration calibrate_coupon(const CouponSpec& coupon) const;
+  /// Two coupons with the same key get the same calibrate_coupon(): by default the material, the
+  /// ply angle and thickness (exactly) and the strategy's options. Lattice adds the coupon's size
+  /// and particle diameter (its packing).
+  virtual std::string calibration_key(const CouponSpec& coupon) const;
+  /// Builds the coupon's particles and bonds with `calibration`, what calibrate_coupon(coupon)
+  /// returns (perhaps computed for another coupon with the same calibration_key).
+  virtual Model assemble(const CouponSpec& coupon, const Calibration& calibration) const = 0;
+  /// How the coupon's boundary cells are completed; by default not redoable (see the struct).
+  virtual BoundaryCompletion boundary_completion() const { return {}; }
+
+  /// Calibrates and builds the coupon.
+  Specimen build(const CouponSpec& coupon) const;
+  /// Builds the coupon with a calibration already computed by calibrate_coupon() for a coupon of
+  /// the same calibration_key. Throws plydem::Error if its target is not the coupon's ply Q-bar.
+  Specimen build(const CouponSpec& coupon, const Calibration& calibration) const;
 };
 
 }  // namespace plydem

@@ -154,7 +154,7 @@ TEST_CASE("HCP coupon: interior coordination 9 / 12 / 9, no self or duplicate bo
   for (double deg : {0.0, 30.0, 45.0, 90.0}) {
     CAPTURE(deg);
     spec.ply_angle = deg * kDeg;
-    const Model model = HcpStrategy().build(spec);
+    const Model model = HcpStrategy().build(spec).model;
     model.check_consistency();
     std::set<std::pair<int, int>> seen;
     for (int b = 0; b < model.bonds.size(); ++b) {
@@ -282,7 +282,7 @@ TEST_CASE("hcp: option c, validated, changes the inclined bonds and still calibr
   spec.material = eglass();
   spec.length = 0.8e-3;
   spec.width = 0.4e-3;
-  const Model model = strategy.build(spec);
+  const Model model = strategy.build(spec).model;
   const double r = 0.5 * spec.particle_diameter, c = 2.2 * r;
   for (int b = 0; b < model.bonds.size(); ++b) {
     const bool inclined = HcpLamina::is_inclined(model.bonds.family(b));

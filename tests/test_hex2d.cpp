@@ -146,7 +146,7 @@ TEST_CASE("hex2d builds a consistent coupon: six neighbours inside, families alo
   spec.width = 0.5e-3;
   for (double deg : {0.0, 30.0, 45.0, 90.0}) {
     spec.ply_angle = deg * kDeg;
-    const Model model = Hex2dStrategy().build(spec);
+    const Model model = Hex2dStrategy().build(spec).model;
     model.check_consistency();
     std::vector<int> coordination(model.particles.size(), 0);
     for (int b = 0; b < model.bonds.size(); ++b) {

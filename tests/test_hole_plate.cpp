@@ -44,7 +44,7 @@ Model small_plate() {
   spec.coupon.thickness = 0.5e-3;
   spec.coupon.particle_diameter = 0.25e-3;
   spec.ply_angles = parse_layup("[0/90/0]");
-  return build_laminate(*default_registry().create("hex2d"), spec);
+  return build_laminate(*default_registry().create("hex2d"), spec).model;
 }
 
 bool has_png_signature(const fs::path& path) {

@@ -22,7 +22,7 @@ Model small_coupon() {
   spec.ply_angle = 0.3;
   spec.length = 0.6e-3;
   spec.width = 0.4e-3;
-  return Hex2dStrategy().build(spec);
+  return Hex2dStrategy().build(spec).model;
 }
 
 void kick(Model& m, unsigned seed) {

@@ -61,7 +61,7 @@ Model hex_coupon(double length = 0.6e-3, double width = 0.4e-3) {
   spec.ply_angle = 0.3;
   spec.length = length;
   spec.width = width;
-  return Hex2dStrategy().build(spec);
+  return Hex2dStrategy().build(spec).model;
 }
 
 // Random displacements, rotations and velocities of the size a loaded model sees.

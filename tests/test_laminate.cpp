@@ -50,7 +50,7 @@ TEST_CASE("a laminate stacks its plies and bonds every facing surface particle a
   spec.coupon.width = 0.5e-3;
   spec.ply_angles = parse_layup("[0/45/90]");
   const std::unique_ptr<Strategy> hex2d = default_registry().create("hex2d");
-  const Model model = build_laminate(*hex2d, spec);
+  const Model model = build_laminate(*hex2d, spec).model;
   const Particles& p = model.particles;
   CHECK(model.thickness == doctest::Approx(3 * spec.coupon.thickness));
   std::vector<int> interface_bonds(p.size(), 0);

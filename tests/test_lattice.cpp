@@ -135,7 +135,7 @@ TEST_CASE("lattice: the correction meets a reachable target on its sample, exact
   coupon.material = mild;
   coupon.length = 1.0e-3;
   coupon.width = 0.8e-3;
-  const Model model = lattice.build(coupon);
+  const Model model = lattice.build(coupon).model;
   CHECK_NOTHROW(model.check_consistency());
   std::vector<int> count(model.particles.size(), 0);
   for (int b = 0; b < model.bonds.size(); ++b) {

@@ -255,7 +255,7 @@ TEST_CASE("square coupon: 8 neighbours inside, no self or duplicate bonds, lengt
       CAPTURE(name);
       CAPTURE(deg);
       spec.ply_angle = deg * kDeg;
-      const Model model = default_registry().create(name)->build(spec);
+      const Model model = default_registry().create(name)->build(spec).model;
       model.check_consistency();
       const int n = model.particles.size();
       std::vector<int> coordination(n, 0);
@@ -298,7 +298,7 @@ TEST_CASE("boundary completion: each family carries one cell per particle it rea
   spec.width = 0.3e-3;
   spec.ply_angle = 0;
   const auto strategy = default_registry().create("square");
-  const Model model = strategy->build(spec);
+  const Model model = strategy->build(spec).model;
   const int n = model.particles.size();
   REQUIRE(n == 12 * 6);
   const Bonds& b = model.bonds;
@@ -322,7 +322,7 @@ TEST_CASE("boundary completion: each family carries one cell per particle it rea
   CHECK(relative_difference(sum, expected) < 1e-12);
   // Without completion the edge strips are softer.
   spec.complete_boundary_cells = false;
-  const Model raw = strategy->build(spec);
+  const Model raw = strategy->build(spec).model;
   CHECK(raw.bonds.normal_stiffness.sum() < 0.95 * b.normal_stiffness.sum());
 }
 

@@ -52,7 +52,7 @@ Model small_coupon(double angle = 0.3, bool complete_boundary_cells = true) {
   spec.length = 0.6e-3;
   spec.width = 0.4e-3;
   spec.complete_boundary_cells = complete_boundary_cells;
-  return Hex2dStrategy().build(spec);
+  return Hex2dStrategy().build(spec).model;
 }
 
 // Particles within two diameters of each end go to the grip groups, as in the tension test.
@@ -453,7 +453,7 @@ TEST_CASE("constraints of the wrong size or with NaN are refused") {
 TEST_CASE("the paper's 3800-particle coupon in tension: E1 from one solve") {
   CouponSpec spec;
   spec.material = load_material("eglass-my750");
-  Model m = Hex2dStrategy().build(spec);
+  Model m = Hex2dStrategy().build(spec).model;
   Particles& p = m.particles;
   mark_grips(p);
   const double x_min = p.reference_position.col(0).minCoeff();
@@ -495,7 +495,7 @@ TEST_CASE("the paper's 3800-particle coupon in tension: E1 from one solve") {
 
   StaticSettings cg = settings;
   cg.method = StaticMethod::kIterative;
-  Model mi = Hex2dStrategy().build(spec);
+  Model mi = Hex2dStrategy().build(spec).model;
   mark_grips(mi.particles);
   const StaticResult ri = solve_static(mi, c, cg);
   MESSAGE(ri.method_name << ": " << ri.iterations << " iterations, preconditioner "

@@ -70,7 +70,7 @@ TEST_CASE("every registered strategy builds a consistent coupon with the stiffne
         CHECK(family.stiffness.shear >= 0);
       }
 
-      const Model model = strategy->build(coupon);
+      const Model model = strategy->build(coupon).model;
       CHECK_NOTHROW(model.check_consistency());  // no self, duplicate or dangling bonds
       const std::vector<int> count = coordination(model);
       const Particles& p = model.particles;

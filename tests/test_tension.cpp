@@ -118,7 +118,7 @@ TEST_CASE("the built coupon's membrane stiffness and Gxy match the ply's Q-bar")
     coupon.ply_angle = degrees * std::numbers::pi / 180;
     coupon.length = 2.0e-3;
     coupon.width = 1.2e-3;
-    const SpecimenStiffness measured = measure_specimen_stiffness(hex2d->build(coupon));
+    const SpecimenStiffness measured = measure_specimen_stiffness(hex2d->build(coupon).model);
     const Eigen::Matrix3d q = qbar_by_hand(eglass, coupon.ply_angle);
     CAPTURE(degrees);
     CAPTURE(measured.stiffness);

@@ -183,7 +183,7 @@ Model stretched_coupon() {
   spec.ply_angle = 30 * std::numbers::pi / 180;
   spec.length = 0.6e-3;
   spec.width = 0.3e-3;
-  Model model = default_registry().create("hex2d")->build(spec);
+  Model model = default_registry().create("hex2d")->build(spec).model;
   Particles& p = model.particles;
   for (int i = 0; i < p.size(); ++i) {
     const double x = p.reference_position(i, 0), y = p.reference_position(i, 1);
@@ -306,7 +306,7 @@ TEST_CASE("a laminate's bonds file marks interface bonds by kind, family -1 - k 
   spec.coupon.length = 0.4e-3;
   spec.coupon.width = 0.3e-3;
   spec.ply_angles = parse_layup("[0/90/0]");
-  const Model model = build_laminate(*default_registry().create("hex2d"), spec);
+  const Model model = build_laminate(*default_registry().create("hex2d"), spec).model;
   const Bonds& bonds = model.bonds;
   TemporaryDirectory dir;
   const fs::path bonds_file = dir.path / "laminate_bonds.vtu";

@@ -193,6 +193,14 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
   return s;
 }
 
+// What the run calibrated and built, on stderr.
+void log_build_statistics() {
+  const plydem::BuildStatistics work = plydem::build_statistics();
+  spdlog::info("{} ply calibration{}, {} coupon build{} (each laminate ply counts as one)",
+               work.calibrations, work.calibrations == 1 ? "" : "s", work.builds,
+               work.builds == 1 ? "" : "s");
+}
+
 int run_tension(const TensionOptions& o) {
   const plydem::TensionSettings settings = to_settings(o);
   plydem::TensionTest test(settings);
@@ -203,6 +211,7 @@ int run_tension(const TensionOptions& o) {
                  p.ratio, p.elapsed_seconds, left);
   });
   const plydem::TensionResult result = test.run();
+  log_build_statistics();
   if (o.json) {
     std::cout << plydem::tension_json(result, settings).dump(2) << "\n";
   } else {
@@ -320,6 +329,7 @@ int main(int argc, char** argv) {
       run_options.config = run_config;
       run_options.out_dir = run_out;
       const plydem::RunSummary summary = plydem::run_experiment(run_options);
+      log_build_statistics();
       std::cout << fmt::format("{} done in {:.1f} s: {} rows in {}, report {}\n",
                                run_options.config.string(), summary.wall_seconds,
                                summary.output.rows.size(), summary.results.string(),

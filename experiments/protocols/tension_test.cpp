@@ -123,15 +123,19 @@ void TensionTest::on_progress(std::function<void(const TensionProgress&)> callba
 }
 
 TensionResult TensionTest::run() const {
-  const auto start = Clock::now();
   const std::unique_ptr<Strategy> strategy = default_registry().create(settings_.strategy);
   for (const auto& [name, value] : settings_.strategy_options) strategy->set_option(name, value);
+  SpecimenBuilder builder(*strategy);
+  return run(builder);
+}
+
+TensionResult TensionTest::run(SpecimenBuilder& builder) const {
+  const auto start = Clock::now();
+  const BuildStatistics before = builder.statistics();
   TensionResult result;
   result.strategy = settings_.strategy;
   result.material = settings_.coupon.material;
   result.ply_angle = settings_.coupon.ply_angle;
-  result.calibration = strategy->calibrate(settings_.coupon.material, settings_.coupon.ply_angle,
-                                           settings_.coupon.thickness);
   if (settings_.layup.empty()) {
     result.theory = in_plane_constants(
         rotate_reduced_stiffness(reduced_stiffness(settings_.coupon.material), result.ply_angle));
@@ -139,28 +143,41 @@ TensionResult TensionTest::run() const {
     result.theory = laminate_constants(
         laminate_plies({settings_.coupon, settings_.layup, settings_.interface}));
   }
-  result.along_x = pull(*strategy, result.ply_angle);
-  result.along_y = pull(*strategy, result.ply_angle - std::numbers::pi / 2);
+  auto coupon_x = std::make_shared<const Specimen>(build_specimen(builder, result.ply_angle));
+  result.calibration = coupon_x->ply_calibrations.front();
+  result.ply_calibrations = coupon_x->ply_calibrations;
+  result.along_x = pull(*coupon_x, result.ply_angle);
+  const double angle_y = result.ply_angle - std::numbers::pi / 2;
+  result.along_y = pull(build_specimen(builder, angle_y), angle_y);
   result.dem.Ex = result.along_x.modulus;
   result.dem.nu_xy = result.along_x.poisson;
   result.dem.shear_coupling_x = result.along_x.shear_coupling;
   result.dem.Ey = result.along_y.modulus;
   result.dem.nu_yx = result.along_y.poisson;
   if (settings_.measure_specimen_stiffness) {
-    result.specimen = measure_specimen_stiffness(build_specimen(*strategy, result.ply_angle));
+    // The coupon along x, as built: measure_specimen_stiffness works on a copy.
+    result.specimen = measure_specimen_stiffness(coupon_x->model);
     result.dem.Gxy = result.specimen.constants.Gxy;
   }
+  result.coupon_x = std::move(coupon_x);
+  result.build_statistics.calibrations = builder.statistics().calibrations - before.calibrations;
+  result.build_statistics.builds = builder.statistics().builds - before.builds;
   result.wall_seconds = seconds_since(start);
   return result;
 }
 
-Model TensionTest::build_specimen(const Strategy& strategy, double ply_angle) const {
+Specimen TensionTest::build_specimen(SpecimenBuilder& builder, double ply_angle) const {
   CouponSpec spec = settings_.coupon;
   spec.ply_angle = ply_angle;
-  if (settings_.layup.empty()) return strategy.build(spec);
+  if (settings_.layup.empty()) return builder.build(spec);
   LaminateSpec laminate{spec, settings_.layup, settings_.interface};
   for (double& angle : laminate.ply_angles) angle += ply_angle - settings_.coupon.ply_angle;
-  return build_laminate(strategy, laminate);
+  return build_laminate(builder, laminate);
+}
+
+Specimen TensionTest::build_specimen(const Strategy& strategy, double ply_angle) const {
+  SpecimenBuilder builder(strategy);
+  return build_specimen(builder, ply_angle);
 }
 
 double TensionTest::grip_length() const {
@@ -168,23 +185,17 @@ double TensionTest::grip_length() const {
                                    : 2.0 * settings_.coupon.particle_diameter;
 }
 
-Model TensionTest::solved_specimen(const Strategy& strategy, double ply_angle) const {
-  Model model = build_specimen(strategy, ply_angle);
-  Particles& p = model.particles;
-  const Grips grips = assign_grips(p, grip_length());
-  solve_static(model,
-               grip_constraints(p, 0.5 * settings_.target_strain * grips.span,
-                                settings_.grips == GripCondition::kClamped),
-               grip_solve_settings());
-  return model;
+PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
+  return pull(build_specimen(strategy, ply_angle), ply_angle);
 }
 
-PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
+PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
   const auto start = Clock::now();
   const TensionSettings& s = settings_;
   CouponSpec spec = s.coupon;
   spec.ply_angle = ply_angle;
-  Model model = build_specimen(strategy, ply_angle);
+  auto loaded = std::make_shared<Model>(specimen.model);
+  Model& model = *loaded;
   Particles& p = model.particles;
 
   // Grips at both ends, gauge section in the middle.
@@ -400,7 +411,9 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
   result.poisson = -linear_fit(result.strain, result.lateral_strain).slope;
   result.shear_coupling = linear_fit(result.strain, result.shear_strain).slope;
   result.cycles = integrator ? integrator->cycles() : 0;
-  result.wall_seconds = seconds_since(start);
+  result.build_seconds = specimen.build_seconds;
+  result.wall_seconds = specimen.build_seconds + seconds_since(start);
+  result.model = std::move(loaded);
   require(std::isfinite(result.modulus) && result.modulus > 0,
           fmt::format("the tension test measured a non-positive modulus {} Pa", result.modulus));
   return result;

@@ -20,6 +20,7 @@
 /// shear); `clamped` also hold the ends laterally.
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,6 +29,7 @@
 #include "experiments/protocols/stiffness_test.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/laminate.hpp"
+#include "strategies/specimen.hpp"
 #include "strategies/strategy.hpp"
 
 namespace plydem {
@@ -89,7 +91,12 @@ struct PullResult {
   /// kQuasiStaticTransits, or a staged run below 1 (a shock), logs a warning that the grips move
   /// too fast for the coupon to follow quasi-statically.
   double loading_transits = 0;
-  double wall_seconds = 0;
+  /// Building the coupon (its calibrations included where they were computed for it) [s].
+  double build_seconds = 0;
+  double wall_seconds = 0;  ///< building and loading [s]
+  /// The coupon at the end of the pull: grips assigned, displaced (static: solved at the target
+  /// strain), for VTU files, figures and field maps without building or solving it again.
+  std::shared_ptr<const Model> model;
 };
 
 /// A fixed-cycle loading slower than this many wave transits counts as quasi-static.
@@ -106,7 +113,14 @@ struct TensionResult {
   /// The ply coupon's membrane stiffness under affine boundary displacements (empty if not
   /// measured: stiffness all zero).
   SpecimenStiffness specimen;
+  /// The calibration the coupon pulled along x got: its ply's (for a laminate, its bottom ply's;
+  /// for lattice, that of the coupon's own packing).
   Calibration calibration;
+  std::vector<Calibration> ply_calibrations;  ///< of the coupon along x, bottom to top
+  /// The coupon along x as built, unloaded: further pulls of it need no new build.
+  std::shared_ptr<const Specimen> coupon_x;
+  /// What run() calibrated and built (each ply calibrated once, each coupon built once).
+  BuildStatistics build_statistics;
   double wall_seconds = 0;
 };
 
@@ -126,16 +140,22 @@ class TensionTest {
   explicit TensionTest(TensionSettings settings);
   void on_progress(std::function<void(const TensionProgress&)> callback);
   /// Both loadings; the strategy is taken from the default registry and given the settings'
-  /// strategy options.
+  /// strategy options. Each distinct ply is calibrated once and each coupon built once (the
+  /// coupon along x also gives the specimen stiffness).
   TensionResult run() const;
+  /// The same with `builder`'s strategy and calibrations (a builder shared by several tests
+  /// calibrates each ply once over all of them); the settings' strategy options are not applied
+  /// to it (set them on the strategy before making the builder).
+  TensionResult run(SpecimenBuilder& builder) const;
   /// One coupon pulled along x by `strategy`: the ply at `ply_angle`, or for a laminate every ply
   /// turned by `ply_angle` - coupon.ply_angle.
   PullResult pull(const Strategy& strategy, double ply_angle) const;
+  /// A copy of `specimen` pulled along x (build_specimen at `ply_angle`: no new build); the
+  /// result's wall_seconds count the specimen's build_seconds.
+  PullResult pull(const Specimen& specimen, double ply_angle) const;
   /// The specimen pull() loads, before grips are assigned.
-  Model build_specimen(const Strategy& strategy, double ply_angle) const;
-  /// That specimen with its grips assigned, solved statically at the target strain under the
-  /// test's grips (for VTU files and field maps; the moduli come from pull()).
-  Model solved_specimen(const Strategy& strategy, double ply_angle) const;
+  Specimen build_specimen(SpecimenBuilder& builder, double ply_angle) const;
+  Specimen build_specimen(const Strategy& strategy, double ply_angle) const;
   /// The grip length at each end [m]: settings.grip_length, or two particle diameters.
   double grip_length() const;
 

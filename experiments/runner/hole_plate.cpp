@@ -13,8 +13,6 @@
 #include "core/material.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/output/vtk_output.hpp"
-#include "packings/hexagonal_layer.hpp"
-#include "packings/square_layer.hpp"
 #include "strategies/boundary_cells.hpp"
 #include "strategies/registry.hpp"
 
@@ -29,16 +27,18 @@ double seconds_since(Clock::time_point start) {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Bond families of a regular layer and how many bonds of each a bulk particle has, for the
-// boundary-cell completion after the hole is cut (the strategies complete their own edges the same
-// way: strategies/hex2d.cpp, strategies/square.cpp).
-int family_count(const std::string& strategy) {
-  if (strategy == "hex2d") return HexagonalLayer::kFamilyCount;
-  if (strategy == "square") return SquareLayer::kFamilyCount;
-  throw Error(fmt::format(
-      "the hole-in-plate experiment builds one regular layer per ply: strategy '{}' is not "
-      "supported (use hex2d or square)",
-      strategy));
+// How the strategy completes its boundary cells, which the hole plate redoes once the hole is cut:
+// asked of the strategy (Strategy::boundary_completion).
+BoundaryCompletion boundary_completion(const Strategy& strategy, const std::string& name) {
+  const BoundaryCompletion completion = strategy.boundary_completion();
+  if (completion.family_count <= 0) {
+    throw Error(fmt::format(
+        "the hole-in-plate experiment completes the boundary cells of a regular layer per ply "
+        "after cutting the hole: strategy '{}' completes its edges its own way, which cannot be "
+        "redone on the cut coupon (use hex2d or square)",
+        name));
+  }
+  return completion;
 }
 
 // Union-find over particle indices.
@@ -215,7 +215,7 @@ void HolePlateSettings::validate() const {
   require(std::isfinite(interpolation_radius) && interpolation_radius >= 0,
           "interpolation radius must be >= 0 (0 = 1.5 particle diameters)");
   require(fem_threads >= 1, "fem threads must be >= 1");
-  family_count(strategy);
+  boundary_completion(*default_registry().create(strategy), strategy);
   interface.validate();
   fem_mesh.validate();
   parse_layup(layup);
@@ -321,7 +321,8 @@ HolePlateDem solve_hole_plate_dem(const HolePlateSettings& settings) {
 
   HolePlateDem dem;
   dem.plies = static_cast<int>(spec.ply_angles.size());
-  dem.model = build_laminate(*strategy, spec);
+  const BoundaryCompletion completion = boundary_completion(*strategy, settings.strategy);
+  dem.model = build_laminate(*strategy, spec).model;
   if (settings.hole_diameter > 0) {
     dem.hole =
         remove_hole(dem.model, 0.5 * settings.length, 0.5 * settings.width, settings.hole_diameter);
@@ -334,7 +335,7 @@ HolePlateDem solve_hole_plate_dem(const HolePlateSettings& settings) {
     for (int c = 0; c < bonds.size(); ++c)
       if (!bonds.is_interface(c)) in_ply.push_back(c);
     Bonds layer = bonds.select(in_ply);
-    complete_boundary_cells(p, layer, family_count(settings.strategy), 2);
+    complete_boundary_cells(p, layer, completion.family_count, completion.bulk_bonds);
     bonds.assign_rows(in_ply, layer);
   }
 

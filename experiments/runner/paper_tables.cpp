@@ -352,21 +352,20 @@ class LaminaStrategiesExperiment : public Experiment {
         // first: a quick run, or a full one whose extrapolated time exceeds
         // explicit.time_limit_s, reports the extrapolation (building the coupon, timed on its
         // own, counted once) instead of running every cycle.
-        const std::unique_ptr<Strategy> strategy = default_registry().create(strategy_name);
+        // The explicit runs pull the static test's coupon along x again (no new build).
+        const Specimen& coupon_x = *r.coupon_x;
         TensionSettings e = s;
         e.solver = TensionSolver::kExplicit;
         e.fixed_cycles = probe_cycles;
-        PullResult fixed = TensionTest(e).pull(*strategy, e.coupon.ply_angle);
-        const auto build_start = std::chrono::steady_clock::now();
-        TensionTest(e).build_specimen(*strategy, e.coupon.ply_angle);
-        const double build_seconds = std::min(seconds_since(build_start), fixed.wall_seconds);
+        PullResult fixed = TensionTest(e).pull(coupon_x, e.coupon.ply_angle);
+        const double build_seconds = fixed.build_seconds;
         const double extrapolated = build_seconds + (fixed.wall_seconds - build_seconds) *
                                                         static_cast<double>(paper_cycles) /
                                                         static_cast<double>(probe_cycles);
         long run_cycles = probe_cycles;
         if (!quick && probe_cycles < paper_cycles && extrapolated <= time_limit) {
           e.fixed_cycles = paper_cycles;
-          fixed = TensionTest(e).pull(*strategy, e.coupon.ply_angle);
+          fixed = TensionTest(e).pull(coupon_x, e.coupon.ply_angle);
           run_cycles = paper_cycles;
         }
         const double fixed_seconds = run_cycles == paper_cycles ? fixed.wall_seconds : extrapolated;
@@ -401,7 +400,7 @@ class LaminaStrategiesExperiment : public Experiment {
         q.ramp_cycles = c.integer("explicit.ramp_cycles", q.ramp_cycles);
         q.load_stages = static_cast<int>(c.integer("explicit.load_stages", q.load_stages));
         q.max_cycles = c.integer("explicit.max_cycles", q.max_cycles);
-        const PullResult staged = TensionTest(q).pull(*strategy, q.coupon.ply_angle);
+        const PullResult staged = TensionTest(q).pull(coupon_x, q.coupon.ply_angle);
         out.rows.push_back({name, strategy_name, "time to quasi-static",
                             fmt::format("dem {} explicit", strategy_name), staged.wall_seconds,
                             "s"});
@@ -417,10 +416,9 @@ class LaminaStrategiesExperiment : public Experiment {
              fmt::format("{:.1f}", staged.wall_seconds), fmt::format("{}", staged.cycles),
              paper_time});
 
-        const TensionTest test(s);
-        const Model solved = test.solved_specimen(*strategy, s.coupon.ply_angle);
+        // The static pull along x: solved at the target strain under the test's grips.
         figures += write_model(
-            solved, context.out_dir, file_stem(fmt::format("{}_{}", name, strategy_name)),
+            *r.along_x.model, context.out_dir, file_stem(fmt::format("{}_{}", name, strategy_name)),
             fmt::format("{}: bonds coloured by normal stiffness (plan view, first {:g} mm)",
                         strategy_name, figure_window(c, coupon) / kMm),
             figure_window(c, coupon), out);
@@ -530,10 +528,8 @@ class LaminaAnglesExperiment : public Experiment {
           out.rows.push_back({name, case_name, "wall time", fmt::format("dem {}", strategy_name),
                               seconds_since(start), "s"});
           curves[strategy_name].push_back(pull_curve(fmt::format("{:g}°", angle_deg), r.along_x));
-          const std::unique_ptr<Strategy> strategy = default_registry().create(strategy_name);
-          const Model solved = TensionTest(s).solved_specimen(*strategy, angle);
           figures += write_model(
-              solved, context.out_dir,
+              *r.along_x.model, context.out_dir,
               file_stem(fmt::format("{}_{}_{:g}deg", name, strategy_name, angle_deg)),
               fmt::format("{} at {:g}°: bonds coloured by normal stiffness (plan view, first {:g} "
                           "mm)",
@@ -705,8 +701,8 @@ class LaminateExperiment : public Experiment {
     for (std::size_t k = 0; k < s.layup.size(); ++k) {
       ply_labels.push_back(fmt::format("ply {}: {:g}°", k, s.layup[k] * 180 / std::numbers::pi));
     }
-    const std::unique_ptr<Strategy> strategy = default_registry().create(s.strategy);
-    const Model solved = TensionTest(s).solved_specimen(*strategy, s.coupon.ply_angle);
+    // The static pull along x: solved at the target strain under the test's grips.
+    const Model& solved = *r.along_x.model;
     const double window = figure_window(c, s.coupon);
     std::string figures = write_model(
         solved, context.out_dir, file_stem(name),
