@@ -48,14 +48,15 @@ class SweepExperiment : public plydem::Experiment {
 
     plydem::ExperimentOutput out;
     out.title = "Off-axis sweep";
-    out.report_markdown = "| angle | Ex DEM [GPa] | Ex CLT [GPa] | rel. err. |\n|---|---|---|---|\n";
+    out.report_markdown =
+        "| angle | Ex DEM [GPa] | Ex CLT [GPa] | rel. err. |\n|---|---|---|---|\n";
     for (const double degrees : config.numbers("angles_deg", {0, 45, 90})) {
       settings.coupon.ply_angle = degrees * std::numbers::pi / 180;
       const plydem::TensionResult r = plydem::TensionTest(settings).run();
       const std::string angle = fmt::format("{:g} deg", degrees);
-      out.report_markdown += fmt::format("| {} | {:.3f} | {:.3f} | {:+.2%} |\n", angle,
-                                         r.dem.Ex * 1e-9, r.theory.Ex * 1e-9,
-                                         r.dem.Ex / r.theory.Ex - 1);
+      out.report_markdown +=
+          fmt::format("| {} | {:.3f} | {:.3f} | {:+.2f}% |\n", angle, r.dem.Ex * 1e-9,
+                      r.theory.Ex * 1e-9, 100 * (r.dem.Ex / r.theory.Ex - 1));
       const std::string dem = "dem " + settings.strategy;
       out.rows.push_back({"sweep", angle, "Ex", dem, r.dem.Ex * 1e-9, "GPa"});
       out.rows.push_back({"sweep", angle, "Ex", "clt", r.theory.Ex * 1e-9, "GPa"});
@@ -87,9 +88,9 @@ int main(int argc, char** argv) {
     const plydem::RunSummary summary = plydem::run_experiment(options);
     const std::vector<plydem::ResultRow>& rows = summary.output.rows;  // DEM, CLT per angle
     for (std::size_t i = 0; i + 1 < rows.size(); i += 2) {
-      std::cout << fmt::format("sweep {}: Ex {:.3f} GPa, CLT {:.3f} GPa ({:+.2%} vs CLT)\n",
+      std::cout << fmt::format("sweep {}: Ex {:.3f} GPa, CLT {:.3f} GPa ({:+.2f}% vs CLT)\n",
                                rows[i].case_name, rows[i].value, rows[i + 1].value,
-                               rows[i].value / rows[i + 1].value - 1);
+                               100 * (rows[i].value / rows[i + 1].value - 1));
     }
     std::cout << fmt::format("wrote {} and {} in {:.1f} s\n", summary.report.string(),
                              summary.results.string(), summary.wall_seconds);

@@ -1,7 +1,8 @@
 // CalculiX FEM references: the mesh generator on its own (no ccx needed), the moduli of single
 // plies and a cross-ply laminate against classical lamination theory written out by hand from the
-// engineering constants (tests/support/test_support.hpp), the displacement field's interpolation, and the clear failures (no ccx,
-// bad input). Cases that need ccx are reported as skipped, with the reason, when it is not installed.
+// engineering constants (tests/support/test_support.hpp), the displacement field's interpolation,
+// and the clear failures (no ccx, bad input). Cases that need ccx are reported as skipped, with the
+// reason, when it is not installed.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -389,7 +390,8 @@ TEST_CASE("a plate with a hole: the field stops at the hole and mirrors about it
     CHECK(a->x() == doctest::Approx(-b->x()).epsilon(1e-5));
   }
   // The hole softens the plate, but a 3 mm hole in a 36 mm strip only a little.
-  const double unnotched = constants_by_hand(membrane_by_hand(eglass(), {0, 90, 0})).Ex * (0.1e-3 / 60e-3) * 36e-3 * 1.5e-3;
+  const double unnotched = constants_by_hand(membrane_by_hand(eglass(), {0, 90, 0})).Ex *
+                           (0.1e-3 / 60e-3) * 36e-3 * 1.5e-3;
   CHECK(f.reaction_force < unnotched);
   CHECK(f.reaction_force > 0.9 * unnotched);
   // Stress concentration: the 0 deg plies beside the hole carry far more than the far field.

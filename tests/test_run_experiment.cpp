@@ -112,7 +112,7 @@ std::map<std::string, double> run_checked(const fs::path& config, const std::str
   } else {
     skip(gnuplot.message);
   }
-  CHECK(vtus == 2);                                        // particles and bonds
+  CHECK(vtus == 2);  // particles and bonds
   CHECK(fs::exists(dir / "vtu" / fmt::format("{}.pvd", name)));
   const std::map<std::string, double> values = parse_results(dir / "results.csv");
   fs::remove_all(dir);

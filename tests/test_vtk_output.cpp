@@ -268,8 +268,9 @@ TEST_CASE("particles and bonds .vtu files hold the model's arrays, readable by V
 
   const std::string python = python_with_vtk();
   if (python.empty()) {
-    skip("python3 with VTK (Debian: python3-vtk9) is not installed: VTK reader check not run, "
-         "structure checked");
+    skip(
+        "python3 with VTK (Debian: python3-vtk9) is not installed: VTK reader check not run, "
+        "structure checked");
     return;
   }
   const std::string script = std::string(PLYDEM_TEST_DATA_DIR) + "/check_vtu.py";

@@ -13,9 +13,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
-#include <iostream>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -66,8 +64,8 @@ struct ConstantsByHand {
 };
 inline ConstantsByHand constants_by_hand(const Eigen::Matrix3d& stiffness) {
   const Eigen::Matrix3d a = stiffness.inverse();
-  return {1 / a(0, 0),          1 / a(1, 1), -a(0, 1) / a(0, 0), -a(0, 1) / a(1, 1),
-          1 / a(2, 2), a(0, 2) / a(0, 0)};
+  return {1 / a(0, 0),        1 / a(1, 1), -a(0, 1) / a(0, 0),
+          -a(0, 1) / a(1, 1), 1 / a(2, 2), a(0, 2) / a(0, 0)};
 }
 
 // An empty folder under the system's temporary directory, named for the test and the process.
@@ -90,7 +88,6 @@ inline int& skipped_cases() {
 inline void skip(const std::string& why) {
   ++skipped_cases();
   MESSAGE("SKIPPED: ", why);
-  std::cout << "SKIPPED: " << why << std::endl;
 }
 
 }  // namespace plydem::test
