@@ -1,7 +1,8 @@
 // CalculiX FEM references: the mesh generator on its own (no ccx needed), the moduli of single
 // plies and a cross-ply laminate against classical lamination theory written out by hand from the
-// engineering constants, the displacement field's interpolation, and the clear failures (no ccx,
-// bad input). Cases that need ccx skip with a message when it is not installed.
+// engineering constants (tests/support/test_support.hpp), the displacement field's interpolation,
+// and the clear failures (no ccx, bad input). Cases that need ccx are reported as skipped, with the
+// reason, when it is not installed.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -11,42 +12,21 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "experiments/fem/calculix.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
-Material eglass() {
-  return load_material("eglass-my750");
-}
-
 bool have_ccx() {
   const CalculixAvailability ccx = calculix_availability();
-  if (!ccx.available) MESSAGE(ccx.message, ": FEM case skipped");
+  if (!ccx.available) skip(ccx.message);
   return ccx.available;
 }
 
 double relative(double value, double reference) {
   return std::abs(value / reference - 1.0);
-}
-
-// The off-axis ply's in-plane compliance by hand: S-bar11, S-bar12, S-bar16, S-bar22, S-bar26 from
-// S11 = 1/E1, S22 = 1/E2, S12 = -nu12/E1, S66 = 1/G12 (Jones, Mechanics of Composite Materials,
-// eq. 2.84), theta counter-clockwise from x to the fibre.
-struct OffAxis {
-  double Ex, Ey, nu_xy, nu_yx, shear_coupling_x;
-};
-OffAxis off_axis_by_hand(const Material& m, double theta) {
-  const double c = std::cos(theta), s = std::sin(theta);
-  const double S11 = 1 / m.E1, S22 = 1 / m.E2, S12 = -m.nu12 / m.E1, S66 = 1 / m.G12;
-  const double b11 = S11 * std::pow(c, 4) + (2 * S12 + S66) * s * s * c * c + S22 * std::pow(s, 4);
-  const double b22 = S11 * std::pow(s, 4) + (2 * S12 + S66) * s * s * c * c + S22 * std::pow(c, 4);
-  const double b12 = S12 * (std::pow(s, 4) + std::pow(c, 4)) + (S11 + S22 - S66) * s * s * c * c;
-  const double b16 = (2 * S11 - 2 * S12 - S66) * s * std::pow(c, 3) -
-                     (2 * S22 - 2 * S12 - S66) * std::pow(s, 3) * c;
-  return {1 / b11, 1 / b22, -b12 / b11, -b12 / b22, b16 / b11};
 }
 
 std::vector<Ply> single_ply(double angle, double thickness = 0.2e-3) {
@@ -56,19 +36,6 @@ std::vector<Ply> single_ply(double angle, double thickness = 0.2e-3) {
 std::vector<Ply> cross_ply(double ply_thickness) {
   return {Ply{eglass(), 0.0, ply_thickness}, Ply{eglass(), 90 * kDeg, ply_thickness},
           Ply{eglass(), 0.0, ply_thickness}};
-}
-
-// CLT of [0/90/0] with equal plies, by hand: two 0 deg plies and one 90 deg ply (Q11 and Q22
-// swapped), A16 = A26 = 0.
-struct CrossPly {
-  double Ex, Ey, nu_xy;
-};
-CrossPly cross_ply_by_hand(const Material& m) {
-  const double nu21 = m.nu12 * m.E2 / m.E1, den = 1 - m.nu12 * nu21;
-  const double Q11 = m.E1 / den, Q22 = m.E2 / den, Q12 = m.nu12 * m.E2 / den;
-  // A / t and h / t = 3.
-  const double A11 = 2 * Q11 + Q22, A22 = 2 * Q22 + Q11, A12 = 3 * Q12;
-  return {(A11 * A22 - A12 * A12) / (3 * A22), (A11 * A22 - A12 * A12) / (3 * A11), A12 / A22};
 }
 
 }  // namespace
@@ -283,7 +250,7 @@ TEST_CASE(
 
 TEST_CASE("30 deg ply: Ex, nu_xy and the shear coupling gamma_xy/eps_x of off-axis CLT") {
   if (!have_ccx()) return;
-  const OffAxis clt = off_axis_by_hand(eglass(), 30 * kDeg);
+  const ConstantsByHand clt = constants_by_hand(qbar_by_hand(eglass(), 30 * kDeg));
   FemSpecimen coupon{single_ply(30 * kDeg), 10e-3, 2e-3};
   const FemTensionResult r = fem_tension_test(coupon, FemSettings{});
   REQUIRE(r.available);
@@ -370,7 +337,8 @@ TEST_CASE("30 deg ply: Ex, nu_xy and the shear coupling gamma_xy/eps_x of off-ax
 
 TEST_CASE("[0/90/0] laminate: Ex and nu_xy within 1% of CLT (A matrix by hand)") {
   if (!have_ccx()) return;
-  const auto [Ex, Ey, nu_xy] = cross_ply_by_hand(eglass());
+  const ConstantsByHand clt = constants_by_hand(membrane_by_hand(eglass(), {0, 90, 0}));
+  const double Ex = clt.Ex, Ey = clt.Ey, nu_xy = clt.nu_xy;
   // Wide enough that the free-edge zones (about a thickness wide, where the 0 and 90 deg plies'
   // Poisson mismatch is released) hold little of the section: on a 10 x 2 mm coupon nu_xy came
   // out 4% low with the full width fitted, 0.1% with 0.5 mm edge bands left out.
@@ -422,7 +390,8 @@ TEST_CASE("a plate with a hole: the field stops at the hole and mirrors about it
     CHECK(a->x() == doctest::Approx(-b->x()).epsilon(1e-5));
   }
   // The hole softens the plate, but a 3 mm hole in a 36 mm strip only a little.
-  const double unnotched = cross_ply_by_hand(eglass()).Ex * (0.1e-3 / 60e-3) * 36e-3 * 1.5e-3;
+  const double unnotched = constants_by_hand(membrane_by_hand(eglass(), {0, 90, 0})).Ex *
+                           (0.1e-3 / 60e-3) * 36e-3 * 1.5e-3;
   CHECK(f.reaction_force < unnotched);
   CHECK(f.reaction_force > 0.9 * unnotched);
   // Stress concentration: the 0 deg plies beside the hole carry far more than the far field.

@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/runner/experiment.hpp"
+#include "support/test_support.hpp"
 
 using plydem::Error;
 using plydem::ExperimentConfig;
@@ -54,7 +55,10 @@ TEST_CASE("gnuplot draws a PNG, or plydem says plainly that it is missing") {
   CHECK_FALSE(plydem::gnuplot_availability("/nonexistent/gnuplot").available);
   CHECK(plydem::gnuplot_availability("no-such-gnuplot").message.find("not installed") !=
         std::string::npos);
-  if (!gnuplot.available) return;
+  if (!gnuplot.available) {
+    plydem::test::skip(gnuplot.message);
+    return;
+  }
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / fmt::format("plydem_gnuplot_{}", ::getpid());
   std::filesystem::create_directories(dir);

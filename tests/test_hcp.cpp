@@ -16,35 +16,12 @@
 #include "packings/hcp_lamina.hpp"
 #include "strategies/hcp.hpp"
 #include "strategies/registry.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
-
-Material eglass() {
-  return load_material("eglass-my750");
-}
-
-// Plane-stress Q-bar written out from the engineering constants (eq. 29 and eq. 32 by hand).
-Eigen::Matrix3d qbar_by_hand(const Material& m, double theta) {
-  const double nu21 = m.nu12 * m.E2 / m.E1, den = 1 - m.nu12 * nu21;
-  const double q11 = m.E1 / den, q22 = m.E2 / den, q12 = m.nu12 * m.E2 / den, q66 = m.G12;
-  const double c = std::cos(theta), s = std::sin(theta);
-  Eigen::Matrix3d q;
-  q(0, 0) = q11 * std::pow(c, 4) + 2 * (q12 + 2 * q66) * s * s * c * c + q22 * std::pow(s, 4);
-  q(1, 1) = q11 * std::pow(s, 4) + 2 * (q12 + 2 * q66) * s * s * c * c + q22 * std::pow(c, 4);
-  q(0, 1) = (q11 + q22 - 4 * q66) * s * s * c * c + q12 * (std::pow(s, 4) + std::pow(c, 4));
-  q(0, 2) = (q11 - q12 - 2 * q66) * s * std::pow(c, 3) + (q12 - q22 + 2 * q66) * std::pow(s, 3) * c;
-  q(1, 2) = (q11 - q12 - 2 * q66) * std::pow(s, 3) * c + (q12 - q22 + 2 * q66) * s * std::pow(c, 3);
-  q(2, 2) =
-      (q11 + q22 - 2 * q12 - 2 * q66) * s * s * c * c + q66 * (std::pow(s, 4) + std::pow(c, 4));
-  q(1, 0) = q(0, 1);
-  q(2, 0) = q(0, 2);
-  q(2, 1) = q(1, 2);
-  return q;
-}
 
 // A neighbour of one particle: the branch vector to it and its bond family.
 struct Neighbour {

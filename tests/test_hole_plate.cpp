@@ -16,8 +16,10 @@
 #include "experiments/runner/hole_plate.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -53,13 +55,6 @@ bool has_png_signature(const fs::path& path) {
   in.read(head, 8);
   const unsigned char expected[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   return in && std::equal(head, head + 8, reinterpret_cast<const char*>(expected));
-}
-
-fs::path fresh_directory(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("plydem_{}_{}", name, ::getpid());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
 }
 
 }  // namespace
@@ -154,15 +149,19 @@ TEST_CASE("quick run of the kind 'hole': report, rows, VTU files and PNG maps") 
   CHECK(dem_stiffness < clt_stiffness);
   CHECK(dem_stiffness > 0.95 * clt_stiffness);
 
-  const bool ccx = calculix_availability().available;
+  const CalculixAvailability calculix = calculix_availability();
+  const bool ccx = calculix.available;
   if (!ccx) {
     CHECK(out.report_markdown.find("FEM column not run") != std::string::npos);
+    skip(calculix.message);
   } else {
     CHECK(value("ux L2 error", "dem hex2d vs calculix") < 100 * kUxBound);
     CHECK(value("uy L2 error", "dem hex2d vs calculix") < 100 * kUyBound);
     CHECK(value("plate stiffness", "calculix") == doctest::Approx(dem_stiffness).epsilon(0.02));
   }
-  if (gnuplot_availability().available) {
+  if (const GnuplotAvailability gnuplot = gnuplot_availability(); !gnuplot.available) {
+    skip(gnuplot.message);
+  } else {
     std::vector<std::string> pngs = {"hole_ux.png", "hole_uy.png"};
     if (ccx) pngs.push_back("hole_difference.png");
     for (const std::string& png : pngs) {
@@ -178,8 +177,8 @@ TEST_CASE("quick run of the kind 'hole': report, rows, VTU files and PNG maps") 
 // against a DEM with the 90 deg ply left at 0 deg.
 TEST_CASE(
     "small plate: DEM against CalculiX; scaled fields and the 90 deg ply left at 0 deg fail") {
-  if (!calculix_availability().available) {
-    MESSAGE("ccx not installed: the FEM comparison is skipped");
+  if (const CalculixAvailability ccx = calculix_availability(); !ccx.available) {
+    skip(ccx.message);
     return;
   }
   HolePlateSettings s;
@@ -258,7 +257,9 @@ TEST_CASE("without CalculiX the kind says so plainly and still runs the DEM") {
   CHECK_FALSE(has_error_row);
   CHECK(has_dem_stiffness);
   CHECK(fs::exists(context.out_dir / "small_particles.vtu"));  // named after the config
-  if (gnuplot_availability().available) {
+  if (const GnuplotAvailability gnuplot = gnuplot_availability(); !gnuplot.available) {
+    skip(gnuplot.message);
+  } else {
     CHECK(has_png_signature(context.out_dir / "small_ux.png"));
     CHECK_FALSE(fs::exists(context.out_dir / "small_difference.png"));
   }

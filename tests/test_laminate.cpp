@@ -9,8 +9,10 @@
 #include "experiments/protocols/tension_test.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 
 namespace {
 
@@ -91,13 +93,10 @@ TEST_CASE("a laminate stacks its plies and bonds every facing surface particle a
 }
 
 TEST_CASE("the paper's [0/90/0] laminate: moduli within 2% and Poisson's ratios within 0.015") {
-  // CLT written out: A = sum Q-bar_k t_k with Q-bar of 0 and 90 deg plies (Q11 <-> Q22).
+  // CLT written out: A/h is the mean Q-bar of the 0 and 90 deg plies (tests/support).
   const Material m = load_material("eglass-my750");
-  const double nu21 = m.nu12 * m.E2 / m.E1, den = 1 - m.nu12 * nu21;
-  const double q11 = m.E1 / den, q22 = m.E2 / den, q12 = m.nu12 * m.E2 / den;
-  const double a11 = (2 * q11 + q22) / 3, a22 = (2 * q22 + q11) / 3, a12 = q12;
-  const double ex = a11 - a12 * a12 / a22, ey = a22 - a12 * a12 / a11;
-  const double nu_xy = a12 / a22, nu_yx = a12 / a11;
+  const ConstantsByHand clt = constants_by_hand(membrane_by_hand(m, {0, 90, 0}));
+  const double ex = clt.Ex, ey = clt.Ey, nu_xy = clt.nu_xy, nu_yx = clt.nu_yx;
 
   TensionSettings settings;
   settings.coupon.material = m;
@@ -111,4 +110,28 @@ TEST_CASE("the paper's [0/90/0] laminate: moduli within 2% and Poisson's ratios 
   CHECK(std::abs(r.dem.nu_xy - nu_xy) < 0.015);
   CHECK(std::abs(r.dem.nu_yx - nu_yx) < 0.015);
   CHECK(std::abs(r.dem.shear_coupling_x) < 0.005);
+}
+
+// The laminate tension path (stacking, interface bonds, both pulls, the fits, the specimen
+// stiffness) on a tiny [0/90/0] coupon: it runs in both builds; the paper's coupon above (label
+// slow) checks the accuracy.
+TEST_CASE("a small [0/90/0] laminate runs the whole tension path near CLT") {
+  const Material m = load_material("eglass-my750");
+  const ConstantsByHand clt = constants_by_hand(membrane_by_hand(m, {0, 90, 0}));
+  TensionSettings settings;
+  settings.coupon.material = m;
+  settings.coupon.length = 1.2e-3;
+  settings.coupon.width = 0.5e-3;
+  settings.coupon.particle_diameter = 0.1e-3;
+  settings.layup = parse_layup("[0/90/0]");
+  const TensionResult r = TensionTest(settings).run();
+  MESSAGE("small [0/90/0]: Ex ", r.dem.Ex / clt.Ex - 1, ", Ey ", r.dem.Ey / clt.Ey - 1, ", nu_xy ",
+          r.dem.nu_xy - clt.nu_xy, ", membrane Ex ", r.specimen.constants.Ex / clt.Ex - 1);
+  CHECK(r.theory.Ex == doctest::Approx(clt.Ex).epsilon(1e-12));
+  CHECK(r.along_x.strain.size() >= 2);  // the origin and the loaded state(s)
+  CHECK(r.along_y.strain.size() >= 2);
+  CHECK(std::abs(r.dem.Ex / clt.Ex - 1) < 0.05);
+  CHECK(std::abs(r.dem.Ey / clt.Ey - 1) < 0.05);
+  CHECK(std::abs(r.specimen.constants.Ex / clt.Ex - 1) < 0.05);
+  CHECK(std::abs(r.dem.shear_coupling_x) < 0.03);  // 0 for [0/90/0]; 30 deg plies give ~0.7
 }

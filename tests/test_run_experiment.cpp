@@ -1,6 +1,6 @@
 // `plydem run`: the Table 4 and Table 5 experiments run quick into a temporary folder; their
 // report, results.csv, figures and VTU files are checked, and the laminate moduli against CLT
-// written out here by hand from E-glass/MY750's engineering constants (paper Table 1, ERRATA §2).
+// written out by hand from E-glass/MY750's engineering constants (tests/support/test_support.hpp).
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 #include <unistd.h>
@@ -17,21 +17,15 @@
 #include "core/error.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/runner/run_experiment.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 namespace fs = std::filesystem;
 
 namespace {
 
 const fs::path kExperiments = fs::path(PLYDEM_TEST_DATA_DIR) / ".." / ".." / "experiments";
-
-fs::path temp_dir(const std::string& name) {
-  const fs::path dir =
-      fs::temp_directory_path() / fmt::format("plydem_run_{}_{}", name, ::getpid());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 std::string read(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -40,34 +34,9 @@ std::string read(const fs::path& path) {
   return s.str();
 }
 
-// Plane-stress Q of E-glass/MY750 (E1 45.6, E2 16.2, G12 5.83 GPa, nu12 0.278) turned to `deg`:
-// eq. (32) written out.
-Eigen::Matrix3d q_bar(double deg) {
-  const double E1 = 45.6e9, E2 = 16.2e9, G12 = 5.83e9, nu12 = 0.278;
-  const double nu21 = nu12 * E2 / E1;
-  const double d = 1 - nu12 * nu21;
-  const double Q11 = E1 / d, Q22 = E2 / d, Q12 = nu12 * E2 / d, Q66 = G12;
-  const double t = deg * std::numbers::pi / 180, c = std::cos(t), s = std::sin(t);
-  const double c2 = c * c, s2 = s * s;
-  Eigen::Matrix3d q;
-  q(0, 0) = Q11 * c2 * c2 + 2 * (Q12 + 2 * Q66) * s2 * c2 + Q22 * s2 * s2;
-  q(1, 1) = Q11 * s2 * s2 + 2 * (Q12 + 2 * Q66) * s2 * c2 + Q22 * c2 * c2;
-  q(0, 1) = q(1, 0) = (Q11 + Q22 - 4 * Q66) * s2 * c2 + Q12 * (s2 * s2 + c2 * c2);
-  q(0, 2) = q(2, 0) = (Q11 - Q12 - 2 * Q66) * s * c2 * c + (Q12 - Q22 + 2 * Q66) * s2 * s * c;
-  q(1, 2) = q(2, 1) = (Q11 - Q12 - 2 * Q66) * s2 * s * c + (Q12 - Q22 + 2 * Q66) * s * c2 * c;
-  q(2, 2) = (Q11 + Q22 - 2 * Q12 - 2 * Q66) * s2 * c2 + Q66 * (s2 * s2 + c2 * c2);
-  return q;
-}
-
-struct Clt {
-  double Ex, Ey, nu_xy, nu_yx;
-};
-// CLT of equal-thickness plies: A/h is the mean Q-bar; Ex = 1/a11, nu_xy = -a12/a11, ...
-Clt clt(const std::vector<double>& degrees) {
-  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-  for (double deg : degrees) a += q_bar(deg) / static_cast<double>(degrees.size());
-  const Eigen::Matrix3d s = a.inverse();
-  return {1 / s(0, 0), 1 / s(1, 1), -s(0, 1) / s(0, 0), -s(0, 1) / s(1, 1)};
+// CLT of equal-thickness plies of E-glass/MY750, by hand (tests/support/test_support.hpp).
+ConstantsByHand clt(const std::vector<double>& degrees) {
+  return constants_by_hand(membrane_by_hand(eglass(), degrees));
 }
 
 // results.csv as (case, quantity, source) -> value, checking the header and the field count.
@@ -101,13 +70,15 @@ bool is_png(const fs::path& path) {
   return head == std::string("\x89PNG\r\n\x1a\n", 8);
 }
 
-// Runs experiments/NAME.toml quick and checks everything a run must leave; returns the values.
-std::map<std::string, double> run_quick(const std::string& name, const std::string& table) {
-  const fs::path dir = temp_dir(name);
+// Runs `config` (quick or not) and checks everything a run must leave; returns the values.
+std::map<std::string, double> run_checked(const fs::path& config, const std::string& table,
+                                          bool quick) {
+  const std::string name = config.stem().string();
+  const fs::path dir = fresh_directory("run_" + name);
   RunOptions options;
-  options.config = kExperiments / fmt::format("{}.toml", name);
+  options.config = config;
   options.out_dir = dir;
-  options.quick = true;
+  options.quick = quick;
   const RunSummary summary = run_experiment(options);
   const std::string report = read(dir / "report.md");
   CHECK(report.find(fmt::format("## {}:", table)) != std::string::npos);
@@ -115,12 +86,13 @@ std::map<std::string, double> run_quick(const std::string& name, const std::stri
   CHECK(report.find("CLT (correct, A matrix)") != std::string::npos);
   CHECK(report.find("free grips") != std::string::npos);
   CHECK(report.find("γxy/εx") != std::string::npos);
-  CHECK(report.find("quick run") != std::string::npos);
+  CHECK((report.find("quick run") != std::string::npos) == quick);
   CHECK(report.find("## Files") != std::string::npos);
   if (find_executable("ccx")) {
     CHECK(report.find("| CalculiX (C3D8I") != std::string::npos);
   } else {
     CHECK(report.find("CalculiX not installed") != std::string::npos);
+    skip("CalculiX (ccx) is not installed: the FEM column was not run");
   }
   int pngs = 0, vtus = 0;
   for (const fs::path& file : summary.output.files) {
@@ -135,12 +107,21 @@ std::map<std::string, double> run_quick(const std::string& name, const std::stri
       ++vtus;
     }
   }
-  if (gnuplot_availability().available) CHECK(pngs >= 3);  // bonds, ux map, stress-strain
-  CHECK(vtus == 2);                                        // particles and bonds
+  if (const GnuplotAvailability gnuplot = gnuplot_availability(); gnuplot.available) {
+    CHECK(pngs >= 3);  // bonds, ux map, stress-strain
+  } else {
+    skip(gnuplot.message);
+  }
+  CHECK(vtus == 2);  // particles and bonds
   CHECK(fs::exists(dir / "vtu" / fmt::format("{}.pvd", name)));
   const std::map<std::string, double> values = parse_results(dir / "results.csv");
   fs::remove_all(dir);
   return values;
+}
+
+// Runs experiments/NAME.toml quick.
+std::map<std::string, double> run_quick(const std::string& name, const std::string& table) {
+  return run_checked(kExperiments / fmt::format("{}.toml", name), table, true);
 }
 
 }  // namespace
@@ -168,7 +149,7 @@ TEST_CASE("run --list finds the paper's experiment configs with their descriptio
 }
 
 TEST_CASE("run refuses a missing config, malformed TOML, an unknown kind and an unknown key") {
-  const fs::path dir = temp_dir("errors");
+  const fs::path dir = fresh_directory("run_errors");
   RunOptions options;
   options.out_dir = dir / "out";
   options.config = dir / "missing.toml";
@@ -193,7 +174,7 @@ TEST_CASE("run refuses a missing config, malformed TOML, an unknown kind and an 
 }
 
 TEST_CASE("quick run: Table 4, the [0/90/0] laminate, within 2% and 0.015 of CLT") {
-  const Clt ref = clt({0, 90, 0});
+  const ConstantsByHand ref = clt({0, 90, 0});
   const std::map<std::string, double> v = run_quick("table4", "Table 4");
   const std::string c = "[0/90/0]";
   // The library's CLT row agrees with the hand-written one.
@@ -217,7 +198,7 @@ TEST_CASE("quick run: Table 4, the [0/90/0] laminate, within 2% and 0.015 of CLT
 }
 
 TEST_CASE("quick run: Table 5, the [0/30/45]s laminate, within 2% and 0.015 of CLT") {
-  const Clt ref = clt({0, 30, 45, 45, 30, 0});
+  const ConstantsByHand ref = clt({0, 30, 45, 45, 30, 0});
   const std::map<std::string, double> v = run_quick("table5", "Table 5");
   const std::string c = "[0/30/45/45/30/0]";
   CHECK(v.at(c + "|Ex|clt") == doctest::Approx(ref.Ex * 1e-9).epsilon(1e-9));
@@ -240,4 +221,24 @@ TEST_CASE("quick run: Table 5, the [0/30/45]s laminate, within 2% and 0.015 of C
                  v.at(c + "|shear coupling gamma_xy/eps_x|clt")) < 0.03);
   // The paper's theory row (30.617 GPa) is not CLT: it is flagged.
   CHECK(std::abs(v.at(c + "|Ex|paper theory") / (ref.Ex * 1e-9) - 1) > 0.05);
+}
+
+// The whole `plydem run` path (config, DEM laminate, CLT, CalculiX, figures, VTU, report) on a
+// tiny coupon: it runs in both builds; the quick runs above (label slow) check the accuracy.
+TEST_CASE("tiny run: Table 4's kind on a 1.2 x 0.5 mm coupon, every file and column") {
+  const ConstantsByHand ref = clt({0, 90, 0});
+  const std::map<std::string, double> v =
+      run_checked(fs::path(PLYDEM_TEST_DATA_DIR) / "tiny_table4.toml", "Table 4", false);
+  const std::string c = "[0/90/0]";
+  CHECK(v.at(c + "|Ex|clt") == doctest::Approx(ref.Ex * 1e-9).epsilon(1e-9));
+  CHECK(v.at(c + "|nu_xy|clt") == doctest::Approx(ref.nu_xy).epsilon(1e-9));
+  MESSAGE("tiny [0/90/0]: Ex ", v.at(c + "|Ex|dem hex2d") / (ref.Ex * 1e-9) - 1, ", Ey ",
+          v.at(c + "|Ey|dem hex2d") / (ref.Ey * 1e-9) - 1, ", nu_xy ",
+          v.at(c + "|nu_xy|dem hex2d") - ref.nu_xy);
+  CHECK(std::abs(v.at(c + "|Ex|dem hex2d") / (ref.Ex * 1e-9) - 1) < 0.05);
+  CHECK(std::abs(v.at(c + "|Ex|dem hex2d membrane") / (ref.Ex * 1e-9) - 1) < 0.05);
+  CHECK(v.at(c + "|Ex|paper theory") == doctest::Approx(36.01));
+  if (v.count(c + "|Ex|calculix")) {
+    CHECK(std::abs(v.at(c + "|Ex|calculix") / (ref.Ex * 1e-9) - 1) < 0.02);
+  }
 }

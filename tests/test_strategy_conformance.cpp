@@ -2,14 +2,21 @@
 // is a consistent bonded model, its interior has the packing's coordination, and the stiffness the
 // built specimen has when the engine loads it agrees with what the strategy's calibration says it
 // will simulate; strategies without a suffix (the defaults) must also reach the target.
+//
+// Each strategy gets a material it can represent: E-glass/MY750, except for the random lattice,
+// whose network cannot reach E-glass's G12 (tests/test_lattice.cpp checks that refusal). It gets
+// a ply it can reach (E1 20, E2 15, G12 6.5 GPa, nu12 0.25), its smallest calibration sample and a
+// small coupon, since it calibrates each coupon's own packing.
 #include <doctest/doctest.h>
 
 #include <map>
 #include <numbers>
+#include <set>
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "experiments/protocols/stiffness_test.hpp"
+#include "strategies/lattice.hpp"
 #include "strategies/registry.hpp"
 
 using namespace plydem;
@@ -22,6 +29,40 @@ const std::map<std::string, std::pair<int, int>> kCoordination = {
     {"hex2d", {6, 6}}, {"hex2d-paper", {6, 6}}, {"square", {8, 8}},   {"square-paper", {8, 8}},
     {"hcp", {9, 12}},  {"hcp-eq26", {9, 12}},   {"lattice", {4, 40}}, {"lattice-paper", {4, 40}},
 };
+
+// The material a strategy is checked with, and the options that keep its calibration small.
+struct Subject {
+  Material material;
+  std::vector<std::pair<std::string, double>> options;
+  double length = 1.2e-3, width = 0.9e-3;
+  double tolerance = 0.03;  // measured specimen stiffness against the promised one
+};
+Subject subject_for(const std::string& strategy) {
+  Subject s;
+  s.material = load_material("eglass-my750");
+  if (strategy.rfind("lattice", 0) == 0) {
+    s.material.name = "reachable by the random lattice";
+    s.material.E1 = 20e9;
+    s.material.E2 = 15e9;
+    s.material.G12 = 6.5e9;
+    s.material.nu12 = 0.25;
+    s.material.nu23 = 0.25;
+    s.options = {{"sample_diameters", 8}};
+    s.length = 0.8e-3;
+    s.width = 0.6e-3;
+    // The bonds cut at a lattice coupon's free edges are not completed (README, lattice): this
+    // 16 x 12 diameter coupon measures 6.0-7.3% softer than its periodic packing.
+    s.tolerance = 0.09;
+  } else if (strategy == "hcp-eq26") {
+    // Eq. (26) fixes C2233/C1122 and needs C1212 >= C1122: E-glass is refused at every angle
+    // (tests/test_hcp.cpp), this ply is not.
+    s.material.name = "stiff-shear";
+    s.material.G12 = 7e9;
+    s.material.nu12 = 0.2;
+    s.material.nu23 = 0.2;
+  }
+  return s;
+}
 
 std::vector<int> coordination(const Model& model) {
   std::vector<int> count(model.particles.size(), 0);
@@ -36,27 +77,26 @@ std::vector<int> coordination(const Model& model) {
 
 TEST_CASE("every registered strategy builds a consistent coupon with the stiffness it promises") {
   const Registry& registry = default_registry();
-  const Material eglass = load_material("eglass-my750");
+  std::set<std::string> checked;  // strategies that built and measured a coupon
   for (const std::string& name : registry.names()) {
     for (const double degrees : {0.0, 90.0}) {
       CAPTURE(name);
       CAPTURE(degrees);
-      // The random lattice cannot reach E-glass's G12 and calibrates each coupon's own packing
-      // (tests/test_lattice.cpp checks its refusal, its sample and its coupon).
-      if (name.rfind("lattice", 0) == 0) continue;
+      const Subject subject = subject_for(name);
       const std::unique_ptr<Strategy> strategy = registry.create(name);
+      for (const auto& [option, value] : subject.options) strategy->set_option(option, value);
       CouponSpec coupon;
-      coupon.material = eglass;
+      coupon.material = subject.material;
       coupon.ply_angle = degrees * std::numbers::pi / 180;
-      coupon.length = 1.2e-3;
-      coupon.width = 0.9e-3;
+      coupon.length = subject.length;
+      coupon.width = subject.width;
       Calibration calibration;
       try {
-        calibration = strategy->calibrate(eglass, coupon.ply_angle, coupon.thickness);
+        calibration = strategy->calibrate(subject.material, coupon.ply_angle, coupon.thickness);
       } catch (const Error& e) {
         // Variants that apply a paper formula as printed may refuse a ply, with a reason; the
         // defaults must represent every E-glass ply.
-        CAPTURE(e.what());
+        CAPTURE(std::string(e.what()));
         CHECK(name.find('-') != std::string::npos);
         continue;
       }
@@ -94,11 +134,26 @@ TEST_CASE("every registered strategy builds a consistent coupon with the stiffne
       CHECK(interior > 0);
 
       // The specimen as the engine loads it has the stiffness the calibration predicted (the
-      // affine boundary frame of a small coupon costs up to about 1%).
+      // affine boundary frame of a small coupon costs up to about 1%). The random lattice
+      // calibrates each coupon's own packing: the corrected one reaches the target on it, as on
+      // calibrate()'s sample; the paper's uncorrected lattice promises the relaxed stiffness of
+      // that packing, computed here as build() does (calibrate_lattice with the coupon's size).
+      Eigen::Matrix3d promised = calibration.relaxed;
+      if (const auto* lattice = dynamic_cast<const LatticeStrategy*>(strategy.get());
+          lattice != nullptr && calibration.relaxed_error > 1e-6) {
+        const Eigen::Vector2d size(coupon.length, coupon.width);
+        promised = lattice
+                       ->calibrate_lattice(coupon.material, coupon.ply_angle, coupon.thickness,
+                                           coupon.particle_diameter, &size)
+                       .calibration.relaxed;
+      }
       const SpecimenStiffness measured = measure_specimen_stiffness(model);
       CAPTURE(measured.stiffness);
-      CAPTURE(calibration.relaxed);
-      CHECK(relative_difference(measured.stiffness, calibration.relaxed) < 0.03);
+      CAPTURE(promised);
+      CHECK(relative_difference(measured.stiffness, promised) < subject.tolerance);
+      checked.insert(name);
     }
   }
+  // Every registered strategy built and measured a coupon at one angle at least: lattice included.
+  CHECK(checked.size() == registry.names().size());
 }

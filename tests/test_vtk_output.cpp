@@ -20,8 +20,10 @@
 #include "experiments/output/vtk_output.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -269,8 +271,8 @@ TEST_CASE("particles and bonds .vtu files hold the model's arrays, readable by V
 
   const std::string python = python_with_vtk();
   if (python.empty()) {
-    MESSAGE(
-        "python3 with VTK (Debian: python3-vtk9) is not installed: VTK reader check skipped, "
+    skip(
+        "python3 with VTK (Debian: python3-vtk9) is not installed: VTK reader check not run, "
         "structure checked");
     return;
   }
