@@ -6,6 +6,7 @@
 /// library's message. The GIL is released while C++ works.
 ///
 ///   PYTHONPATH=build/python /usr/bin/python3 -c "import plydem; print(plydem.strategies())"
+#include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -22,6 +23,7 @@
 #include "experiments/output/report.hpp"
 #include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/tension_test.hpp"
+#include "solvers/explicit_integrator.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
@@ -167,6 +169,26 @@ StaticMethod static_method(const std::string& name) {
   if (name == "iterative") return StaticMethod::kIterative;
   throw Error("static method '" + name + "' is none of auto, direct, iterative");
 }
+
+py::dict check_dict(const RunCheck& c) {
+  py::dict d;
+  d["cycles"] = c.cycles;
+  d["run_cycles"] = c.run_cycles;
+  d["strain_energy"] = c.report.strain_energy;
+  d["kinetic_energy"] = c.report.kinetic_energy;
+  d["unbalanced_force_ratio"] = c.report.unbalanced_force_ratio;
+  d["elapsed_seconds"] = c.elapsed_seconds;
+  d["seconds_left"] = c.seconds_left;
+  return d;
+}
+
+// An ExplicitIntegrator with the Model it advances (kept alive by the Python object).
+struct PyIntegrator {
+  std::shared_ptr<Model> model;
+  ExplicitIntegrator integrator;
+  PyIntegrator(std::shared_ptr<Model> m, const ExplicitSettings& settings)
+      : model(std::move(m)), integrator(*model, settings) {}
+};
 
 }  // namespace
 
@@ -444,6 +466,106 @@ PYBIND11_MODULE(plydem, m) {
       "free_dofs, prescribed_dofs, iterations, relative_residual, strain_energy [J], reaction "
       "(n x 6 [N, N m]), pinned and seconds. method: auto, direct or iterative. pin_rigid_modes "
       "fixes the dofs that would leave a rigid-body mode free (at zero, carrying no force).");
+
+  // --- explicit dynamics ----------------------------------------------------------------------
+  py::class_<PrescribedMotion>(
+      m, "PrescribedMotion",
+      "Velocities imposed on every particle of a boundary group; components whose fix_* flag is "
+      "False stay free. Keywords: group, velocity [m/s], angular_velocity [rad/s], fix_velocity, "
+      "fix_angular_velocity (three booleans each).")
+      .def(py::init([](py::kwargs kwargs) { return from_kwargs<PrescribedMotion>(kwargs); }),
+           "PrescribedMotion(**keywords)")
+      .def_property(
+          "group", [](const PrescribedMotion& x) { return static_cast<int>(x.group); },
+          [](PrescribedMotion& x, int g) { x.group = static_cast<BoundaryGroup>(g); },
+          "the boundary group (LEFT_GRIP, RIGHT_GRIP)")
+      .def_readwrite("velocity", &PrescribedMotion::velocity, "[m/s]")
+      .def_readwrite("angular_velocity", &PrescribedMotion::angular_velocity, "[rad/s]")
+      .def_readwrite("fix_velocity", &PrescribedMotion::fix_velocity, "which components are set")
+      .def_readwrite("fix_angular_velocity", &PrescribedMotion::fix_angular_velocity,
+                     "which components are set");
+
+  py::class_<PyIntegrator>(
+      m, "ExplicitIntegrator",
+      "Damped central differences on a Model (solvers/explicit_integrator.hpp): the same bond "
+      "law as the static solve, PFC local damping, prescribed motions of boundary groups.")
+      .def(py::init(
+               [](std::shared_ptr<Model> model, double damping, double safety, double time_step) {
+                 ExplicitSettings settings;
+                 settings.local_damping = damping;
+                 settings.safety_factor = safety;
+                 settings.time_step = time_step;
+                 return std::make_unique<PyIntegrator>(std::move(model), settings);
+               }),
+           py::arg("model"), py::arg("damping") = 0.7, py::arg("safety") = 0.8,
+           py::arg("time_step") = 0.0,
+           "ExplicitIntegrator(model, damping=0.7, safety=0.8, time_step=0): time_step 0 = "
+           "safety times the critical step. Raises plydem.Error for bad settings or model.")
+      .def_property_readonly(
+          "time_step", [](const PyIntegrator& x) { return x.integrator.time_step(); }, "[s]")
+      .def_property_readonly(
+          "time", [](const PyIntegrator& x) { return x.integrator.time(); }, "[s]")
+      .def_property_readonly(
+          "cycles", [](const PyIntegrator& x) { return x.integrator.cycles(); }, "cycles so far")
+      .def(
+          "set_prescribed_motions",
+          [](PyIntegrator& x, const std::vector<PrescribedMotion>& motions) {
+            x.integrator.set_prescribed_motions(motions);
+          },
+          py::arg("motions"),
+          "Replaces the prescribed motions (a list of PrescribedMotion); allowed from a callback.")
+      .def(
+          "gather",
+          [](PyIntegrator& x) {
+            std::vector<int> all(static_cast<std::size_t>(x.model->particles.size()));
+            for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+            x.integrator.gather(all, x.model->particles);
+          },
+          "From a callback: copies the current state (displacement, rotation, velocities, force, "
+          "torque) into the model's arrays, so that its NumPy views show it. After run() the "
+          "model holds the state anyway.")
+      .def(
+          "run",
+          [](PyIntegrator& x, long max_cycles, double tolerance, double time_limit,
+             long check_interval, py::object callback) {
+            RunControl control;
+            control.max_cycles = max_cycles;
+            control.tolerance = tolerance;
+            control.time_limit_seconds = time_limit;
+            control.check_interval = check_interval;
+            // Every check takes the GIL: for the callback, and to honour Ctrl-C (the
+            // KeyboardInterrupt ends the run with the model written back).
+            control.on_check = [&callback](const RunCheck& check) {
+              py::gil_scoped_acquire acquire;
+              if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+              if (callback.is_none()) return true;
+              py::object answer = callback(check_dict(check));
+              return answer.is_none() || answer.cast<bool>();
+            };
+            RunReport r;
+            {
+              py::gil_scoped_release release;
+              r = x.integrator.run(control);
+            }
+            py::dict d;
+            d["cycles"] = r.cycles;
+            d["checks"] = r.checks;
+            d["stop"] = std::string(to_string(r.stop));
+            d["strain_energy"] = r.last.strain_energy;
+            d["kinetic_energy"] = r.last.kinetic_energy;
+            d["unbalanced_force_ratio"] = r.last.unbalanced_force_ratio;
+            d["wall_seconds"] = r.wall_seconds;
+            return d;
+          },
+          py::arg("max_cycles") = 0, py::arg("tolerance") = 0.0, py::arg("time_limit") = 0.0,
+          py::arg("check_interval") = 1000, py::arg("callback") = py::none(),
+          "Cycles until a stop condition holds (at least one of max_cycles, tolerance on the "
+          "unbalanced-force ratio, time_limit [s]); callback(check) is called every "
+          "check_interval cycles with a dict (cycles, run_cycles, strain_energy, kinetic_energy, "
+          "unbalanced_force_ratio, elapsed_seconds, seconds_left) and stops the run by returning "
+          "False. The GIL is released between checks; Ctrl-C stops the run. Returns a dict with "
+          "cycles, checks, stop ('quasi-static', 'cycle limit', 'time limit', 'hook'), the last "
+          "cycle's energies and ratio, wall_seconds.");
 
   // --- the tension test -----------------------------------------------------------------------
   py::class_<TensionSettings>(

@@ -165,3 +165,70 @@ def test_errors_are_plydem_error_with_the_library_message():
     with pytest.raises(plydem.Error, match="unknown strategy 'nosuch'"):
         plydem.tension_test(strategy="nosuch")
     assert issubclass(plydem.Error, RuntimeError)
+
+
+def test_explicit_run_calls_back_every_n_cycles_and_stops_on_false():
+    model = grip_coupon()
+    integrator = plydem.ExplicitIntegrator(model)
+    assert integrator.time_step > 0
+    v = 1e-3  # m/s per grip
+    integrator.set_prescribed_motions([
+        plydem.PrescribedMotion(group=plydem.LEFT_GRIP, velocity=(-v, 0, 0), fix_velocity=(True, False, False)),
+        plydem.PrescribedMotion(group=plydem.RIGHT_GRIP, velocity=(v, 0, 0), fix_velocity=(True, False, False)),
+    ])
+    u = model.particles.displacement
+    seen = []
+
+    def callback(check):
+        integrator.gather()  # the views show the kernel's state from here
+        seen.append((check["run_cycles"], float(u[:, 0].max())))
+        return len(seen) < 3
+
+    report = integrator.run(max_cycles=10_000, check_interval=200, callback=callback)
+    assert report["stop"] == "hook" and report["cycles"] == 600 and report["checks"] == 3
+    assert [c for c, _ in seen] == [200, 400, 600]
+    # The right grip moved v dt per cycle, seen through the same view.
+    for cycles, umax in seen:
+        assert umax == pytest.approx(v * integrator.time_step * cycles, rel=1e-9)
+    assert integrator.cycles == 600
+    assert integrator.run(max_cycles=100)["stop"] == "cycle limit"
+
+
+def test_an_exception_in_the_callback_ends_the_run():
+    model = grip_coupon()
+    integrator = plydem.ExplicitIntegrator(model)
+
+    def callback(check):
+        raise KeyError("stop here")
+
+    with pytest.raises(KeyError, match="stop here"):
+        integrator.run(max_cycles=1000, check_interval=100, callback=callback)
+    assert integrator.cycles == 100
+    with pytest.raises(plydem.Error):
+        integrator.run()  # no stop condition
+
+
+def test_ctrl_c_stops_an_explicit_run():
+    import signal
+    import sys
+    import time
+
+    script = (
+        "import plydem, sys\n"
+        "m = plydem.create_strategy('hex2d').build(plydem.CouponSpec(length=2e-3, width=0.5e-3))\n"
+        "g = plydem.ExplicitIntegrator(m)\n"
+        "print('running', flush=True)\n"
+        "try:\n"
+        "    g.run(max_cycles=10**12, check_interval=1000)\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted after', g.cycles, flush=True)\n"
+        "    sys.exit(3)\n"
+    )
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                             env=dict(os.environ))
+    assert child.stdout.readline().strip() == "running"
+    time.sleep(0.5)
+    child.send_signal(signal.SIGINT)
+    out, _ = child.communicate(timeout=60)
+    assert child.returncode == 3, out
+    assert "interrupted after" in out
