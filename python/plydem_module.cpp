@@ -198,7 +198,10 @@ PYBIND11_MODULE(plydem, m) {
       "SI units throughout (m, Pa, N, rad). Arrays of a Model are NumPy views of the C++ arrays.\n"
       "Every error the library raises arrives as plydem.Error with its message.";
   m.attr("__version__") = PLYDEM_VERSION;
-  py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+  auto& error = py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+  error.attr("__doc__") =
+      "Bad input or an impossible request (plydem::Error): the message names the problem in the "
+      "user's terms, as the command line prints it.";
 
   // --- materials ------------------------------------------------------------------------------
   py::class_<Material>(m, "Material",
@@ -293,8 +296,8 @@ PYBIND11_MODULE(plydem, m) {
 
   // --- strategies -----------------------------------------------------------------------------
   py::class_<StrategyOption>(m, "StrategyOption", "A strategy's own parameter and its value.")
-      .def_readonly("name", &StrategyOption::name)
-      .def_readonly("value", &StrategyOption::value)
+      .def_readonly("name", &StrategyOption::name, "the option's name, as set_option takes it")
+      .def_readonly("value", &StrategyOption::value, "its current value")
       .def_readonly("description", &StrategyOption::description, "one line, with the unit");
 
   py::class_<Strategy>(m, "Strategy",

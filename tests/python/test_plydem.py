@@ -232,3 +232,22 @@ def test_ctrl_c_stops_an_explicit_run():
     out, _ = child.communicate(timeout=60)
     assert child.returncode == 3, out
     assert "interrupted after" in out
+
+
+def test_docstrings_on_everything():
+    def described(name, doc):
+        lines = [line for line in (doc or "").strip().splitlines()
+                 if line.strip() and not line.strip().startswith(name + "(")]
+        return bool(lines)
+
+    missing = []
+    for name, obj in vars(plydem).items():
+        if name.startswith("_") or isinstance(obj, (int, str)):
+            continue
+        if not described(name, obj.__doc__):
+            missing.append(name)
+        if isinstance(obj, type) and obj.__module__ == "plydem":
+            for attr, member in vars(obj).items():
+                if (not attr.startswith("_") or attr == "__init__") and not described(attr, member.__doc__):
+                    missing.append(f"{name}.{attr}")
+    assert not missing
