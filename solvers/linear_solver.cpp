@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cholmod.h>
+#include <dlfcn.h>
 #include <algorithm>
 #include <cstring>
 #include <optional>
@@ -209,14 +210,69 @@ LinearSolverKind parse_linear_solver(std::string_view name) {
   throw Error(fmt::format("unknown linear solver '{}': use auto, direct or cholmod", name));
 }
 
-LinearSolverKind linear_solver_for(LinearSolverKind kind, int unknowns) {
-  if (kind != LinearSolverKind::kAuto) return kind;
-  return unknowns <= kAutoDirectMaxDofs ? LinearSolverKind::kDirect : LinearSolverKind::kCholmod;
+bool optimized_blas() {
+  // OpenBLAS exports openblas_get_config; the reference BLAS does not. CHOLMOD's libraries are
+  // linked into this program, so its BLAS is loaded by now.
+  static const bool found = dlsym(RTLD_DEFAULT, "openblas_get_config") != nullptr;
+  return found;
 }
 
-std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind, int unknowns) {
-  if (linear_solver_for(kind, unknowns) == LinearSolverKind::kCholmod)
-    return std::make_unique<CholmodSolver>();
+namespace {
+
+// kAuto: the hand-written symbolic analysis decides (see the header).
+class AutoSolver final : public LinearSolver {
+ public:
+  void factor(const SparseMatrix& lower, double pivot_tolerance) override {
+    cholmod_.reset();
+    direct_.emplace();
+    direct_->analyze(lower);
+    const double fill = static_cast<double>(direct_->factor_entries()) /
+                        std::max<double>(1.0, static_cast<double>(lower.rows()));
+    if (fill > kAutoCholmodFill && optimized_blas()) {
+      direct_.reset();  // its symbolic structure is large too
+      cholmod_ = std::make_unique<CholmodSolver>();
+      cholmod_->factor(lower, pivot_tolerance);
+    } else {
+      direct_->factorize(lower, pivot_tolerance);
+    }
+  }
+  const std::vector<int>& zero_pivots() const override {
+    return cholmod_ ? cholmod_->zero_pivots() : direct_->zero_pivots();
+  }
+  Eigen::VectorXd pivots() const override {
+    return cholmod_ ? cholmod_->pivots() : direct_->pivots();
+  }
+  void solve_in_place(Eigen::MatrixXd& b) const override {
+    require(cholmod_ || direct_, "linear solver: solve before factor");
+    if (cholmod_)
+      cholmod_->solve_in_place(b);
+    else
+      direct_->solve_in_place(b);
+  }
+  std::string name() const override {
+    return cholmod_ ? cholmod_->name() : "supernodal Cholesky (AMD on particles)";
+  }
+  double factor_entries() const override {
+    if (cholmod_) return cholmod_->factor_entries();
+    return direct_ ? static_cast<double>(direct_->factor_entries()) : 0.0;
+  }
+
+ private:
+  std::optional<SupernodalCholesky> direct_;
+  std::unique_ptr<CholmodSolver> cholmod_;
+};
+
+}  // namespace
+
+std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind) {
+  switch (kind) {
+    case LinearSolverKind::kAuto:
+      return std::make_unique<AutoSolver>();
+    case LinearSolverKind::kCholmod:
+      return std::make_unique<CholmodSolver>();
+    case LinearSolverKind::kDirect:
+      break;
+  }
   return std::make_unique<DirectSolver>();
 }
 

@@ -11,8 +11,13 @@
 ///   order the matrix is given (the static solver orders particles with AMD);
 /// - kCholmod: CHOLMOD (SuiteSparse), supernodal LL^T, with the fill-reducing order CHOLMOD
 ///   chooses itself (AMD, METIS where AMD fills in much, on the dofs).
-/// kAuto picks by size (linear_solver_for): the hand-written one up to kAutoDirectMaxDofs free
-/// dofs, where it is as fast, CHOLMOD above (bench/static_bench, README "Benchmarks").
+/// kAuto chooses after the hand-written solver's symbolic analysis, which costs little: CHOLMOD
+/// where the factor fills in densely (more than kAutoCholmodFill entries per unknown, as in a
+/// stacked laminate, whose factor is a band the width of its cross-section) and CHOLMOD's BLAS
+/// is an optimized one (OpenBLAS); the hand-written one otherwise. Measured on one thread
+/// (README, Benchmarks): on single plies (64-100 entries per unknown) the hand-written solver is
+/// as fast or faster at every size; on the [0/45/-45/90]s coupon (880 per unknown) CHOLMOD with
+/// METIS and OpenBLAS is 2.4x faster, while with the reference BLAS it is 2x slower.
 ///
 /// Zero pivots. Both report the same diagnosis: the dofs whose LDL^T pivot is at or below
 /// `pivot_tolerance` times their diagonal entry (sparse_cholesky.hpp). CHOLMOD stops at the first
@@ -30,21 +35,22 @@
 namespace plydem {
 
 enum class LinearSolverKind {
-  kAuto,    ///< kDirect up to kAutoDirectMaxDofs unknowns, kCholmod above
+  kAuto,    ///< by the fill of the factor and the BLAS (see the file comment)
   kDirect,  ///< SupernodalCholesky (solvers/sparse_cholesky.hpp)
   kCholmod  ///< CHOLMOD's supernodal Cholesky (SuiteSparse)
 };
 
-/// Largest system kAuto gives to the hand-written Cholesky (see README, Benchmarks).
-inline constexpr int kAutoDirectMaxDofs = 50000;
+/// Entries of the hand-written factor per unknown above which kAuto factors with CHOLMOD.
+inline constexpr double kAutoCholmodFill = 300;
 
 /// "auto", "direct" or "cholmod".
 const char* linear_solver_name(LinearSolverKind kind);
 /// Parses "auto", "direct" or "cholmod". Throws plydem::Error for anything else, and says so
 /// explicitly for "petsc", which is not built in (issue 15).
 LinearSolverKind parse_linear_solver(std::string_view name);
-/// The solver kAuto means for a system of `unknowns` (other kinds are returned as they are).
-LinearSolverKind linear_solver_for(LinearSolverKind kind, int unknowns);
+/// Whether the BLAS that CHOLMOD calls is an optimized one (OpenBLAS, found at run time: the
+/// Debian alternative libblas.so.3 or LD_LIBRARY_PATH decide which one is loaded).
+bool optimized_blas();
 
 class LinearSolver {
  public:
@@ -63,7 +69,8 @@ class LinearSolver {
   virtual Eigen::VectorXd pivots() const = 0;
   /// Solves A X = B for every column of `b`, in place (zero at zero pivots).
   virtual void solve_in_place(Eigen::MatrixXd& b) const = 0;
-  /// E.g. "supernodal Cholesky (AMD on particles)" or "CHOLMOD supernodal (METIS)".
+  /// E.g. "supernodal Cholesky (AMD on particles)" or "CHOLMOD supernodal (METIS)"; kAuto's
+  /// names the one it chose.
   virtual std::string name() const = 0;
   /// Stored entries of the factor L.
   virtual double factor_entries() const = 0;
@@ -71,7 +78,8 @@ class LinearSolver {
   void solve_in_place(Eigen::VectorXd& b) const;
 };
 
-/// A solver of `kind` for a system of `unknowns` (kAuto resolved by linear_solver_for).
-std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind, int unknowns);
+/// A solver of `kind`. The hand-written one and kAuto factor in the order the matrix is given
+/// (give it a fill-reducing one); CHOLMOD orders it itself.
+std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind);
 
 }  // namespace plydem

@@ -508,12 +508,13 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   const int nf = m.nf = dofs - m.prescribed;
   m.direct = settings.method == StaticMethod::kDirect ||
              (settings.method == StaticMethod::kAuto && nf <= settings.direct_max_dofs);
-  const LinearSolverKind kind = linear_solver_for(settings.linear_solver, nf);
+  const LinearSolverKind kind = settings.linear_solver;
 
-  // The hand-written direct solver factorizes in a fill-reducing order of the particles (counted
-  // with the factorization); CHOLMOD orders the dofs itself and CG needs none.
+  // The hand-written direct solver (and kAuto, which starts with its analysis) factorizes in a
+  // fill-reducing order of the particles (counted with the factorization); CHOLMOD orders the
+  // dofs itself and CG needs none.
   start = Clock::now();
-  m.order = m.direct && nf > 0 && kind == LinearSolverKind::kDirect
+  m.order = m.direct && nf > 0 && kind != LinearSolverKind::kCholmod
                 ? EliminationOrder::minimum_degree(model)
                 : EliminationOrder::identity(n);
   const double ordering_seconds = seconds_since(start);
@@ -555,7 +556,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   if (nf == 0) {
     m.method_name = "none (every dof prescribed)";
   } else if (m.direct) {
-    m.cholesky = make_linear_solver(kind, nf);
+    m.cholesky = make_linear_solver(kind);
     // Round-off leaves a zero pivot far above machine epsilon, the more so the larger the
     // system: on hex2d coupons with a free rigid mode we measured up to 4e-10 at 2.3e4 free dofs
     // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold
