@@ -310,30 +310,6 @@ std::string join(const std::vector<std::string>& items) {
                : ""));
 }
 
-// Runs CG with preconditioner Precond on A y = b from the guess y; throws if it does not converge.
-template <typename Precond>
-void solve_cg(const SparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& y,
-              const StaticSettings& settings, StaticResult& result) {
-  Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Precond> cg;
-  cg.setTolerance(settings.cg_tolerance);
-  if (settings.cg_max_iterations > 0) cg.setMaxIterations(settings.cg_max_iterations);
-  auto start = Clock::now();
-  cg.compute(a);
-  require(cg.info() == Eigen::Success,
-          "static solve: the preconditioner of the conjugate gradient could not be built");
-  result.seconds.factorization = seconds_since(start);
-  start = Clock::now();
-  y = cg.solveWithGuess(b, y);
-  result.seconds.solve = seconds_since(start);
-  result.iterations = static_cast<int>(cg.iterations());
-  require(cg.info() == Eigen::Success,
-          fmt::format("static solve: the conjugate gradient did not converge in {} iterations "
-                      "(relative residual {:.3g} > tolerance {:.3g}); the free dofs may form a "
-                      "mechanism (try StaticMethod::kDirect, which names it) or the tolerance is "
-                      "below round-off",
-                      cg.iterations(), cg.error(), settings.cg_tolerance));
-}
-
 }  // namespace
 
 const char* dof_name(Dof dof) {
@@ -451,148 +427,263 @@ void validate(const StaticSettings& settings) {
           "0, cg_tolerance > 0, 0 < pivot_tolerance < 1)");
 }
 
-StaticResult solve_static(Model& model, const DofConstraints& given,
-                          const StaticSettings& settings) {
+using IncompleteCholeskyCg = Eigen::ConjugateGradient<
+    SparseMatrix, Eigen::Lower,
+    Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>;
+using JacobiCg =
+    Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Eigen::DiagonalPreconditioner<double>>;
+
+struct StaticSystem::Impl {
+  StaticSettings settings;
+  DofConstraints constraints;  // the given ones and the pins (at zero)
+  DofFlags given_fixed;        // the dofs whose values solve() reads
+  std::vector<PinnedDof> pinned;
+  int n = 0, bonds = 0, dofs = 0, nf = 0, prescribed = 0;
+  bool direct = true;
+  EliminationOrder order;
+  std::vector<int> free_index;  // rank-ordered dof -> free index or -1
+  std::vector<int> free_dofs;   // free index -> model dof (6 * particle + component)
+  Eigen::VectorXd s;            // Jacobi scaling of the free dofs
+  BlockStiffness k;             // for the right-hand sides -K_fp u_p
+  SparseMatrix a;               // lower triangle of S K_ff S
+  std::unique_ptr<LinearSolver> cholesky;
+  std::unique_ptr<IncompleteCholeskyCg> cg_ic;
+  std::unique_ptr<JacobiCg> cg_jacobi;
+  std::string method_name;
+  StaticTimings setup;
+  int factorizations = 0;
+  mutable int solves = 0;
+
+  template <typename Cg>
+  std::unique_ptr<Cg> make_cg() const {
+    auto cg = std::make_unique<Cg>();
+    cg->setTolerance(settings.cg_tolerance);
+    if (settings.cg_max_iterations > 0) cg->setMaxIterations(settings.cg_max_iterations);
+    cg->compute(a);
+    require(cg->info() == Eigen::Success,
+            "static solve: the preconditioner of the conjugate gradient could not be built");
+    return cg;
+  }
+
+  template <typename Cg>
+  void run_cg(const Cg& cg, const Eigen::VectorXd& b, Eigen::VectorXd& y,
+              StaticResult& result) const {
+    y = cg.solveWithGuess(b, y);
+    result.iterations = static_cast<int>(cg.iterations());
+    require(cg.info() == Eigen::Success,
+            fmt::format("static solve: the conjugate gradient did not converge in {} iterations "
+                        "(relative residual {:.3g} > tolerance {:.3g}); the free dofs may form a "
+                        "mechanism (try StaticMethod::kDirect, which names it) or the tolerance is "
+                        "below round-off",
+                        cg.iterations(), cg.error(), settings.cg_tolerance));
+  }
+};
+
+StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
+                           const StaticSettings& settings)
+    : impl_(std::make_unique<Impl>()) {
   validate(settings);
-  StaticResult result;
+  Impl& m = *impl_;
+  m.settings = settings;
   auto start = Clock::now();
   check_input(model, given);
-  DofConstraints constraints = given;
-  const std::vector<ClusterModes> free = free_rigid_modes(model, constraints);
+  m.constraints = given;
+  m.given_fixed = given.fixed;
+  const std::vector<ClusterModes> free = free_rigid_modes(model, m.constraints);
   if (!free.empty()) {
     if (!settings.pin_rigid_modes) refuse_rigid_modes(model.particles, free);
     for (const ClusterModes& c : free)
       for (const PinnedDof& pin : c.pins) {
-        constraints.fix(pin.particle, pin.dof, 0.0);
-        result.pinned.push_back(pin);
+        m.constraints.fix(pin.particle, pin.dof, 0.0);
+        m.pinned.push_back(pin);
       }
   }
-  result.seconds.checks = seconds_since(start);
+  m.setup.checks = seconds_since(start);
 
-  Particles& p = model.particles;
-  const int n = p.size();
-  const int dofs = kDofsPerParticle * n;
-  result.dofs = dofs;
-  const int prescribed = constraints.prescribed_count();
-  const int nf = dofs - prescribed;
-  result.free_dofs = nf;
-  result.prescribed_dofs = prescribed;
-  const bool direct = settings.method == StaticMethod::kDirect ||
-                      (settings.method == StaticMethod::kAuto && nf <= settings.direct_max_dofs);
-  result.method = direct ? StaticMethod::kDirect : StaticMethod::kIterative;
+  const Particles& p = model.particles;
+  const int n = m.n = p.size();
+  m.bonds = model.bonds.size();
+  const int dofs = m.dofs = kDofsPerParticle * n;
+  m.prescribed = m.constraints.prescribed_count();
+  const int nf = m.nf = dofs - m.prescribed;
+  m.direct = settings.method == StaticMethod::kDirect ||
+             (settings.method == StaticMethod::kAuto && nf <= settings.direct_max_dofs);
+  const LinearSolverKind kind = settings.linear_solver;
 
-  // The direct solver factorizes in a fill-reducing order of the particles (counted with the
-  // factorization); CG needs none.
+  // The hand-written direct solver (and kAuto, which starts with its analysis) factorizes in a
+  // fill-reducing order of the particles (counted with the factorization); CHOLMOD orders the
+  // dofs itself and CG needs none.
   start = Clock::now();
-  const EliminationOrder order =
-      direct && nf > 0 ? EliminationOrder::minimum_degree(model) : EliminationOrder::identity(n);
+  m.order = m.direct && nf > 0 && kind != LinearSolverKind::kCholmod
+                ? EliminationOrder::minimum_degree(model)
+                : EliminationOrder::identity(n);
   const double ordering_seconds = seconds_since(start);
 
   start = Clock::now();
   // Dofs in rank order (dof 6 * rank + component): index among the free dofs, or -1 if
   // prescribed; free_dofs[f] is the model's dof (6 * particle + component) of free index f.
-  std::vector<int> free_index(dofs, -1);
-  std::vector<int> free_dofs;
-  free_dofs.reserve(nf);
-  Eigen::VectorXd u_ranked = Eigen::VectorXd::Zero(dofs);
+  m.free_index.assign(dofs, -1);
+  m.free_dofs.reserve(nf);
   for (int r = 0; r < n; ++r) {
-    const int i = order.order[r];
+    const int i = m.order.order[r];
     for (int c = 0; c < kDofsPerParticle; ++c) {
-      if (constraints.fixed(i, c)) {
-        u_ranked(kDofsPerParticle * r + c) = constraints.value(i, c);
-      } else {
-        free_index[kDofsPerParticle * r + c] = static_cast<int>(free_dofs.size());
-        free_dofs.push_back(kDofsPerParticle * i + c);
-      }
+      if (m.constraints.fixed(i, c)) continue;
+      m.free_index[kDofsPerParticle * r + c] = static_cast<int>(m.free_dofs.size());
+      m.free_dofs.push_back(kDofsPerParticle * i + c);
     }
   }
 
-  // The blocks are released before the factorization, whose factor then reuses their memory.
-  Eigen::VectorXd s(nf), b(nf);
-  SparseMatrix a;
-  {
-    const BlockStiffness k = block_stiffness(model, order);
-    // Jacobi scaling A = S K_ff S with S = diag(K_ff)^-1/2. Rotational and translational
-    // stiffnesses differ by the squared particle radius (1e-10 in SI); with a unit diagonal the
-    // pivot test below means the same for both, and CG's preconditioners start better
-    // conditioned.
-    for (int f = 0; f < nf; ++f) {
-      const int i = free_dofs[f] / kDofsPerParticle, c = free_dofs[f] % kDofsPerParticle;
-      const double diagonal = k.diagonal(order.rank[i], c);
-      if (!(diagonal > 0))
-        throw Error(
-            fmt::format("static solve: nothing resists {}: every bond of the particle has zero "
-                        "stiffness in that direction; prescribe it or stiffen the bonds",
-                        dof_at(p, free_dofs[f])));
-      s(f) = 1 / std::sqrt(diagonal);
-    }
-    // The lower triangle only: all that the factorization, IC and CG read, at half the memory.
-    a = compress_lower(k, free_index, nf, s);
-    // Right-hand side -K_fp u_p, from the same blocks (the prescribed values, free dofs at zero).
-    const Eigen::VectorXd k_u = k.multiply(u_ranked);
-    for (int d = 0; d < dofs; ++d)
-      if (free_index[d] >= 0) b(free_index[d]) = -s(free_index[d]) * k_u(d);
+  m.s.resize(nf);
+  m.k = block_stiffness(model, m.order);
+  // Jacobi scaling A = S K_ff S with S = diag(K_ff)^-1/2. Rotational and translational
+  // stiffnesses differ by the squared particle radius (1e-10 in SI); with a unit diagonal the
+  // pivot test below means the same for both, and CG's preconditioners start better conditioned.
+  for (int f = 0; f < nf; ++f) {
+    const int i = m.free_dofs[f] / kDofsPerParticle, c = m.free_dofs[f] % kDofsPerParticle;
+    const double diagonal = m.k.diagonal(m.order.rank[i], c);
+    if (!(diagonal > 0))
+      throw Error(
+          fmt::format("static solve: nothing resists {}: every bond of the particle has zero "
+                      "stiffness in that direction; prescribe it or stiffen the bonds",
+                      dof_at(p, m.free_dofs[f])));
+    m.s(f) = 1 / std::sqrt(diagonal);
   }
-  result.stiffness_nonzeros = a.nonZeros();
-  result.seconds.assembly = seconds_since(start);
+  // The lower triangle only: all that the factorizations, IC and CG read, at half the memory.
+  m.a = compress_lower(m.k, m.free_index, nf, m.s);
+  m.setup.assembly = seconds_since(start);
 
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);
+  start = Clock::now();
   if (nf == 0) {
-    result.method_name = "none (every dof prescribed)";
-  } else if (direct) {
-    result.method_name = "supernodal Cholesky (AMD on particles)";
-    start = Clock::now();
-    SupernodalCholesky cholesky;
-    cholesky.analyze(a);
+    m.method_name = "none (every dof prescribed)";
+  } else if (m.direct) {
+    m.cholesky = make_linear_solver(kind);
     // Round-off leaves a zero pivot far above machine epsilon, the more so the larger the
     // system: on hex2d coupons with a free rigid mode we measured up to 4e-10 at 2.3e4 free dofs
     // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold
     // that grows with the size. The factorization collects every zero pivot in one pass.
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
-    cholesky.factorize(a, threshold);
-    if (!cholesky.zero_pivots().empty())
-      refuse_zero_pivots(p, free_dofs, cholesky.pivots(), cholesky.zero_pivots(), threshold);
-    result.seconds.factorization = ordering_seconds + seconds_since(start);
-    start = Clock::now();
-    y = b;
-    cholesky.solve_in_place(y);
-    result.seconds.solve = seconds_since(start);
+    m.cholesky->factor(m.a, threshold);
+    ++m.factorizations;
+    if (!m.cholesky->zero_pivots().empty())
+      refuse_zero_pivots(p, m.free_dofs, m.cholesky->pivots(), m.cholesky->zero_pivots(),
+                         threshold);
+    m.method_name = m.cholesky->name();
+    m.setup.factorization = ordering_seconds + seconds_since(start);
+  } else if (settings.preconditioner == StaticPreconditioner::kIncompleteCholesky) {
+    m.method_name = "ConjugateGradient + IncompleteCholesky";
+    m.cg_ic = m.make_cg<IncompleteCholeskyCg>();
+    m.setup.factorization = seconds_since(start);
   } else {
+    m.method_name = "ConjugateGradient + Jacobi";
+    m.cg_jacobi = m.make_cg<JacobiCg>();
+    m.setup.factorization = seconds_since(start);
+  }
+}
+
+StaticSystem::~StaticSystem() = default;
+StaticSystem::StaticSystem(StaticSystem&&) noexcept = default;
+StaticSystem& StaticSystem::operator=(StaticSystem&&) noexcept = default;
+
+int StaticSystem::factorizations() const {
+  return impl_->factorizations;
+}
+
+int StaticSystem::solves() const {
+  return impl_->solves;
+}
+
+StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
+  const Impl& m = *impl_;
+  Particles& p = model.particles;
+  require(p.size() == m.n && model.bonds.size() == m.bonds,
+          fmt::format("static solve: the system was built for {} particles and {} bonds, the "
+                      "model has {} and {}",
+                      m.n, m.bonds, p.size(), model.bonds.size()));
+  require(values.rows() == m.n,
+          fmt::format("static solve: the prescribed values are for {} particles, the model has {}",
+                      values.rows(), m.n));
+  for (int i = 0; i < m.n; ++i)
+    for (int c = 0; c < kDofsPerParticle; ++c)
+      if (m.given_fixed(i, c) && !std::isfinite(values(i, c)))
+        throw Error(
+            fmt::format("static solve: the prescribed {} is not finite", dof_at(p, 6 * i + c)));
+
+  StaticResult result;
+  result.method = m.direct ? StaticMethod::kDirect : StaticMethod::kIterative;
+  result.method_name = m.method_name;
+  result.dofs = m.dofs;
+  result.free_dofs = m.nf;
+  result.prescribed_dofs = m.prescribed;
+  result.stiffness_nonzeros = m.a.nonZeros();
+  result.pinned = m.pinned;
+  result.reused_factorization = m.solves > 0;
+  result.factor_entries = m.cholesky ? m.cholesky->factor_entries() : 0.0;
+  if (!result.reused_factorization) result.seconds = m.setup;
+  ++m.solves;
+
+  // The prescribed values (pins at zero), in rank order, and the right-hand side -K_fp u_p from
+  // the blocks (the prescribed values, free dofs at zero).
+  auto start = Clock::now();
+  const int nf = m.nf;
+  auto value_of = [&](int i, int c) { return m.given_fixed(i, c) ? values(i, c) : 0.0; };
+  Eigen::VectorXd u_ranked = Eigen::VectorXd::Zero(m.dofs);
+  for (int r = 0; r < m.n; ++r) {
+    const int i = m.order.order[r];
+    for (int c = 0; c < kDofsPerParticle; ++c)
+      if (m.constraints.fixed(i, c)) u_ranked(kDofsPerParticle * r + c) = value_of(i, c);
+  }
+  Eigen::VectorXd b(nf);
+  {
+    const Eigen::VectorXd k_u = m.k.multiply(u_ranked);
+    for (int d = 0; d < m.dofs; ++d)
+      if (m.free_index[d] >= 0) b(m.free_index[d]) = -m.s(m.free_index[d]) * k_u(d);
+  }
+  result.seconds.assembly += seconds_since(start);
+
+  start = Clock::now();
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);
+  if (nf > 0 && m.direct) {
+    y = b;
+    m.cholesky->solve_in_place(y);
+  } else if (nf > 0) {
     // Warm start from the current state: successive load stages then take few iterations.
     for (int f = 0; f < nf; ++f) {
-      const int i = free_dofs[f] / kDofsPerParticle, c = free_dofs[f] % kDofsPerParticle;
-      y(f) = (c < 3 ? p.displacement(i, c) : p.rotation(i, c - 3)) / s(f);
+      const int i = m.free_dofs[f] / kDofsPerParticle, c = m.free_dofs[f] % kDofsPerParticle;
+      y(f) = (c < 3 ? p.displacement(i, c) : p.rotation(i, c - 3)) / m.s(f);
     }
     if (!y.allFinite()) y.setZero();
-    if (settings.preconditioner == StaticPreconditioner::kIncompleteCholesky) {
-      result.method_name = "ConjugateGradient + IncompleteCholesky";
-      solve_cg<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(
-          a, b, y, settings, result);
-    } else {
-      result.method_name = "ConjugateGradient + Jacobi";
-      solve_cg<Eigen::DiagonalPreconditioner<double>>(a, b, y, settings, result);
-    }
+    if (m.cg_ic)
+      m.run_cg(*m.cg_ic, b, y, result);
+    else
+      m.run_cg(*m.cg_jacobi, b, y, result);
   }
+  result.seconds.solve = seconds_since(start);
   require(y.allFinite(),
           "static solve: the solution is not finite (the stiffness matrix is numerically "
           "singular)");
   const double b_norm = b.norm();
-  const Eigen::VectorXd ay = a.selfadjointView<Eigen::Lower>() * y;
+  const Eigen::VectorXd ay = m.a.selfadjointView<Eigen::Lower>() * y;
   result.relative_residual = b_norm > 0 ? (ay - b).norm() / b_norm : ay.norm();
 
   // The solution, and the kernel's forces at it: ~0 on free dofs, -(K u)_p on prescribed ones.
-  Eigen::VectorXd u(dofs);
-  for (int i = 0; i < n; ++i)
+  Eigen::VectorXd u(m.dofs);
+  for (int i = 0; i < m.n; ++i)
     for (int c = 0; c < kDofsPerParticle; ++c)
-      u(kDofsPerParticle * i + c) = constraints.value(i, c);
-  for (int f = 0; f < nf; ++f) u(free_dofs[f]) = s(f) * y(f);
+      u(kDofsPerParticle * i + c) = m.constraints.fixed(i, c) ? value_of(i, c) : 0.0;
+  for (int f = 0; f < nf; ++f) u(m.free_dofs[f]) = m.s(f) * y(f);
   set_state(p, u);
   const Eigen::VectorXd force = bond_generalized_forces(p, model.bonds, &result.strain_energy);
-  result.reaction = DofArray::Zero(n, kDofsPerParticle);
-  for (int i = 0; i < n; ++i)
+  result.reaction = DofArray::Zero(m.n, kDofsPerParticle);
+  for (int i = 0; i < m.n; ++i)
     for (int c = 0; c < kDofsPerParticle; ++c)
-      if (constraints.fixed(i, c)) result.reaction(i, c) = -force(kDofsPerParticle * i + c);
+      if (m.constraints.fixed(i, c)) result.reaction(i, c) = -force(kDofsPerParticle * i + c);
   return result;
+}
+
+StaticResult solve_static(Model& model, const DofConstraints& constraints,
+                          const StaticSettings& settings) {
+  const StaticSystem system(model, constraints, settings);
+  return system.solve(model, constraints.value);
 }
 
 }  // namespace plydem

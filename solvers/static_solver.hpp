@@ -24,10 +24,12 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/model.hpp"
+#include "solvers/linear_solver.hpp"
 
 namespace plydem {
 
@@ -90,7 +92,7 @@ Eigen::SparseMatrix<double> assemble_stiffness(const Model& model);
 
 enum class StaticMethod {
   kAuto,      ///< kDirect up to StaticSettings::direct_max_dofs free dofs, kIterative above
-  kDirect,    ///< sparse Cholesky (SupernodalCholesky, AMD ordering of the particles)
+  kDirect,    ///< sparse Cholesky (StaticSettings::linear_solver: solvers/linear_solver.hpp)
   kIterative  ///< preconditioned conjugate gradient (Eigen::ConjugateGradient)
 };
 
@@ -103,6 +105,8 @@ struct StaticSettings {
   /// (1e5 particles) take 0.9 GiB and 6 s CPU, where CG takes 190 s; 1.8e6 free dofs take 2.9 GiB
   /// and 23 s (bench/static_solve).
   int direct_max_dofs = 2000000;
+  /// The direct method's factorization: the hand-written supernodal Cholesky, CHOLMOD, or by size.
+  LinearSolverKind linear_solver = LinearSolverKind::kAuto;
   StaticPreconditioner preconditioner = StaticPreconditioner::kIncompleteCholesky;
   /// Conjugate gradient stops when |A y - b| <= tolerance |b| on the Jacobi-scaled system.
   double cg_tolerance = 1e-13;
@@ -133,6 +137,10 @@ struct StaticTimings {
 struct StaticResult {
   StaticMethod method = StaticMethod::kDirect;  ///< kDirect or kIterative, as used
   std::string method_name;                      ///< e.g. "supernodal Cholesky (AMD on particles)"
+  /// The factorization (or preconditioner) was made for an earlier solve of the same StaticSystem:
+  /// `seconds` then holds this solve's right-hand side (assembly) and solve only.
+  bool reused_factorization = false;
+  double factor_entries = 0;  ///< stored entries of the Cholesky factor (0 for kIterative)
   int dofs = 0;
   int free_dofs = 0;
   int prescribed_dofs = 0;              ///< pins included
@@ -163,5 +171,36 @@ struct StaticResult {
 /// the model unchanged.
 StaticResult solve_static(Model& model, const DofConstraints& constraints,
                           const StaticSettings& settings = {});
+
+/// One stiffness matrix and set of prescribed dofs, factorized once and solved for any number of
+/// prescribed values: solve_static is StaticSystem(model, constraints, settings).solve(model,
+/// constraints.value). The constructor does the checks, the rigid-mode pins (from which dofs are
+/// fixed, not their values), the assembly of K_ff and its factorization (or CG's preconditioner);
+/// each solve() only builds the right-hand side -K_fp u_p and back-substitutes. The constructor
+/// throws plydem::Error as solve_static does and leaves the model alone.
+class StaticSystem {
+ public:
+  StaticSystem(const Model& model, const DofConstraints& constraints,
+               const StaticSettings& settings = {});
+  ~StaticSystem();
+  StaticSystem(StaticSystem&&) noexcept;
+  StaticSystem& operator=(StaticSystem&&) noexcept;
+
+  /// Solves with the prescribed dofs at `values` (one row per particle, Dof columns; read only
+  /// where the constructor's constraints fix a dof; pinned dofs stay at zero) and writes the state
+  /// into `model`, as solve_static does. `model` must be the one the system was built from, or a
+  /// copy of it (same particles and bonds; not checked beyond its size). Throws plydem::Error for
+  /// values of the wrong size or non-finite ones, or (CG) no convergence.
+  StaticResult solve(Model& model, const DofArray& values) const;
+
+  /// Factorizations done (1 for the direct method once the constructor returned; 0 for CG) and
+  /// solves so far.
+  int factorizations() const;
+  int solves() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace plydem

@@ -48,6 +48,7 @@ struct TensionOptions {
   std::string layup;
   double interface_normal = 0, interface_shear = 0;
   std::string solver = "static";
+  std::string linear_solver = "auto";
   std::vector<std::string> strategy_options;
   bool json = false;
   bool raw_edges = false;
@@ -118,6 +119,10 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
                  "static (one sparse linear solve) or explicit (damped dynamics to quasi-static)")
       ->check(CLI::IsMember({"explicit", "static"}))
       ->capture_default_str();
+  app.add_option("--linear-solver", o.linear_solver,
+                 "factorization of the static solves: auto (by size), direct (plydem's supernodal "
+                 "Cholesky) or cholmod (SuiteSparse)")
+      ->capture_default_str();
   app.add_flag("--raw-edges", o.raw_edges,
                "do not complete the boundary cells of free edges (edge bonds keep bulk stiffness)");
   app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
@@ -187,6 +192,7 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
   s.solver =
       o.solver == "static" ? plydem::TensionSolver::kStatic : plydem::TensionSolver::kExplicit;
   s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
+  s.linear_solver = plydem::parse_linear_solver(o.linear_solver);
   s.explicit_settings.local_damping = o.damping;
   s.explicit_settings.safety_factor = o.safety;
   make_strategy(o);  // unknown strategies and options fail here, before any work

@@ -9,7 +9,8 @@
 
 namespace plydem {
 
-SpecimenStiffness measure_specimen_stiffness(const Model& model, double band) {
+SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
+                                             LinearSolverKind linear_solver) {
   const auto start = std::chrono::steady_clock::now();
   const Particles& p = model.particles;
   require(p.size() >= 4, "the specimen stiffness needs at least four particles");
@@ -36,6 +37,18 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band) {
   // Strains about the centre, so that the reactions' moments are taken about it.
   const Eigen::Vector3d centre = 0.5 * (low + high);
 
+  // The three strain cases prescribe the same dofs (the frame's ux and uy) and differ only in
+  // their values: one factorization serves all three solves.
+  DofConstraints constraints(p.size());
+  for (int i : frame) {
+    constraints.fix(i, Dof::kUx);
+    constraints.fix(i, Dof::kUy);
+  }
+  StaticSettings settings;
+  settings.pin_rigid_modes = true;  // out-of-plane motion of a layer is not restrained by the frame
+  settings.linear_solver = linear_solver;
+  const StaticSystem system(model, constraints, settings);
+
   for (int column = 0; column < 3; ++column) {
     Eigen::Matrix2d strain = Eigen::Matrix2d::Zero();  // engineering shear: off-diagonals 1/2
     if (column < 2) {
@@ -44,19 +57,16 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band) {
       strain(0, 1) = strain(1, 0) = 0.5;
     }
     strain *= 1e-3;  // the model is linear; a small strain keeps the numbers physical
-    DofConstraints constraints(p.size());
+    DofArray values = DofArray::Zero(p.size(), kDofsPerParticle);
     for (int i : frame) {
       const Eigen::Vector2d x =
           (p.reference_position.row(i).matrix().transpose() - centre).head<2>();
       const Eigen::Vector2d u = strain * x;
-      constraints.fix(i, Dof::kUx, u.x());
-      constraints.fix(i, Dof::kUy, u.y());
+      values(i, static_cast<int>(Dof::kUx)) = u.x();
+      values(i, static_cast<int>(Dof::kUy)) = u.y();
     }
-    StaticSettings settings;
-    settings.pin_rigid_modes =
-        true;  // out-of-plane motion of a layer is not restrained by the frame
     Model solved = model;
-    const StaticResult r = solve_static(solved, constraints, settings);
+    const StaticResult r = system.solve(solved, values);
     Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();
     for (int i : frame) {
       const Eigen::Vector2d x =
@@ -71,6 +81,8 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band) {
   }
   result.stiffness = 0.5 * (result.stiffness + result.stiffness.transpose()).eval();
   result.constants = in_plane_constants(result.stiffness);
+  result.factorizations = system.factorizations();
+  result.solves = system.solves();
   result.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -16,6 +16,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/model.hpp"
+#include "solvers/linear_solver.hpp"
 
 namespace plydem {
 
@@ -25,13 +26,17 @@ struct SpecimenStiffness {
   InPlaneConstants constants;   ///< from `stiffness`, Gxy among them
   double volume = 0;            ///< material volume V [m^3]
   int frame_particles = 0;      ///< particles with prescribed displacements
+  int factorizations = 0;       ///< of the stiffness matrix (one serves the three solves)
+  int solves = 0;               ///< static solves (three)
   double wall_seconds = 0;
 };
 
 /// Measures the specimen (the model is copied; `model` is left untouched). `band` [m] is the
 /// frame's width; 0 = two particle diameters (2 x the largest radius x 2). Throws plydem::Error for
 /// an empty specimen or one whose interior the frame would swallow, or when a solve is refused
-/// (solve_static names the cause).
-SpecimenStiffness measure_specimen_stiffness(const Model& model, double band = 0);
+/// (solve_static names the cause). The three solves share one factorization (StaticSystem), made
+/// by `linear_solver` (solvers/linear_solver.hpp).
+SpecimenStiffness measure_specimen_stiffness(
+    const Model& model, double band = 0, LinearSolverKind linear_solver = LinearSolverKind::kAuto);
 
 }  // namespace plydem

@@ -67,9 +67,10 @@ DofConstraints grip_constraints(const Particles& p, double travel, bool clamped)
   return constraints;
 }
 
-StaticSettings grip_solve_settings() {
+StaticSettings grip_solve_settings(LinearSolverKind linear_solver) {
   StaticSettings settings;
   settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
+  settings.linear_solver = linear_solver;
   return settings;
 }
 
@@ -156,7 +157,7 @@ TensionResult TensionTest::run(SpecimenBuilder& builder) const {
   result.dem.nu_yx = result.along_y.poisson;
   if (settings_.measure_specimen_stiffness) {
     // The coupon along x, as built: measure_specimen_stiffness works on a copy.
-    result.specimen = measure_specimen_stiffness(coupon_x->model);
+    result.specimen = measure_specimen_stiffness(coupon_x->model, 0, settings_.linear_solver);
     result.dem.Gxy = result.specimen.constants.Gxy;
   }
   result.coupon_x = std::move(coupon_x);
@@ -323,7 +324,7 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
     // The model is linear: one solve at the target strain, fitted through the unloaded origin.
     const StaticResult solved = solve_static(
         model, grip_constraints(p, total_grip_travel, s.grips == GripCondition::kClamped),
-        grip_solve_settings());
+        grip_solve_settings(s.linear_solver));
     record(sample(p));
     result.final_ratio = solved.relative_residual;
   } else if (s.fixed_cycles > 0) {

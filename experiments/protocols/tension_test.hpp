@@ -28,6 +28,7 @@
 #include "core/elasticity.hpp"
 #include "experiments/protocols/stiffness_test.hpp"
 #include "solvers/explicit_integrator.hpp"
+#include "solvers/linear_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/specimen.hpp"
 #include "strategies/strategy.hpp"
@@ -66,6 +67,9 @@ struct TensionSettings {
   /// Also measure the specimen's membrane stiffness (and Gxy) with affine boundary displacements
   /// (experiments/protocols/stiffness_test.hpp): three more static solves on the ply's coupon.
   bool measure_specimen_stiffness = true;
+  /// The static solves' factorization (solvers/linear_solver.hpp): by size, the hand-written
+  /// supernodal Cholesky or CHOLMOD.
+  LinearSolverKind linear_solver = LinearSolverKind::kAuto;
   ExplicitSettings explicit_settings;
 
   /// Throws plydem::Error naming the first bad setting.
