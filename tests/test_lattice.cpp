@@ -13,6 +13,7 @@
 #include "core/material.hpp"
 #include "solvers/periodic_homogenization.hpp"
 #include "strategies/lattice.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
 
@@ -26,18 +27,6 @@ RandomPackingSpec small_box(bool periodic, std::uint64_t seed) {
   spec.packing_fraction = 0.29;
   spec.seed = seed;
   return spec;
-}
-
-// A ply the random network can reach (tests/test_strategy_conformance.cpp uses it too).
-Material mild_ply() {
-  Material mild;
-  mild.name = "mild";
-  mild.E1 = 20e9;
-  mild.E2 = 15e9;
-  mild.G12 = 6.5e9;
-  mild.nu12 = 0.25;
-  mild.nu23 = 0.25;
-  return mild;
 }
 
 std::set<std::pair<int, int>> pair_set(const PackingBonds& bonds) {
@@ -121,7 +110,7 @@ TEST_CASE("lattice-paper: the paper's lattice is far softer than its target (neg
 }
 
 TEST_CASE("lattice: the correction meets a reachable target on its sample, exactly as simulated") {
-  const Material mild = mild_ply();
+  const Material mild = test::mild_ply();
   LatticeStrategy lattice(true);
   const LatticeCalibration cal = lattice.calibrate_lattice(mild, 0, 0.2e-3, 0.05e-3);
   const InPlaneConstants reached = in_plane_constants(cal.calibration.relaxed);
@@ -170,7 +159,7 @@ TEST_CASE("lattice: E-glass's G12 is out of the random network's reach, and it s
 // within max_error, so the refusal is asked of a ply with a still lower G12.
 TEST_CASE(
     "small lattice sample: the correction meets a reachable target, a softer G12 is refused") {
-  const Material mild = mild_ply();
+  const Material mild = test::mild_ply();
   LatticeStrategy lattice(true);
   lattice.set_option("sample_diameters", 8);
   const LatticeCalibration cal = lattice.calibrate_lattice(mild, 0, 0.2e-3, 0.05e-3);

@@ -19,6 +19,7 @@
 #include "strategies/lattice.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/specimen.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
 
@@ -146,13 +147,7 @@ TEST_CASE("a user's strategy that overrides calibrate() alone builds with its ca
 }
 
 TEST_CASE("lattice returns the calibration of the coupon's own packing, and refuses another") {
-  Material mild;
-  mild.name = "mild";
-  mild.E1 = 20e9;
-  mild.E2 = 15e9;
-  mild.G12 = 6.5e9;
-  mild.nu12 = 0.25;
-  mild.nu23 = 0.25;
+  const Material mild = test::mild_ply();
   const LatticeStrategy lattice(false);  // the uncorrected law: quick, same bookkeeping
   CouponSpec coupon;
   coupon.material = mild;

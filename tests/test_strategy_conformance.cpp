@@ -41,12 +41,7 @@ Subject subject_for(const std::string& strategy) {
   Subject s;
   s.material = load_material("eglass-my750");
   if (strategy.rfind("lattice", 0) == 0) {
-    s.material.name = "reachable by the random lattice";
-    s.material.E1 = 20e9;
-    s.material.E2 = 15e9;
-    s.material.G12 = 6.5e9;
-    s.material.nu12 = 0.25;
-    s.material.nu23 = 0.25;
+    s.material = test::mild_ply();
     s.options = {{"sample_diameters", 8}};
     s.length = 0.8e-3;
     s.width = 0.6e-3;

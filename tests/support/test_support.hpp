@@ -24,6 +24,19 @@ namespace plydem::test {
 
 inline constexpr double kDeg = std::numbers::pi / 180.0;
 
+/// A ply the random lattice can reach (E1 20, E2 15, G12 6.5 GPa, nu12 = nu23 = 0.25): E-glass's
+/// G12 is out of its reach.
+inline Material mild_ply() {
+  Material mild;
+  mild.name = "mild";
+  mild.E1 = 20e9;
+  mild.E2 = 15e9;
+  mild.G12 = 6.5e9;
+  mild.nu12 = 0.25;
+  mild.nu23 = 0.25;
+  return mild;
+}
+
 inline Material eglass() {
   return load_material("eglass-my750");
 }
