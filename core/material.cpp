@@ -61,6 +61,13 @@ Material eglass_my750() {
   m.nu12 = 0.278;
   m.nu23 = 0.4;
   m.density = 2000.0;
+  // WWFE-I (Soden, Hinton & Kaddour 1998, Table 1 of that paper; DAMAGE_NOTES §1). No fracture
+  // energies are given there: softening needs them from a material file.
+  m.strength.XT = 1280e6;
+  m.strength.XC = 800e6;
+  m.strength.YT = 40e6;
+  m.strength.YC = 145e6;
+  m.strength.S12 = 73e6;
   return m;
 }
 
@@ -73,7 +80,22 @@ std::string builtin_list() {
   return list;
 }
 
-constexpr std::string_view kNumberKeys[] = {"E1", "E2", "G12", "nu12", "nu23", "density"};
+constexpr std::string_view kNumberKeys[] = {"E1",  "E2", "G12", "nu12",    "nu23",     "density",
+                                            "XT",  "XC", "YT",  "YC",      "S12",      "G_fibre",
+                                            "G_matrix", "weibull_modulus"};
+
+// The optional strength entries, by key.
+double* strength_entry(LaminaStrength& s, std::string_view key) {
+  if (key == "XT") return &s.XT;
+  if (key == "XC") return &s.XC;
+  if (key == "YT") return &s.YT;
+  if (key == "YC") return &s.YC;
+  if (key == "S12") return &s.S12;
+  if (key == "G_fibre") return &s.G_fibre;
+  if (key == "G_matrix") return &s.G_matrix;
+  if (key == "weibull_modulus") return &s.weibull_modulus;
+  return nullptr;
+}
 
 bool is_known_key(std::string_view key) {
   if (key == "name") return true;
@@ -138,6 +160,18 @@ Material parse_material_file(const std::string& file) {
   m.nu12 = *read_number(table, "nu12", file, true);
   m.nu23 = *read_number(table, "nu23", file, true);
   if (auto density = read_number(table, "density", file, false)) m.density = *density;
+  for (auto key : kNumberKeys) {
+    double* entry = strength_entry(m.strength, key);
+    if (entry == nullptr) continue;
+    if (auto value = read_number(table, key, file, false)) {
+      // 0 means "not given" inside; a file that writes 0 (or less) means something else.
+      require(*value > 0 && std::isfinite(*value),
+              "material file " + in_quotes(file) + ": " + std::string(key) +
+                  " must be finite and positive, got " + format_number(*value) +
+                  " (leave the key out for a material without it)");
+      *entry = *value;
+    }
+  }
   return m;
 }
 
@@ -150,6 +184,19 @@ void validate(const Material& material) {
   require_finite(material, "nu12", material.nu12);
   require_finite(material, "nu23", material.nu23);
   require_finite_positive(material, "density", material.density, "kg/m^3");
+  {
+    LaminaStrength copy = material.strength;
+    for (auto key : kNumberKeys) {
+      const double* entry = strength_entry(copy, key);
+      if (entry == nullptr) continue;
+      const bool energy = key.front() == 'G';
+      const bool modulus = key == "weibull_modulus";
+      require(std::isfinite(*entry) && *entry >= 0,
+              "material " + in_quotes(material.name) + ": " + std::string(key) +
+                  " must be finite and positive (0 = not given), got " + format_number(*entry) +
+                  (modulus ? "" : (energy ? " J/m^2" : " Pa")));
+    }
+  }
 
   // Scaled by E2 so the test sees numbers of order one; positive definiteness is scale-free.
   if (is_positive_definite(compliance_3d(material) * material.E2)) return;
@@ -171,6 +218,27 @@ void validate(const Material& material) {
   throw Error("material " + in_quotes(material.name) +
               ": the 3D compliance is not positive definite " + constants +
               ": no elastic solid has these constants; " + hint);
+}
+
+void require_strengths(const Material& material, const std::string& purpose, bool softening) {
+  const LaminaStrength& s = material.strength;
+  std::string missing;
+  auto need = [&](const char* key, double value) {
+    if (value > 0) return;
+    if (!missing.empty()) missing += ", ";
+    missing += key;
+  };
+  need("XT", s.XT);
+  need("YT", s.YT);
+  need("S12", s.S12);
+  if (softening) {
+    need("G_fibre", s.G_fibre);
+    need("G_matrix", s.G_matrix);
+  }
+  require(missing.empty(),
+          "material " + in_quotes(material.name) + " has no " + missing + ": " + purpose +
+              " needs them (add them to the material file: XT, YT, S12 in Pa" +
+              (softening ? ", G_fibre and G_matrix in J/m^2" : "") + ")");
 }
 
 std::vector<std::string> builtin_material_names() {

@@ -8,6 +8,25 @@
 
 namespace plydem {
 
+/// A ply's strengths and fracture energies (paper's future work; ../shared/DAMAGE_NOTES.md §1),
+/// all optional: 0 = not given. Strengths are magnitudes (XC and YC positive in compression).
+struct LaminaStrength {
+  double XT = 0;   ///< longitudinal tensile strength [Pa]
+  double XC = 0;   ///< longitudinal compressive strength [Pa]
+  double YT = 0;   ///< transverse tensile strength [Pa]
+  double YC = 0;   ///< transverse compressive strength [Pa]
+  double S12 = 0;  ///< in-plane shear strength [Pa]
+  double G_fibre = 0;   ///< fracture energy of a crack across the fibres [J/m^2]
+  double G_matrix = 0;  ///< fracture energy of a crack along the fibres [J/m^2]
+  /// Weibull modulus m of the bonds' strength scatter; 0 = no scatter.
+  double weibull_modulus = 0;
+
+  /// XT, YT and S12 are all given (what a tension test to failure needs).
+  bool tensile_and_shear() const { return XT > 0 && YT > 0 && S12 > 0; }
+  /// G_fibre and G_matrix are both given (what softening bonds need).
+  bool fracture_energies() const { return G_fibre > 0 && G_matrix > 0; }
+};
+
 struct Material {
   std::string name;
   double E1 = 0;    ///< fibre-direction Young's modulus [Pa]
@@ -18,20 +37,29 @@ struct Material {
   /// Mass density [kg/m^3]. Not in the paper's Table 1; it sets the particles' masses and so the
   /// explicit time step, never an elastic result.
   double density = 2000.0;
+  LaminaStrength strength;  ///< optional (all zero for a material without strengths)
 
   double nu21() const { return nu12 * E2 / E1; }
   double G23() const { return E2 / (2.0 * (1.0 + nu23)); }
 };
 
 /// Throws plydem::Error naming the problem unless every constant is finite and positive (density
-/// too) and the 3D compliance of the transversely isotropic ply is positive definite.
+/// too) and the 3D compliance of the transversely isotropic ply is positive definite; every
+/// strength and fracture energy given must be finite and positive (0 = not given).
 void validate(const Material& material);
 
-/// Names of the built-in materials ("eglass-my750", paper Table 1).
+/// Throws plydem::Error naming the material and every one of XT, YT, S12 it lacks, and what needs
+/// them (`purpose`, e.g. "plydem strength"); with `softening`, G_fibre and G_matrix too.
+void require_strengths(const Material& material, const std::string& purpose,
+                       bool softening = false);
+
+/// Names of the built-in materials ("eglass-my750", paper Table 1, with the WWFE-I strengths of
+/// Soden, Hinton & Kaddour, Compos. Sci. Technol. 58 (1998) 1011).
 std::vector<std::string> builtin_material_names();
 
 /// A built-in material by name, or a TOML file with keys name, E1, E2, G12, nu12, nu23 (SI, Pa) and
-/// optionally density (kg/m^3). Validated before it is returned; throws plydem::Error otherwise.
+/// optionally density (kg/m^3), strengths XT, XC, YT, YC, S12 (Pa), fracture energies G_fibre,
+/// G_matrix (J/m^2) and weibull_modulus. Validated before it is returned; throws plydem::Error otherwise.
 Material load_material(const std::string& name_or_file);
 
 }  // namespace plydem

@@ -18,9 +18,10 @@ namespace {
 
 template <class S>
 void resize_fields(S& s, int n) {
-  S::for_each_field([&](FieldInfo, auto member) {
+  S::for_each_field([&](FieldInfo info, auto member) {
     auto& a = s.*member;
-    a.setZero(n, a.cols());
+    using Scalar = typename FieldType<decltype(member)>::Scalar;
+    a.setConstant(n, a.cols(), static_cast<Scalar>(info.fill));
   });
 }
 
@@ -81,6 +82,33 @@ void check_field_sizes(const S& s, const char* what) {
       throw Error(fmt::format("{} arrays differ in size: '{}' has {} rows, there are {} {}", what,
                               info.name, rows, n, what));
   });
+}
+
+// The strength fields of bond k: what core/bond_failure.hpp needs to decide.
+void check_bond_strength(const Bonds& b, int k) {
+  const bool breakable = std::isfinite(b.tensile_strength(k)) || std::isfinite(b.cohesion(k));
+  for (const auto& [name, value] : {std::pair{"tensile strength", b.tensile_strength(k)},
+                                    std::pair{"cohesion", b.cohesion(k)}}) {
+    if (!(value > 0))
+      throw Error(fmt::format("bond {} has a {} of {} Pa: a strength must be positive (+inf for "
+                              "a bond that never breaks)",
+                              k, name, value));
+  }
+  if (breakable && !(std::isfinite(b.strength_radius(k)) && b.strength_radius(k) > 0))
+    throw Error(fmt::format("bond {} has a strength but its cross-section radius is {} m", k,
+                            b.strength_radius(k)));
+  if (!(std::isfinite(b.friction_coefficient(k)) && b.friction_coefficient(k) >= 0))
+    throw Error(fmt::format("bond {} has a friction coefficient of {} (must be finite and >= 0)",
+                            k, b.friction_coefficient(k)));
+  if (!(std::isfinite(b.ductility(k)) && b.ductility(k) >= 1))
+    throw Error(fmt::format("bond {} has a ductility of {} (kappa_u >= 1; 1 = brittle)", k,
+                            b.ductility(k)));
+  if (!(b.damage(k) >= 0 && b.damage(k) <= 1))
+    throw Error(fmt::format("bond {} has a damage of {} (must lie in [0, 1])", k, b.damage(k)));
+  if (!(b.state(k) >= 0 && b.state(k) <= static_cast<int>(BondState::kBrokenShear)))
+    throw Error(fmt::format("bond {} has state {}, which is no BondState (0 intact, 1 broken in "
+                            "tension, 2 broken in shear)",
+                            k, b.state(k)));
 }
 
 }  // namespace
@@ -245,7 +273,15 @@ void Model::check_consistency() const {
           b.kind(k) == static_cast<int>(BondKind::kInterface)))
       throw Error(fmt::format("bond {} has kind {}, which is no BondKind (0 in-ply, 1 interface)",
                               k, b.kind(k)));
+    check_bond_strength(b, k);
   }
+}
+
+bool Bonds::breakable() const {
+  for (int k = 0; k < size(); ++k) {
+    if (std::isfinite(tensile_strength(k)) || std::isfinite(cohesion(k))) return true;
+  }
+  return false;
 }
 
 }  // namespace plydem

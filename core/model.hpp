@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -26,6 +27,11 @@ enum class BoundaryGroup : int { kFree = 0, kLeftGrip = 1, kRightGrip = 2 };
 /// plies (strategies/laminate.hpp). Stored as int in Bonds::kind.
 enum class BondKind : int { kInPly = 0, kInterface = 1 };
 
+/// Whether a bond still holds, or how it broke (core/bond_failure.hpp). Stored as int in
+/// Bonds::state. A broken bond keeps its row (its identity: family, kind, ends) with zero
+/// stiffness.
+enum class BondState : int { kIntact = 0, kBrokenTension = 1, kBrokenShear = 2 };
+
 /// What one row of a field holds.
 enum class FieldKind { kVector3, kScalar, kInt };
 
@@ -34,6 +40,8 @@ enum class FieldKind { kVector3, kScalar, kInt };
 struct FieldInfo {
   const char* name = "";
   bool particle_index = false;
+  /// The value resize() gives every row (an unbreakable bond's strength is +infinity, not 0).
+  double fill = 0;
 };
 
 namespace detail {
@@ -135,6 +143,18 @@ struct Bonds {
   /// interface bond, the interface: k for the one above ply k (both >= 0).
   Eigen::ArrayXi family;
   Eigen::ArrayXi kind;  ///< BondKind as int
+  // Strength: the parallel-bond failure law of core/bond_failure.hpp. A bond with infinite
+  // strengths never breaks (what every builder makes until strengths are assigned).
+  Eigen::ArrayXd strength_radius;       ///< R of the bond's cross-section A = pi R^2 [m]
+  Eigen::ArrayXd tensile_strength;      ///< sigma_c [Pa]; +inf = unbreakable
+  Eigen::ArrayXd cohesion;              ///< c, the shear strength at zero normal stress [Pa]
+  Eigen::ArrayXd friction_coefficient;  ///< tan(phi) of the shear strength c - sigma tan(phi)
+  /// Linear softening: the ratio of the separation at which the bond carries nothing to that at
+  /// its peak (kappa_u >= 1); 1 = brittle.
+  Eigen::ArrayXd ductility;
+  /// 0 intact .. 1 broken: the stiffnesses above are (1 - damage) times the intact ones.
+  Eigen::ArrayXd damage;
+  Eigen::ArrayXi state;  ///< BondState as int
 
   /// The declaration of the fields above: f(FieldInfo, &Bonds::field) for each, in order.
   template <class F>
@@ -151,6 +171,14 @@ struct Bonds {
     f(FieldInfo{"lever_second"}, &Bonds::lever_second);
     f(FieldInfo{"family"}, &Bonds::family);
     f(FieldInfo{"kind"}, &Bonds::kind);
+    constexpr double kUnbreakable = std::numeric_limits<double>::infinity();
+    f(FieldInfo{"strength_radius"}, &Bonds::strength_radius);
+    f(FieldInfo{"tensile_strength", false, kUnbreakable}, &Bonds::tensile_strength);
+    f(FieldInfo{"cohesion", false, kUnbreakable}, &Bonds::cohesion);
+    f(FieldInfo{"friction_coefficient"}, &Bonds::friction_coefficient);
+    f(FieldInfo{"ductility", false, 1.0}, &Bonds::ductility);
+    f(FieldInfo{"damage"}, &Bonds::damage);
+    f(FieldInfo{"state"}, &Bonds::state);
   }
 
   int size() const { return static_cast<int>(first.size()); }
@@ -175,6 +203,9 @@ struct Bonds {
   void check_sizes() const;
 
   bool is_interface(int b) const { return kind(b) == static_cast<int>(BondKind::kInterface); }
+  bool is_broken(int b) const { return state(b) != static_cast<int>(BondState::kIntact); }
+  /// Whether any bond has a finite strength (the model can break).
+  bool breakable() const;
 };
 
 namespace detail {

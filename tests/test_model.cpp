@@ -69,7 +69,9 @@ TEST_CASE_TEMPLATE("every declared field is resized, appended, selected and perm
   S::for_each_field([&](FieldInfo info, auto member) {
     CAPTURE(std::string(info.name));
     CHECK((zero.*member).rows() == 4);
-    CHECK(((zero.*member) == 0).all());
+    // Each field starts at its declared fill (0, or +inf for an unbreakable bond's strength).
+    using Scalar = typename FieldType<decltype(member)>::Scalar;
+    CHECK(((zero.*member) == static_cast<Scalar>(info.fill)).all());
   });
 
   S joined = a;
