@@ -1,0 +1,114 @@
+#pragma once
+/// \file
+/// Strength calibration as simulated. Under a uniform in-plane stress the relaxed lattice's bond
+/// forces and moments are linear in the stress, and known exactly from the unit cell the strategy
+/// calibrated its stiffnesses on (core/homogenizer.hpp, relaxed: spins and sublattice shifts at
+/// minimum energy). For each bond family the calibration solves for its tensile strength sigma_c
+/// and cohesion c (core/bond_failure.hpp) so that the model without scatter first breaks exactly at
+/// XT (sigma1), YT (sigma2) and S12 (tau12, either sign): the least strengths that let no family
+/// fail earlier than a target, and the refusal (Error) when one of the three is then not met by
+/// any family, since every other choice only makes the model stronger there.
+/// XC and YC are reported (the model's first failure under sigma1 = -1, sigma2 = -1) beside the
+/// targets, never solved for: a bond criterion of tension and shear represents compression only
+/// through its shear mode.
+///
+/// Fracture energy (softening): a bond's share of crack area is A_crack = 1 / sum_g (rho_g L_g
+/// |n_g . n_b|) for a crack normal to it (rho_g bonds of family g per unit volume, L_g their length),
+/// so that a straight crack normal to a bond direction cuts bonds whose shares add up to its area;
+/// families within 15 deg of the fibre get G_fibre, the others G_matrix; ductility from
+/// bond_ductility with the family's energy at its calibrated first failure.
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/failure_criteria.hpp"
+#include "core/material.hpp"
+#include "strategies/specimen.hpp"
+#include "strategies/strategy.hpp"
+
+namespace plydem {
+
+/// Strengths and fracture energies of a laminate's interface bonds (0 = not given: the interface
+/// does not break).
+struct InterfaceStrength {
+  double normal = 0;  ///< tensile strength across the interface [Pa]
+  double shear = 0;   ///< shear strength (cohesion) [Pa]
+  double GIc = 0;     ///< mode I fracture energy [J/m^2]
+  double GIIc = 0;    ///< mode II fracture energy [J/m^2]
+  bool given() const { return normal > 0 || shear > 0; }
+  /// Throws plydem::Error naming a negative or non-finite entry, or only one of the two strengths.
+  void validate() const;
+};
+
+struct StrengthOptions {
+  double friction_coefficient = 0;  ///< tan(phi) of every in-ply bond
+  bool softening = false;           ///< linear softening from G_fibre, G_matrix (else brittle)
+};
+
+/// One bond family's strength, for the bonds and for reports.
+struct FamilyStrength {
+  std::string label;  ///< as the family's FamilyCalibration
+  double tensile = std::numeric_limits<double>::infinity();   ///< sigma_c [Pa]
+  double cohesion = std::numeric_limits<double>::infinity();  ///< c [Pa]
+  double friction = 0;                                         ///< tan(phi)
+  double radius = 0;      ///< R of the section [m]
+  double crack_area = 0;  ///< A_crack [m^2]
+  double ductility = 1;   ///< kappa_u (1 = brittle)
+  /// Which target set each strength ("XT", "YT", "S12"; "" if no target loads the mode).
+  std::string tensile_set_by, cohesion_set_by;
+};
+
+/// A target strength beside the model's first failure under the same loading.
+struct StrengthTarget {
+  std::string name;   ///< "XT", "YT", "S12", "XC", "YC"
+  double target = 0;  ///< [Pa]; 0 if the material does not give it
+  double model = std::numeric_limits<double>::infinity();  ///< first-failure stress [Pa]
+  bool calibrated = false;  ///< solved for (XT, YT, S12), not only reported (XC, YC)
+  std::string family;       ///< label of the family that breaks first
+  std::string mode;         ///< "tension" or "shear"
+};
+
+class StrengthCalibration {
+ public:
+  std::vector<FamilyStrength> families;  ///< index = Bonds::family of the ply's in-ply bonds
+  std::vector<StrengthTarget> targets;   ///< XT, YT, S12, XC, YC in that order
+  double ply_angle = 0;                  ///< [rad]
+  /// The factor by which the uniform ply stress `stress` must be scaled for the first bond of the
+  /// relaxed bulk to fail (+inf if never): the model's first-failure surface, as the engine
+  /// simulates it, for the envelopes (sigma1-sigma2, sigma2-tau12).
+  double first_failure_factor(const PlyStress& stress) const;
+
+  /// Per family and unit ply stress component (sigma1, sigma2, tau12), the bond's generalized
+  /// deformation-driven resultants, for first_failure_factor: rows F_n, F_s (3), M_b (3), M_t of
+  /// the family's most loaded cell bond are linear in the stress. Filled by calibrate_strengths.
+  struct UnitResponse {
+    int family = 0;
+    Eigen::Matrix<double, 8, 3> resultants = Eigen::Matrix<double, 8, 3>::Zero();
+  };
+  std::vector<UnitResponse> responses;
+};
+
+/// Calibrates the strengths of a ply of `material` (its strength block: XT, YT, S12 required) at
+/// `ply_angle` built by `strategy` with stiffness `calibration` at `thickness`. Throws
+/// plydem::Error naming the cause: strengths missing (require_strengths), a strategy without a unit
+/// cell (lattice's random packing: no uniform bond state), or a target that the strategy cannot
+/// meet: which, the model's nearest first-failure stresses, and which registered strategies meet
+/// all three at this angle.
+StrengthCalibration calibrate_strengths(const Strategy& strategy, const Calibration& calibration,
+                                        const Material& material, double ply_angle,
+                                        double thickness, const StrengthOptions& options = {});
+
+/// Writes the strength fields of every bond of a built specimen: in-ply bonds of ply p from
+/// plies[p] by their Bonds::family, scaled by their stiffness weight (k_n of the bond over its
+/// family's bulk k_n, as boundary cells scale the stiffness: an edge bond is as utilised as a bulk
+/// one under the same strain), times a Weibull factor (-ln U)^(1/m) / Gamma(1 + 1/m) per bond when
+/// `weibull_modulus` m > 0 (random stream from `seed`: the same seed, the same strengths);
+/// interface bonds from `interface` (unbreakable when not given). Throws plydem::Error if the
+/// plies do not match the specimen.
+void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
+                           const InterfaceStrength& interface = {}, double weibull_modulus = 0,
+                           std::uint64_t seed = 1);
+
+}  // namespace plydem
