@@ -5,6 +5,8 @@
 //   plydem tension --strategy hex2d --angle 30 --json
 //   plydem tension --material my_ply.toml --angle 0 --grips clamped
 //   plydem calibrate --strategy hex2d --angle 30 --json
+//   plydem strength --angle 30               # tension test to failure beside the criteria
+//   plydem strength --layup "[0/90]s" --out results/strength   # report, figures, VTU series
 //   plydem strategies                        # registered strategies
 //   plydem materials                         # built-in materials
 //   plydem run experiments/table4.toml       # the paper's Table 4 into results/table4/
@@ -14,7 +16,9 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <iostream>
 #include <numbers>
@@ -22,19 +26,34 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "experiments/output/report.hpp"
+#include "experiments/output/strength_report.hpp"
+#include "experiments/protocols/strength_test.hpp"
 #include "experiments/protocols/tension_test.hpp"
+#include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/run_experiment.hpp"
+#include "experiments/runner/strength_experiment.hpp"
 #include "strategies/registry.hpp"
 
 namespace {
 
-struct TensionOptions {
+// What every command that builds a coupon takes: the ply, the coupon, the laminate, the grips.
+struct CouponOptions {
   std::string strategy = "hex2d";
   std::string material = "eglass-my750";
   double angle_deg = 0;
   double length_mm = 10, width_mm = 0.83, thickness_mm = 0.2, diameter_mm = 0.05;
   double grip_mm = 0;
   double gauge_fraction = 0.5;
+  std::string grips = "free";
+  std::string layup;
+  double interface_normal = 0, interface_shear = 0;
+  std::string linear_solver = "auto";
+  std::vector<std::string> strategy_options;
+  bool json = false;
+  bool raw_edges = false;
+};
+
+struct TensionOptions : CouponOptions {
   double target_strain = 1e-3;
   int stages = 2;
   long ramp_cycles = 2000;
@@ -44,18 +63,26 @@ struct TensionOptions {
   double damping = 0.7;
   double safety = 0.8;
   double grip_velocity_mm_s = 0;
-  std::string grips = "free";
-  std::string layup;
-  double interface_normal = 0, interface_shear = 0;
   std::string solver = "static";
-  std::string linear_solver = "auto";
-  std::vector<std::string> strategy_options;
-  bool json = false;
-  bool raw_edges = false;
+};
+
+struct StrengthCommandOptions : CouponOptions {
+  std::string method = "events";
+  double weibull_modulus = 0;
+  std::uint64_t seed = 1;
+  CLI::Option* weibull_option = nullptr;  // given or not (not given: the material's modulus)
+  CLI::Option* seed_option = nullptr;
+  double interface_strength_normal = 0, interface_strength_shear = 0;
+  double interface_GIc = 0, interface_GIIc = 0;
+  double friction = 0;
+  bool softening = false;
+  long max_events = plydem::EventSettings{}.max_events;
+  double stop_fraction = plydem::EventSettings{}.stop_fraction;
+  std::string out;
 };
 
 // Options every command that builds a ply takes: strategy, its options, material, angle.
-void add_ply_options(CLI::App& app, TensionOptions& o) {
+void add_ply_options(CLI::App& app, CouponOptions& o) {
   app.add_option("--strategy", o.strategy, "packing strategy (see `plydem strategies`)")
       ->capture_default_str();
   app.add_option("--strategy-option", o.strategy_options,
@@ -68,7 +95,8 @@ void add_ply_options(CLI::App& app, TensionOptions& o) {
       ->capture_default_str();
 }
 
-void add_tension_options(CLI::App& app, TensionOptions& o) {
+// The coupon a tension-type test pulls: its size, grips, gauge, laminate and interfaces.
+void add_coupon_options(CLI::App& app, CouponOptions& o) {
   add_ply_options(app, o);
   app.add_option("--length-mm", o.length_mm, "coupon length along x [mm]")->capture_default_str();
   app.add_option("--width-mm", o.width_mm, "coupon width along y [mm]")->capture_default_str();
@@ -79,6 +107,32 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
       ->capture_default_str();
   app.add_option("--gauge-fraction", o.gauge_fraction, "central fraction of the length measured")
       ->capture_default_str();
+  app.add_option(
+      "--layup", o.layup,
+      "a laminate instead of one ply, bottom ply first: [0/90/0], [0/30/45]s, [45/-45]s, "
+      "[0/90]2s (--angle then turns the whole laminate)");
+  app.add_option("--interface-normal", o.interface_normal,
+                 "normal stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
+                 "10 E2/t (see strategies/laminate.hpp); the paper used 1e14")
+      ->capture_default_str();
+  app.add_option("--interface-shear", o.interface_shear,
+                 "shear stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
+                 "10 G12/t; the paper used 1e13")
+      ->capture_default_str();
+  app.add_option("--grips", o.grips, "free (uniaxial stress) or clamped (ends held laterally)")
+      ->check(CLI::IsMember({"free", "clamped"}))
+      ->capture_default_str();
+  app.add_option("--linear-solver", o.linear_solver,
+                 "factorization of the static solves: auto (by size), direct (plydem's supernodal "
+                 "Cholesky) or cholmod (SuiteSparse)")
+      ->capture_default_str();
+  app.add_flag("--raw-edges", o.raw_edges,
+               "do not complete the boundary cells of free edges (edge bonds keep bulk stiffness)");
+  app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
+}
+
+void add_tension_options(CLI::App& app, TensionOptions& o) {
+  add_coupon_options(app, o);
   app.add_option("--target-strain", o.target_strain, "nominal strain at the last load stage")
       ->capture_default_str();
   app.add_option("--stages", o.stages, "load stages (points of the stress-strain fit)")
@@ -100,72 +154,71 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
   app.add_option("--grip-velocity-mm-s", o.grip_velocity_mm_s,
                  "grip velocity [mm/s]; 0 = derived from --ramp-cycles")
       ->capture_default_str();
-  app.add_option(
-      "--layup", o.layup,
-      "a laminate instead of one ply, bottom ply first: [0/90/0], [0/30/45]s, [45/-45]s, "
-      "[0/90]2s (--angle then turns the whole laminate)");
-  app.add_option("--interface-normal", o.interface_normal,
-                 "normal stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
-                 "10 E2/t (see strategies/laminate.hpp); the paper used 1e14")
-      ->capture_default_str();
-  app.add_option("--interface-shear", o.interface_shear,
-                 "shear stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
-                 "10 G12/t; the paper used 1e13")
-      ->capture_default_str();
-  app.add_option("--grips", o.grips, "free (uniaxial stress) or clamped (ends held laterally)")
-      ->check(CLI::IsMember({"free", "clamped"}))
-      ->capture_default_str();
   app.add_option("--solver", o.solver,
                  "static (one sparse linear solve) or explicit (damped dynamics to quasi-static)")
       ->check(CLI::IsMember({"explicit", "static"}))
       ->capture_default_str();
-  app.add_option("--linear-solver", o.linear_solver,
-                 "factorization of the static solves: auto (by size), direct (plydem's supernodal "
-                 "Cholesky) or cholmod (SuiteSparse)")
-      ->capture_default_str();
-  app.add_flag("--raw-edges", o.raw_edges,
-               "do not complete the boundary cells of free edges (edge bonds keep bulk stiffness)");
-  app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
 }
 
-// "NAME=VALUE" -> (NAME, VALUE); a malformed entry is an error naming it.
-std::vector<std::pair<std::string, double>> parse_strategy_options(
-    const std::vector<std::string>& entries) {
-  std::vector<std::pair<std::string, double>> result;
-  for (const std::string& entry : entries) {
-    const auto eq = entry.find('=');
-    plydem::require(eq != std::string::npos && eq > 0 && eq + 1 < entry.size(),
-                    fmt::format("--strategy-option '{}' is not NAME=VALUE", entry));
-    const std::string value = entry.substr(eq + 1);
-    std::size_t used = 0;
-    double number = 0;
-    try {
-      number = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    plydem::require(
-        used == value.size() && std::isfinite(number),
-        fmt::format("--strategy-option '{}': '{}' is not a finite number", entry, value));
-    result.emplace_back(entry.substr(0, eq), number);
-  }
-  return result;
+void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
+  add_coupon_options(app, o);
+  app.add_option("--method", o.method,
+                 "events (quasi-static, one bond at a time: sequentially linear analysis) or "
+                 "explicit (damped dynamics with breaking bonds)")
+      ->check(CLI::IsMember({"events", "explicit"}))
+      ->capture_default_str();
+  o.weibull_option = app.add_option(
+      "--weibull-modulus", o.weibull_modulus,
+      "Weibull modulus m of the bonds' strength scatter; 0 = none; default: the material's");
+  o.seed_option = app.add_option("--seed", o.seed,
+                                 "random stream of the strength scatter (needs scatter: "
+                                 "--weibull-modulus, or a material with weibull_modulus)");
+  app.add_option("--interface-strength-normal", o.interface_strength_normal,
+                 "tensile strength of the interface bonds between plies [Pa]; 0 = the interfaces "
+                 "do not break")
+      ->capture_default_str();
+  app.add_option("--interface-strength-shear", o.interface_strength_shear,
+                 "shear strength (cohesion) of the interface bonds [Pa]")
+      ->capture_default_str();
+  app.add_option("--interface-GIc", o.interface_GIc,
+                 "mode I fracture energy of the interface [J/m^2] (softening bonds)")
+      ->capture_default_str();
+  app.add_option("--interface-GIIc", o.interface_GIIc,
+                 "mode II fracture energy of the interface [J/m^2] (softening bonds)")
+      ->capture_default_str();
+  app.add_option("--friction", o.friction,
+                 "friction coefficient tan(phi) of the bonds' shear strength c - sigma tan(phi)")
+      ->capture_default_str();
+  app.add_flag("--softening", o.softening,
+               "linear-softening bonds dissipating the fracture energies G_fibre, G_matrix "
+               "(default: brittle)");
+  app.add_option("--max-events", o.max_events, "stop after this many events")
+      ->capture_default_str();
+  app.add_option("--stop-fraction", o.stop_fraction,
+                 "the coupon has failed when, after the peak, the stress falls below this "
+                 "fraction of the peak")
+      ->capture_default_str();
+  app.add_option("--out", o.out,
+                 "also write report.md, results.csv, the stress-strain and crack-pattern PNGs and "
+                 "a VTU series into this folder");
 }
 
 // The strategy named by the options, with its options set (unknown names fail here).
-std::unique_ptr<plydem::Strategy> make_strategy(const TensionOptions& o) {
+std::unique_ptr<plydem::Strategy> make_strategy(const CouponOptions& o) {
   std::unique_ptr<plydem::Strategy> strategy = plydem::default_registry().create(o.strategy);
-  for (const auto& [name, value] : parse_strategy_options(o.strategy_options)) {
+  for (const auto& [name, value] :
+       plydem::parse_strategy_options(o.strategy_options, "--strategy-option")) {
     strategy->set_option(name, value);
   }
   return strategy;
 }
 
-plydem::TensionSettings to_settings(const TensionOptions& o) {
+// The coupon part of a test's settings (TensionSettings, StrengthSettings: the same fields).
+template <class Settings>
+void set_coupon(const CouponOptions& o, Settings& s) {
   constexpr double mm = 1e-3;
-  plydem::TensionSettings s;
   s.strategy = o.strategy;
-  s.strategy_options = parse_strategy_options(o.strategy_options);
+  s.strategy_options = plydem::parse_strategy_options(o.strategy_options, "--strategy-option");
   plydem::require(std::isfinite(o.angle_deg), "--angle is not a finite number");
   s.coupon.material = plydem::load_material(o.material);
   s.coupon.ply_angle = o.angle_deg * std::numbers::pi / 180.0;
@@ -182,6 +235,15 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
   s.interface.shear = o.interface_shear;
   s.grip_length = o.grip_mm * mm;
   s.gauge_fraction = o.gauge_fraction;
+  s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
+  s.linear_solver = plydem::parse_linear_solver(o.linear_solver);
+  make_strategy(o);  // unknown strategies and options fail here, before any work
+}
+
+plydem::TensionSettings to_settings(const TensionOptions& o) {
+  constexpr double mm = 1e-3;
+  plydem::TensionSettings s;
+  set_coupon(o, s);
   s.target_strain = o.target_strain;
   s.load_stages = o.stages;
   s.ramp_cycles = o.ramp_cycles;
@@ -191,11 +253,33 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
   s.grip_velocity = o.grip_velocity_mm_s * mm;
   s.solver =
       o.solver == "static" ? plydem::TensionSolver::kStatic : plydem::TensionSolver::kExplicit;
-  s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
-  s.linear_solver = plydem::parse_linear_solver(o.linear_solver);
   s.explicit_settings.local_damping = o.damping;
   s.explicit_settings.safety_factor = o.safety;
-  make_strategy(o);  // unknown strategies and options fail here, before any work
+  return s;
+}
+
+plydem::StrengthSettings to_settings(const StrengthCommandOptions& o) {
+  plydem::StrengthSettings s;
+  set_coupon(o, s);
+  s.method = plydem::parse_strength_method(o.method);
+  if (o.weibull_option->count() > 0) s.weibull_modulus = o.weibull_modulus;
+  s.seed = o.seed;
+  s.interface_strength.normal = o.interface_strength_normal;
+  s.interface_strength.shear = o.interface_strength_shear;
+  s.interface_strength.GIc = o.interface_GIc;
+  s.interface_strength.GIIc = o.interface_GIIc;
+  s.strength_options.friction_coefficient = o.friction;
+  s.strength_options.softening = o.softening;
+  s.events.max_events = o.max_events;
+  s.events.stop_fraction = o.stop_fraction;
+  s.record_snapshots = !o.out.empty();
+  s.validate();  // NaN and negative values fail here, before any work
+  if (o.seed_option->count() > 0 && !(s.effective_weibull_modulus() > 0)) {
+    throw plydem::Error(fmt::format(
+        "--seed needs strength scatter: give --weibull-modulus m > 0 (the material {} has no "
+        "weibull_modulus)",
+        s.coupon.material.name));
+  }
   return s;
 }
 
@@ -222,6 +306,57 @@ int run_tension(const TensionOptions& o) {
     std::cout << plydem::tension_json(result, settings).dump(2) << "\n";
   } else {
     std::cout << plydem::format_tension_table(result, settings);
+  }
+  return 0;
+}
+
+int run_strength(const StrengthCommandOptions& o, const std::string& command_line) {
+  const auto start = std::chrono::steady_clock::now();
+  const plydem::StrengthSettings settings = to_settings(o);
+  std::filesystem::path out_dir;
+  if (!o.out.empty()) {
+    // The folder must be writable before the run, not after it.
+    out_dir = o.out;
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir, ec);
+    plydem::require(!ec && std::filesystem::is_directory(out_dir),
+                    fmt::format("cannot create the output folder '{}': {}", o.out,
+                                ec ? ec.message() : "not a folder"));
+  }
+  plydem::StrengthTest test(settings);
+  test.on_progress([](const plydem::EventProgress& p) {
+    spdlog::info("{} events, {} bonds broken, load factor {:.4g}, peak reaction {:.4g} N, {:.0f} s",
+                 p.events, p.broken, p.load_factor, p.peak_reaction, p.elapsed_seconds);
+  });
+  const plydem::StrengthResult result = test.run();
+  log_build_statistics();
+  if (o.json) {
+    std::cout << plydem::strength_json(result, settings).dump(2) << "\n";
+  } else {
+    std::cout << plydem::format_strength_table(result, settings);
+  }
+  if (!out_dir.empty()) {
+    const std::string case_name =
+        result.layup.empty()
+            ? fmt::format("{:g} deg", o.angle_deg)
+            : fmt::format("{} at {:g} deg", plydem::format_layup(result.layup), o.angle_deg);
+    plydem::ExperimentOutput output =
+        plydem::strength_output(result, out_dir, "strength", case_name, "strength");
+    output.title =
+        fmt::format("Strength: the {} {} ({}, {})", result.material.name,
+                    result.layup.empty() ? "ply" : "laminate", case_name, result.strategy);
+    output.report_markdown =
+        fmt::format("Coupon {:g} × {:g} mm, ply thickness {:g} mm, particle diameter {:g} mm. ",
+                    settings.coupon.length * 1e3, settings.coupon.width * 1e3,
+                    settings.coupon.thickness * 1e3, settings.coupon.particle_diameter * 1e3) +
+        plydem::strength_model_note(settings) + "\n\n" + output.report_markdown;
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const plydem::RunReportFiles files =
+        plydem::write_run_report(out_dir, output, "strength", "",
+                                 fmt::format("command: `{}`", command_line), false, seconds);
+    spdlog::info("wrote {} and {} ({} more files) into {}", files.report.filename().string(),
+                 files.results.filename().string(), output.files.size(), out_dir.string());
   }
   return 0;
 }
@@ -264,6 +399,12 @@ int main(int argc, char** argv) {
   CLI::App* tension = app.add_subcommand(
       "tension", "virtual uniaxial tension test of one ply: Ex, Ey, nu_xy, nu_yx beside CLT");
   add_tension_options(*tension, tension_options);
+  StrengthCommandOptions strength_options;
+  CLI::App* strength = app.add_subcommand(
+      "strength",
+      "tension test to failure: strength, strain at peak, first-failure stress and broken bonds "
+      "beside XT, YT, S12 and the max-stress, Tsai-Hill, Tsai-Wu and Hashin criteria");
+  add_strength_options(*strength, strength_options);
   TensionOptions calibrate_options;
   bool calibrate_json = false;
   CLI::App* calibrate = app.add_subcommand(
@@ -320,6 +461,11 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*calibrate) return run_calibrate(calibrate_options, calibrate_json);
+    if (*strength) {
+      std::string command_line = "plydem";
+      for (int i = 1; i < argc; ++i) command_line += fmt::format(" {}", argv[i]);
+      return run_strength(strength_options, command_line);
+    }
     if (*run) {
       if (run_list) {
         const std::filesystem::path folder = plydem::default_experiments_folder();

@@ -137,9 +137,108 @@ Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, cons
   return draw(out_dir, stem, data, script);
 }
 
+Figure plot_bond_states(const Model& model, const fs::path& out_dir, const std::string& stem,
+                        const std::string& title, double x_begin, double x_end,
+                        const std::vector<std::string>& ply_labels) {
+  const Particles& p = model.particles;
+  const Bonds& b = model.bonds;
+  if (p.size() == 0 || b.size() == 0) {
+    throw Error(fmt::format("figure {}: the model has no particles or no bonds", stem));
+  }
+  if (!(x_end > x_begin)) {
+    x_begin = p.reference_position.col(0).minCoeff();
+    x_end = p.reference_position.col(0).maxCoeff();
+  }
+  const double y_min = p.reference_position.col(1).minCoeff();
+  const double y_max = p.reference_position.col(1).maxCoeff();
+  const double ply_shift = 1.15 * std::max(y_max - y_min, 1e-12);
+  const int plies = p.ply.maxCoeff() + 1;
+  constexpr double mm = 1e3;
+  // The bonds by state: intact, softened, broken in tension, broken in shear.
+  std::string blocks[4];
+  int counts[4] = {0, 0, 0, 0};
+  std::string crosses[2];  // broken interface bonds: tension, shear
+  int cross_counts[2] = {0, 0};
+  for (int k = 0; k < b.size(); ++k) {
+    const int i = b.first(k), j = b.second(k);
+    const double xi = p.reference_position(i, 0), xj = p.reference_position(j, 0);
+    if (std::min(xi, xj) < x_begin || std::max(xi, xj) > x_end) continue;
+    const int state = b.state(k);
+    const int mode = state == static_cast<int>(BondState::kBrokenTension) ? 0 : 1;
+    if (b.is_interface(k)) {
+      if (state == static_cast<int>(BondState::kIntact)) continue;
+      crosses[mode] += fmt::format("{:.6g} {:.6g}\n", xi * mm,
+                                   (p.reference_position(i, 1) + p.ply(i) * ply_shift) * mm);
+      ++cross_counts[mode];
+      continue;
+    }
+    const int block =
+        state == static_cast<int>(BondState::kIntact) ? (b.damage(k) > 0 ? 1 : 0) : 2 + mode;
+    blocks[block] +=
+        fmt::format("{:.6g} {:.6g} {:.6g} {:.6g}\n", xi * mm,
+                    (p.reference_position(i, 1) + p.ply(i) * ply_shift) * mm, (xj - xi) * mm,
+                    (p.reference_position(j, 1) - p.reference_position(i, 1)) * mm);
+    ++counts[block];
+  }
+  if (counts[0] + counts[1] + counts[2] + counts[3] == 0) {
+    throw Error(fmt::format("figure {}: no bond lies in the drawn window", stem));
+  }
+  static const char* const kNames[4] = {"intact", "softened", "broken in tension",
+                                        "broken in shear"};
+  static const char* const kStyles[4] = {"lw 0.6 lc rgb '#c8c8c8'", "lw 2 lc rgb '#f08c00'",
+                                         "lw 2.5 lc rgb '#d01010'", "lw 2.5 lc rgb '#1040d0'"};
+  std::string data =
+      "# x1 [mm], y1 [mm], dx [mm], dy [mm] (broken interface bonds: x, y), one block per state\n";
+  // Only non-empty blocks are written: gnuplot numbers the blocks it finds.
+  std::string plot = "plot ";
+  int index = 0;
+  for (int block = 0; block < 4; ++block) {
+    if (counts[block] == 0) continue;
+    data += fmt::format("# {}\n{}\n\n", kNames[block], blocks[block]);
+    plot += fmt::format("{}'{}.dat' index {} using 1:2:3:4 with vectors nohead {} title '{} ({})'",
+                        index > 0 ? ", " : "", stem, index, kStyles[block], kNames[block],
+                        counts[block]);
+    ++index;
+  }
+  for (int mode = 0; mode < 2; ++mode) {
+    if (cross_counts[mode] == 0) continue;
+    const char* name = mode == 0 ? "tension" : "shear";
+    data += fmt::format("# broken interface bonds, {}\n{}\n\n", name, crosses[mode]);
+    plot += fmt::format(
+        "{}'{}.dat' index {} using 1:2 with points pt 2 ps 1.2 lc rgb '{}' title 'interface "
+        "broken in {} ({})'",
+        index > 0 ? ", " : "", stem, index, mode == 0 ? "#d01010" : "#1040d0", name,
+        cross_counts[mode]);
+    ++index;
+  }
+  std::string labels;
+  for (int k = 0; k < plies && plies > 1; ++k) {
+    const std::string label = k < static_cast<int>(ply_labels.size())
+                                  ? ply_labels[static_cast<std::size_t>(k)]
+                                  : fmt::format("ply {}", k);
+    labels += fmt::format("set label {} at first {:.6g}, first {:.6g} left front noenhanced\n",
+                          gp_quote(label), x_begin * mm,
+                          (y_max + k * ply_shift + 0.075 * (y_max - y_min)) * mm);
+  }
+  const double height = (y_max - y_min + (plies - 1) * ply_shift + 0.15 * (y_max - y_min)) * mm;
+  const double width = (x_end - x_begin) * mm;
+  const std::string script = fmt::format(
+      "set terminal pngcairo size 1200,{} font ',11'\n"
+      "set output '../{}.png'\n"
+      "set title {} noenhanced\n"
+      "set size ratio -1\n"
+      "set xlabel 'x [mm]'\nset ylabel 'y [mm]'\n"
+      "set key outside bottom center horizontal noenhanced\n"
+      "set xrange [{:.6g}:{:.6g}]\n"
+      "{}{}\n",
+      canvas_height(height / std::max(width, 1e-12)) + 80, stem, gp_quote(title),
+      x_begin * mm - 0.02 * width, x_begin * mm + 1.02 * width, labels, plot);
+  return draw(out_dir, stem, data, script);
+}
+
 Figure plot_curves(const std::vector<Curve>& curves, const fs::path& out_dir,
                    const std::string& stem, const std::string& title, const std::string& x_label,
-                   const std::string& y_label) {
+                   const std::string& y_label, const PlotAxes& axes) {
   std::string data;
   std::string plot = "plot ";
   int index = 0;
@@ -149,6 +248,14 @@ Figure plot_curves(const std::vector<Curve>& curves, const fs::path& out_dir,
                               c.x.size(), c.y.size()));
     }
     if (c.x.empty()) continue;
+    if (axes.log_y) {
+      for (double y : c.y) {
+        if (!(y > 0)) {
+          throw Error(fmt::format("figure {}: curve '{}' has y = {} on a logarithmic axis", stem,
+                                  c.label, y));
+        }
+      }
+    }
     data += fmt::format("# {}\n", c.label);
     for (std::size_t i = 0; i < c.x.size(); ++i) {
       data += fmt::format("{:.9g} {:.9g}\n", c.x[i], c.y[i]);
@@ -165,8 +272,9 @@ Figure plot_curves(const std::vector<Curve>& curves, const fs::path& out_dir,
       "set output '../{}.png'\n"
       "set title {} noenhanced\n"
       "set xlabel {} noenhanced\nset ylabel {} noenhanced\n"
-      "set key left top noenhanced\nset grid\n{}\n",
-      stem, gp_quote(title), gp_quote(x_label), gp_quote(y_label), plot);
+      "set key left top noenhanced\nset grid\n{}{}\n",
+      stem, gp_quote(title), gp_quote(x_label), gp_quote(y_label),
+      axes.log_y ? "set logscale y\n" : "", plot);
   return draw(out_dir, stem, data, script);
 }
 

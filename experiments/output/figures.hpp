@@ -38,6 +38,16 @@ Figure plot_bonds_by_stiffness(const Model& model, const std::filesystem::path& 
                                const std::string& stem, const std::string& title, double window = 0,
                                const std::vector<std::string>& ply_labels = {});
 
+/// The bonds of `model` in plan view (x-y, mm) by their state (core/model.hpp BondState): intact
+/// bonds thin grey, softened ones (0 < damage < 1) orange, broken in tension red, in shear blue:
+/// the crack pattern. Plies side by side as in plot_bonds_by_stiffness (interface bonds left
+/// out; a broken interface bond is drawn as a cross at its first particle, in its mode's colour).
+/// Only x_begin <= x <= x_end is drawn (x_end <= x_begin: all). Throws plydem::Error if the model
+/// has no bonds in that window.
+Figure plot_bond_states(const Model& model, const std::filesystem::path& out_dir,
+                        const std::string& stem, const std::string& title, double x_begin = 0,
+                        double x_end = 0, const std::vector<std::string>& ply_labels = {});
+
 /// One curve of plot_curves.
 struct Curve {
   std::string label;
@@ -45,11 +55,17 @@ struct Curve {
   bool points = true;        ///< points joined by lines; false: a plain (dashed) line
 };
 
+/// Axes of plot_curves beyond their labels.
+struct PlotAxes {
+  bool log_y = false;  ///< logarithmic y axis (every y must then be positive)
+};
+
 /// Curves in one x-y plot, e.g. stress-strain: measured points beside theory lines.
-/// Throws plydem::Error if a curve's x and y differ in length or there is no point at all.
+/// Throws plydem::Error if a curve's x and y differ in length or there is no point at all, or a
+/// y value is not positive on a logarithmic axis.
 Figure plot_curves(const std::vector<Curve>& curves, const std::filesystem::path& out_dir,
                    const std::string& stem, const std::string& title, const std::string& x_label,
-                   const std::string& y_label);
+                   const std::string& y_label, const PlotAxes& axes = {});
 
 /// A scalar field at scattered points (x, y in mm) as coloured dots in plan view, equal axes.
 /// Throws plydem::Error if the arrays differ in length or are empty.

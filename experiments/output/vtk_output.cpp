@@ -173,6 +173,8 @@ void write_bonds_vtu(const Model& model, const std::string& path, const VtkOptio
   vtu.doubles("force", force);
   vtu.doubles("normal_force", normal_force);
   vtu.doubles("strain_energy", energy);
+  vtu.ints("Int32", "state", bonds.state);
+  vtu.doubles("damage", bonds.damage);
   vtu.close("CellData");
   vtu.points(position);
   vtu.cells(connectivity, 2, kVtkLine);

@@ -12,7 +12,9 @@
 ///     (BondKind: 0 in-ply, 1 interface), normal_stiffness, shear_stiffness, bending_stiffness,
 ///     twisting_stiffness, and the bond's response at the current state through the one bond law
 ///     (core/parallel_bond.hpp): force (|F| [N]), normal_force (n.F, positive in tension [N]) and
-///     strain_energy [J]; the point data repeats the particles' displacement so that ParaView's
+///     strain_energy [J]; the bond's state (BondState: 0 intact, 1 broken in tension, 2 broken in
+///     shear) and damage (0 intact .. 1 broken; a broken bond keeps its cell, with zero
+///     stiffness); the point data repeats the particles' displacement so that ParaView's
 ///     "Warp By Vector" works.
 ///
 /// Points sit at the reference positions plus `displacement_scale` times the displacements

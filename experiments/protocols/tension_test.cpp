@@ -12,67 +12,12 @@
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
 #include "core/measurements.hpp"
+#include "experiments/protocols/coupon.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {
-
-// The coupon's extent along x and its grips: the particles within `grip` of either end are put in
-// the left and right grip groups. Throws plydem::Error if the grips leave no free length or one
-// holds no particle.
-struct Grips {
-  double x_min = 0, x_max = 0, span = 0;
-};
-Grips assign_grips(Particles& p, double grip) {
-  Grips g;
-  g.x_min = p.reference_position.col(0).minCoeff();
-  g.x_max = p.reference_position.col(0).maxCoeff();
-  g.span = g.x_max - g.x_min;
-  require(g.span > 2 * grip,
-          fmt::format("the grips ({} mm each) leave no free length in a {} mm coupon", grip * 1e3,
-                      g.span * 1e3));
-  int left = 0, right = 0;
-  for (int i = 0; i < p.size(); ++i) {
-    const double x = p.reference_position(i, 0);
-    if (x <= g.x_min + grip) {
-      p.group(i) = static_cast<int>(BoundaryGroup::kLeftGrip);
-      ++left;
-    } else if (x >= g.x_max - grip) {
-      p.group(i) = static_cast<int>(BoundaryGroup::kRightGrip);
-      ++right;
-    }
-  }
-  require(left > 0 && right > 0, "a grip holds no particle");
-  return g;
-}
-
-// The static test's grips: each moved by `travel` along x (apart), held in z and against
-// tilting; clamped grips also hold y and the in-plane rotation.
-DofConstraints grip_constraints(const Particles& p, double travel, bool clamped) {
-  DofConstraints constraints(p.size());
-  for (int i = 0; i < p.size(); ++i) {
-    const int g = p.group(i);
-    if (g == static_cast<int>(BoundaryGroup::kFree)) continue;
-    const double sign = g == static_cast<int>(BoundaryGroup::kRightGrip) ? 1.0 : -1.0;
-    constraints.fix(i, Dof::kUx, sign * travel);
-    constraints.fix(i, Dof::kUz);
-    constraints.fix(i, Dof::kThetaX);
-    constraints.fix(i, Dof::kThetaY);
-    if (clamped) {
-      constraints.fix(i, Dof::kUy);
-      constraints.fix(i, Dof::kThetaZ);
-    }
-  }
-  return constraints;
-}
-
-StaticSettings grip_solve_settings(LinearSolverKind linear_solver) {
-  StaticSettings settings;
-  settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
-  settings.linear_solver = linear_solver;
-  return settings;
-}
 
 using Clock = std::chrono::steady_clock;
 
@@ -168,12 +113,7 @@ TensionResult TensionTest::run(SpecimenBuilder& builder) const {
 }
 
 Specimen TensionTest::build_specimen(SpecimenBuilder& builder, double ply_angle) const {
-  CouponSpec spec = settings_.coupon;
-  spec.ply_angle = ply_angle;
-  if (settings_.layup.empty()) return builder.build(spec);
-  LaminateSpec laminate{spec, settings_.layup, settings_.interface};
-  for (double& angle : laminate.ply_angles) angle += ply_angle - settings_.coupon.ply_angle;
-  return build_laminate(builder, laminate);
+  return build_coupon(builder, settings_.coupon, settings_.layup, settings_.interface, ply_angle);
 }
 
 Specimen TensionTest::build_specimen(const Strategy& strategy, double ply_angle) const {
@@ -200,31 +140,18 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
   Particles& p = model.particles;
 
   // Grips at both ends, gauge section in the middle.
-  const Grips grips = assign_grips(p, grip_length());
-  const double x_min = grips.x_min, x_max = grips.x_max, span = grips.span;
-  const double x_mid = 0.5 * (x_min + x_max);
-  const double gauge_half = 0.5 * s.gauge_fraction * span;
-  // Strains from the gauge interior: away from the grips and, by `edge_band`, from the free edges,
-  // whose discrete boundary layer relaxes differently from the bulk.
-  std::vector<int> gauge;
-  {
-    const double y_min = p.reference_position.col(1).minCoeff();
-    const double y_max = p.reference_position.col(1).maxCoeff();
-    const double band =
-        std::min(s.edge_band_diameters * spec.particle_diameter, 0.25 * (y_max - y_min));
-    for (int i : particles_between(p, x_mid - gauge_half, x_mid + gauge_half)) {
-      const double y = p.reference_position(i, 1);
-      if (y >= y_min + band && y <= y_max - band) gauge.push_back(i);
-    }
-  }
+  const CouponGrips grips = assign_grips(p, grip_length());
+  const double span = grips.span;
+  const GaugeSection section =
+      gauge_section(p, grips, s.gauge_fraction, s.edge_band_diameters, spec.particle_diameter);
+  const std::vector<int>& gauge = section.particles;
   // What a sample reads (sample() below): the gauge particles' displacements, the grips' forces.
   std::vector<int> sampled = gauge;
   for (int i = 0; i < p.size(); ++i)
     if (p.group(i) != static_cast<int>(BoundaryGroup::kFree)) sampled.push_back(i);
   std::sort(sampled.begin(), sampled.end());
   sampled.erase(std::unique(sampled.begin(), sampled.end()), sampled.end());
-  const double area = cross_section_area(p, x_mid - gauge_half, x_mid + gauge_half,
-                                         std::min(4.0 * spec.particle_diameter, 0.25 * gauge_half));
+  const double area = section.cross_section;
 
   // Only explicit runs need the integrator (and its critical time step over every bond).
   std::optional<ExplicitIntegrator> integrator;
@@ -244,15 +171,7 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
     integrator->set_prescribed_motions({motion[0], motion[1]});
   };
   auto sample = [&](const Particles& state) {
-    double left_force = 0, right_force = 0;
-    for (int i = 0; i < state.size(); ++i) {
-      if (state.group(i) == static_cast<int>(BoundaryGroup::kLeftGrip))
-        left_force += state.force(i, 0);
-      if (state.group(i) == static_cast<int>(BoundaryGroup::kRightGrip))
-        right_force += state.force(i, 0);
-    }
-    // The bonds pull the right grip towards -x and the left one towards +x.
-    return Sample{fit_gauge_strain(state, gauge), 0.5 * (left_force - right_force) / area};
+    return Sample{fit_gauge_strain(state, gauge), grip_stress(state, area)};
   };
 
   PullResult result;
@@ -322,9 +241,9 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
   if (s.fixed_cycles == 0 || s.solver == TensionSolver::kStatic) record(Sample{});
   if (s.solver == TensionSolver::kStatic) {
     // The model is linear: one solve at the target strain, fitted through the unloaded origin.
-    const StaticResult solved = solve_static(
-        model, grip_constraints(p, total_grip_travel, s.grips == GripCondition::kClamped),
-        grip_solve_settings(s.linear_solver));
+    const StaticResult solved =
+        solve_static(model, grip_constraints(p, -total_grip_travel, total_grip_travel, s.grips),
+                     grip_solve_settings(s.linear_solver));
     record(sample(p));
     result.final_ratio = solved.relative_residual;
   } else if (s.fixed_cycles > 0) {

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "core/elasticity.hpp"
+#include "experiments/protocols/coupon.hpp"
 #include "experiments/protocols/stiffness_test.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "solvers/linear_solver.hpp"
@@ -35,7 +36,6 @@
 
 namespace plydem {
 
-enum class GripCondition { kFree, kClamped };
 /// explicit: damped central differences to quasi-static (above); static: one sparse linear solve
 /// of the same bonds with the grips displaced to the target strain (solvers/static_solver.hpp).
 enum class TensionSolver { kExplicit, kStatic };

@@ -16,6 +16,7 @@
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/tension_test.hpp"
+#include "experiments/runner/coupon_config.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
@@ -65,30 +66,6 @@ std::vector<std::string> known_keys(std::vector<std::string> extra) {
   return extra;
 }
 
-// coupon.* [mm], with quick.* replacing them in a quick run.
-CouponSpec coupon_from(const ExperimentConfig& c, bool quick) {
-  CouponSpec spec;
-  spec.material = load_material(c.string("material", "eglass-my750"));
-  auto size = [&](const std::string& key, double fallback_mm) {
-    const double full = c.number(fmt::format("coupon.{}", key), fallback_mm);
-    return (quick ? c.number(fmt::format("quick.{}", key), full) : full) * kMm;
-  };
-  spec.length = size("length_mm", 10);
-  spec.width = size("width_mm", 0.83);
-  spec.thickness = size("thickness_mm", 0.2);
-  spec.particle_diameter = size("diameter_mm", 0.05);
-  spec.validate();
-  return spec;
-}
-
-GripCondition grips_from(const ExperimentConfig& c) {
-  const std::string grips = c.string("coupon.grips", "free");
-  if (grips == "free") return GripCondition::kFree;
-  if (grips == "clamped") return GripCondition::kClamped;
-  throw Error(fmt::format("{}: coupon.grips must be \"free\" or \"clamped\", got \"{}\"",
-                          c.path().string(), grips));
-}
-
 std::string grips_sentence(GripCondition grips) {
   return grips == GripCondition::kFree
              ? "free grips: only the axial displacement is prescribed on the grip particles, so "
@@ -112,7 +89,7 @@ FemSettings fem_settings_from(const ExperimentConfig& c, const ExperimentContext
   s.mesh.elements_per_ply = static_cast<int>(c.integer("fem.elements_per_ply", 1));
   s.mesh.element_size = c.number("fem.element_size_mm", 0) * kMm;
   s.edge_band = c.number("fem.edge_band_mm", default_edge_band / kMm) * kMm;
-  s.loading.grips = grips_from(c);
+  s.loading.grips = grips_from_config(c);
   s.validate();
   return s;
 }
@@ -271,7 +248,7 @@ class LaminaStrategiesExperiment : public Experiment {
                     "explicit.max_cycles", "explicit.time_limit_s"}));
     const std::string name = c.name();
     const bool quick = context.quick;
-    const CouponSpec coupon = coupon_from(c, quick);
+    const CouponSpec coupon = coupon_from_config(c, quick);
     const double angle_deg = c.number("angle_deg", 0);
     const std::vector<std::string> strategies =
         c.strings("strategies", {"lattice", "hcp", "hex2d", "square"});
@@ -285,7 +262,7 @@ class LaminaStrategiesExperiment : public Experiment {
     TensionSettings base;
     base.coupon = coupon;
     base.coupon.ply_angle = radians(angle_deg);
-    base.grips = grips_from(c);
+    base.grips = grips_from_config(c);
     base.solver = TensionSolver::kStatic;
     const Values clt = values_of(in_plane_constants(
         rotate_reduced_stiffness(reduced_stiffness(coupon.material), base.coupon.ply_angle)));
@@ -484,10 +461,10 @@ class LaminaAnglesExperiment : public Experiment {
   ExperimentOutput run(const ExperimentConfig& c, const ExperimentContext& context) const override {
     c.require_known_keys(known_keys({"strategies", "angles_deg"}));
     const std::string name = c.name();
-    const CouponSpec coupon = coupon_from(c, context.quick);
+    const CouponSpec coupon = coupon_from_config(c, context.quick);
     const std::vector<std::string> strategies = c.strings("strategies", {"hex2d", "square"});
     const std::vector<double> angles = c.numbers("angles_deg", {0, 15, 30, 45, 60, 75, 90});
-    const GripCondition grips = grips_from(c);
+    const GripCondition grips = grips_from_config(c);
     const bool run_fem = c.boolean("fem.run", true);
     const FemSettings fem_settings = fem_settings_from(c, context, 0);
     const CalculixAvailability ccx = calculix_availability(context.calculix);
@@ -614,11 +591,11 @@ class LaminateExperiment : public Experiment {
     const std::string table = c.string("table", "Laminate");
     TensionSettings s;
     s.strategy = c.string("strategy", "hex2d");
-    s.coupon = coupon_from(c, context.quick);
+    s.coupon = coupon_from_config(c, context.quick);
     s.layup = parse_layup(layup_text);
     s.interface.normal = c.number("interface.normal", 0);
     s.interface.shear = c.number("interface.shear", 0);
-    s.grips = grips_from(c);
+    s.grips = grips_from_config(c);
     const std::string case_name = format_layup(s.layup);
     const LaminateSpec spec{s.coupon, s.layup, s.interface};
     const std::vector<Ply> plies = laminate_plies(spec);

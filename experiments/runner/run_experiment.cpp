@@ -117,6 +117,32 @@ fs::path default_experiments_folder() {
   return local;
 }
 
+RunReportFiles write_run_report(const fs::path& out_dir, const ExperimentOutput& out,
+                                const std::string& fallback_title, const std::string& description,
+                                const std::string& what, bool quick, double wall_seconds) {
+  RunReportFiles files;
+  files.results = out_dir / "results.csv";
+  write_text(files.results, results_csv(out.rows));
+  files.report = out_dir / "report.md";
+  std::string report = fmt::format("# {}\n\n", out.title.empty() ? fallback_title : out.title);
+  if (!description.empty()) report += fmt::format("{}\n\n", description);
+  report += fmt::format(
+      "- {}{}\n- date: {}\n- machine: {}\n- plydem: {}\n- wall time: {:.1f} s\n\n", what,
+      quick ? "\n- **quick run** (`--quick`): smaller coupons and fewer cycles than the paper; use "
+              "a full run for the tables"
+            : "",
+      utc_now(), machine_line(), plydem_version(), wall_seconds);
+  report += out.report_markdown;
+  report +=
+      "\n## Files\n\n- `report.md` (this file)\n- `results.csv`: one row per value "
+      "(experiment, case, quantity, source, value, unit)\n";
+  for (const fs::path& file : out.files) {
+    report += fmt::format("- `{}`\n", file.generic_string());
+  }
+  write_text(files.report, report);
+  return files;
+}
+
 RunSummary run_experiment(const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const ExperimentConfig config = ExperimentConfig::load(options.config);
@@ -142,28 +168,12 @@ RunSummary run_experiment(const RunOptions& options) {
   summary.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  summary.results = summary.out_dir / "results.csv";
-  write_text(summary.results, results_csv(summary.output.rows));
-  summary.report = summary.out_dir / "report.md";
-  const ExperimentOutput& out = summary.output;
-  std::string report = fmt::format("# {}\n\n", out.title.empty() ? config.name() : out.title);
-  if (!config.description().empty()) report += fmt::format("{}\n\n", config.description());
-  report += fmt::format(
-      "- config: `{}` (experiment kind `{}`){}\n- date: {}\n- machine: {}\n- plydem: {}\n- wall "
-      "time: {:.1f} s\n\n",
-      options.config.string(), kind,
-      options.quick ? "\n- **quick run** (`--quick`): smaller coupons and fewer cycles than the "
-                      "paper; use a full run for the tables"
-                    : "",
-      utc_now(), machine_line(), plydem_version(), summary.wall_seconds);
-  report += out.report_markdown;
-  report +=
-      "\n## Files\n\n- `report.md` (this file)\n- `results.csv`: one row per value "
-      "(experiment, case, quantity, source, value, unit)\n";
-  for (const fs::path& file : out.files) {
-    report += fmt::format("- `{}`\n", file.generic_string());
-  }
-  write_text(summary.report, report);
+  const RunReportFiles files = write_run_report(
+      summary.out_dir, summary.output, config.name(), config.description(),
+      fmt::format("config: `{}` (experiment kind `{}`)", options.config.string(), kind),
+      options.quick, summary.wall_seconds);
+  summary.report = files.report;
+  summary.results = files.results;
   return summary;
 }
 

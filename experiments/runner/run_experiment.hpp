@@ -34,6 +34,22 @@ struct RunSummary {
 /// kind or key, or a failed run (the output folder may then hold partial files).
 RunSummary run_experiment(const RunOptions& options);
 
+/// The two files write_run_report writes.
+struct RunReportFiles {
+  std::filesystem::path report;   ///< DIR/report.md
+  std::filesystem::path results;  ///< DIR/results.csv
+};
+
+/// Writes DIR/results.csv (the output's rows) and DIR/report.md: the output's title (or
+/// `fallback_title`), `description`, `what` was run (a config and its kind, or a command line),
+/// the date, machine, plydem version and wall time, the output's section and its file list.
+/// `quick` adds the line that says it was a quick run. Throws plydem::Error if a file cannot be
+/// written. run_experiment writes its files with it; `plydem strength --out` too.
+RunReportFiles write_run_report(const std::filesystem::path& out_dir,
+                                const ExperimentOutput& output, const std::string& fallback_title,
+                                const std::string& description, const std::string& what, bool quick,
+                                double wall_seconds);
+
 /// results.csv's text: the header `experiment,case,quantity,source,value,unit` and one line per
 /// row (fields with a comma or quote are quoted; values with 10 significant digits).
 std::string results_csv(const std::vector<ResultRow>& rows);

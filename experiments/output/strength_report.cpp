@@ -1,0 +1,257 @@
+#include "experiments/output/strength_report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "experiments/output/vtk_output.hpp"
+
+namespace plydem {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+constexpr double kMPa = 1e-6;
+
+const char* grips_name(GripCondition g) {
+  return g == GripCondition::kFree ? "free" : "clamped";
+}
+
+std::string specimen_text(const StrengthResult& r) {
+  if (r.layup.empty()) return fmt::format("ply angle {:g} deg", r.ply_angle / kDegree);
+  return fmt::format("laminate {}", format_layup(r.layup));
+}
+
+std::string scatter_text(const StrengthResult& r) {
+  if (!(r.weibull_modulus > 0)) return "no strength scatter";
+  return fmt::format("Weibull strength scatter m = {:g}, seed {}", r.weibull_modulus, r.seed);
+}
+
+std::string mpa(double pascals) {
+  if (!std::isfinite(pascals)) return "never";
+  return fmt::format("{:.2f} MPa", pascals * kMPa);
+}
+
+nlohmann::json finite_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+const char* criterion_label(FailureCriterion criterion) {
+  switch (criterion) {
+    case FailureCriterion::kMaxStress:
+      return "max-stress";
+    case FailureCriterion::kTsaiHill:
+      return "Tsai-Hill";
+    case FailureCriterion::kTsaiWu:
+      return "Tsai-Wu";
+    case FailureCriterion::kHashin:
+      return "Hashin";
+  }
+  return "?";
+}
+
+std::string format_strength_table(const StrengthResult& r, const StrengthSettings& s) {
+  std::string out = fmt::format(
+      "plydem strength test: strategy {}, material {}, {}, method {}, grips {}\n", r.strategy,
+      r.material.name, specimen_text(r), strength_method_name(r.method), grips_name(s.grips));
+  out += fmt::format(
+      "coupon {:g} mm x {:g} mm x {:g} mm{}, particle diameter {:g} mm; {} particles, {} bonds; "
+      "{}; {}\n\n",
+      s.coupon.length * 1e3, s.coupon.width * 1e3, s.coupon.thickness * 1e3,
+      r.layup.empty() ? "" : " per ply", s.coupon.particle_diameter * 1e3, r.particles, r.bonds,
+      s.strength_options.softening ? "linear-softening bonds" : "brittle bonds", scatter_text(r));
+  out += fmt::format("{:<34} {:>14}\n", "strength (peak stress)", mpa(r.strength));
+  out += fmt::format("{:<34} {:>13.4f}%\n", "strain at peak", r.strain_at_peak * 100);
+  out += fmt::format("{:<34} {:>14}\n", "first-failure stress", mpa(r.first_failure_stress));
+  out += fmt::format("{:<34} {:>14}  (calibrated bulk: no edges, no scatter)\n",
+                     "model's own first failure", mpa(r.model_first_failure));
+  const LaminaStrength& ls = r.material.strength;
+  auto given = [](double v) { return v > 0 ? fmt::format("{:g}", v * kMPa) : std::string("-"); };
+  out += fmt::format("\nlamina strengths [MPa]: XT {}, XC {}, YT {}, YC {}, S12 {}\n\n",
+                     given(ls.XT), given(ls.XC), given(ls.YT), given(ls.YC), given(ls.S12));
+  out += fmt::format("{:<14} {:>14} {:>16}\n", r.layup.empty() ? "criterion" : "criterion (FPF)",
+                     "strength", "DEM rel. to it");
+  for (const CriterionStrength& t : r.theory) {
+    if (t.strength) {
+      out += fmt::format("{:<14} {:>14} {:>+15.2f}%\n", criterion_label(t.criterion),
+                         mpa(*t.strength), 100.0 * (r.strength / *t.strength - 1.0));
+    } else {
+      out += fmt::format("{:<14} {:>14}  ({})\n", criterion_label(t.criterion), "-", t.missing);
+    }
+  }
+  out += fmt::format("\n{:<28} {:>8} {:>8}\n", "broken bonds (family)", "tension", "shear");
+  for (const BrokenBonds& b : r.broken) {
+    out += fmt::format("{:<28} {:>8} {:>8}\n", b.family, b.tension, b.shear);
+  }
+  out += fmt::format("{:<28} {:>8} {:>8}\n", "all", r.broken_tension, r.broken_shear);
+  if (r.damaged > 0) out += fmt::format("softened, not broken: {}\n", r.damaged);
+  out += fmt::format(
+      "\n{} events (stopped: {}), {} factorizations, {} solves, energy released {:.4g} J\n",
+      r.events, r.stop, r.factorizations, r.solves, r.dissipated_energy);
+  out += fmt::format("building {:.2f} s, wall time {:.2f} s\n", r.build_seconds, r.wall_seconds);
+  return out;
+}
+
+nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s) {
+  nlohmann::json j;
+  j["strength"] = r.strength;
+  j["strain_at_peak"] = r.strain_at_peak;
+  j["first_failure_stress"] = r.first_failure_stress;
+  j["first_failure_strain"] = r.first_failure_strain;
+  nlohmann::json curve = nlohmann::json::array();
+  for (std::size_t i = 0; i < r.strain.size(); ++i) curve.push_back({r.strain[i], r.stress[i]});
+  j["curve"] = curve;
+  nlohmann::json families = nlohmann::json::object();
+  for (const BrokenBonds& b : r.broken) {
+    families[b.family] = {{"tension", b.tension}, {"shear", b.shear}, {"interface", b.interface}};
+  }
+  j["broken_bonds"] = {{"tension", r.broken_tension},
+                       {"shear", r.broken_shear},
+                       {"total", r.broken_tension + r.broken_shear},
+                       {"softened", r.damaged},
+                       {"by_family", families}};
+  nlohmann::json theory = nlohmann::json::object();
+  nlohmann::json missing = nlohmann::json::object();
+  for (const CriterionStrength& t : r.theory) {
+    theory[criterion_name(t.criterion)] = t.strength ? nlohmann::json(*t.strength) : nullptr;
+    if (!t.strength) missing[criterion_name(t.criterion)] = t.missing;
+  }
+  j["theory"] = theory;
+  if (!missing.empty()) j["theory_missing"] = missing;
+  j["theory_kind"] = r.layup.empty() ? "off-axis strength of the ply"
+                                     : "first-ply failure, classical lamination theory";
+  j["events"] = r.events;
+  j["wall_seconds"] = r.wall_seconds;
+
+  j["model_first_failure"] = finite_or_null(r.model_first_failure);
+  const LaminaStrength& ls = r.material.strength;
+  j["lamina_strengths"] = {
+      {"XT", ls.XT}, {"XC", ls.XC}, {"YT", ls.YT}, {"YC", ls.YC}, {"S12", ls.S12}};
+  j["strategy"] = r.strategy;
+  j["material"] = r.material.name;
+  j["angle_deg"] = r.ply_angle / kDegree;
+  if (!r.layup.empty()) {
+    j["layup"] = format_layup(r.layup);
+    const InterfaceStrength& is = s.interface_strength;
+    j["interface_strength"] = {
+        {"normal", is.normal}, {"shear", is.shear}, {"GIc", is.GIc}, {"GIIc", is.GIIc}};
+  }
+  j["method"] = strength_method_name(r.method);
+  j["grips"] = grips_name(s.grips);
+  j["softening"] = s.strength_options.softening;
+  j["friction_coefficient"] = s.strength_options.friction_coefficient;
+  j["weibull_modulus"] = r.weibull_modulus;
+  if (r.weibull_modulus > 0) j["seed"] = r.seed;
+  j["stop"] = r.stop;
+  j["factorizations"] = r.factorizations;
+  j["solves"] = r.solves;
+  j["dissipated_energy"] = r.dissipated_energy;
+  j["particles"] = r.particles;
+  j["bonds"] = r.bonds;
+  j["cross_section"] = r.cross_section;
+  j["build_seconds"] = r.build_seconds;
+  nlohmann::json plies = nlohmann::json::array();
+  for (const StrengthCalibration& c : r.ply_strengths) {
+    nlohmann::json fams = nlohmann::json::array();
+    for (const FamilyStrength& f : c.families) {
+      fams.push_back({{"family", f.label},
+                      {"tensile_strength", finite_or_null(f.tensile)},
+                      {"cohesion", finite_or_null(f.cohesion)},
+                      {"friction_coefficient", f.friction},
+                      {"radius", f.radius},
+                      {"ductility", f.ductility},
+                      {"tensile_set_by", f.tensile_set_by},
+                      {"cohesion_set_by", f.cohesion_set_by}});
+    }
+    nlohmann::json targets = nlohmann::json::array();
+    for (const StrengthTarget& t : c.targets) {
+      targets.push_back({{"name", t.name},
+                         {"target", t.target},
+                         {"model", finite_or_null(t.model)},
+                         {"calibrated", t.calibrated},
+                         {"family", t.family},
+                         {"mode", t.mode}});
+    }
+    plies.push_back(
+        {{"ply_angle_deg", c.ply_angle / kDegree}, {"families", fams}, {"targets", targets}});
+  }
+  j["strength_calibration"] = plies;
+  j["units"] = "SI (Pa, m, s, J)";
+  return j;
+}
+
+Figure plot_strength_curve(const StrengthResult& r, const fs::path& out_dir,
+                           const std::string& stem, const std::string& title) {
+  std::vector<Curve> curves;
+  Curve dem{"DEM", {}, {}, true};
+  double max_strain = 0;
+  for (std::size_t i = 0; i < r.strain.size(); ++i) {
+    dem.x.push_back(r.strain[i] * 100);
+    dem.y.push_back(r.stress[i] * kMPa);
+    max_strain = std::max(max_strain, r.strain[i] * 100);
+  }
+  curves.push_back(dem);
+  curves.push_back({fmt::format("DEM peak {:.1f} MPa", r.strength * kMPa),
+                    {r.strain_at_peak * 100},
+                    {r.strength * kMPa},
+                    true});
+  const double right = max_strain > 0 ? 1.05 * max_strain : 1.0;
+  for (const CriterionStrength& t : r.theory) {
+    if (!t.strength) continue;
+    curves.push_back(
+        {fmt::format("{} {:.1f} MPa", criterion_label(t.criterion), *t.strength * kMPa),
+         {0.0, right},
+         {*t.strength * kMPa, *t.strength * kMPa},
+         false});
+  }
+  return plot_curves(curves, out_dir, stem, title, "gauge strain eps_x [%]",
+                     "stress sigma_x [MPa]");
+}
+
+Figure plot_crack_pattern(const StrengthResult& r, const fs::path& out_dir, const std::string& stem,
+                          const std::string& title) {
+  const Model& model = *r.model;
+  const Particles& p = model.particles;
+  const Bonds& b = model.bonds;
+  double x_begin = 0, x_end = 0;
+  double broken_min = INFINITY, broken_max = -INFINITY;
+  for (int k = 0; k < b.size(); ++k) {
+    if (!b.is_broken(k) && !(b.damage(k) > 0)) continue;
+    for (int i : {b.first(k), b.second(k)}) {
+      broken_min = std::min(broken_min, p.reference_position(i, 0));
+      broken_max = std::max(broken_max, p.reference_position(i, 0));
+    }
+  }
+  if (broken_max >= broken_min) {
+    const double width =
+        p.reference_position.col(1).maxCoeff() - p.reference_position.col(1).minCoeff();
+    x_begin = std::max(broken_min - width, p.reference_position.col(0).minCoeff());
+    x_end = std::min(broken_max + width, p.reference_position.col(0).maxCoeff());
+  }
+  std::vector<std::string> labels;
+  for (std::size_t k = 0; k < r.layup.size(); ++k)
+    labels.push_back(fmt::format("ply {}: {:g} deg", k, r.layup[k] / kDegree));
+  return plot_bond_states(model, out_dir, stem, title, x_begin, x_end, labels);
+}
+
+std::vector<fs::path> write_strength_vtu(const StrengthResult& r, const fs::path& out_dir,
+                                         const std::string& stem) {
+  fs::create_directories(out_dir / "vtu");
+  VtkSeries series((out_dir / "vtu" / fmt::format("{}.pvd", stem)).string());
+  if (r.snapshots.empty()) {
+    series.add_model(static_cast<double>(r.events), *r.model);
+  } else {
+    for (const StrengthSnapshot& snapshot : r.snapshots)
+      series.add_model(static_cast<double>(snapshot.event), *snapshot.model);
+  }
+  std::vector<fs::path> files{fs::path("vtu") / fmt::format("{}.pvd", stem)};
+  for (const std::string& file : series.files()) files.push_back(fs::path("vtu") / file);
+  return files;
+}
+
+}  // namespace plydem

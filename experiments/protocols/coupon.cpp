@@ -1,0 +1,104 @@
+#include "experiments/protocols/coupon.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "core/measurements.hpp"
+
+namespace plydem {
+
+Specimen build_coupon(SpecimenBuilder& builder, const CouponSpec& coupon,
+                      const std::vector<double>& layup, const InterfaceStiffness& interface,
+                      double ply_angle) {
+  CouponSpec spec = coupon;
+  spec.ply_angle = ply_angle;
+  if (layup.empty()) return builder.build(spec);
+  LaminateSpec laminate{spec, layup, interface};
+  for (double& angle : laminate.ply_angles) angle += ply_angle - coupon.ply_angle;
+  return build_laminate(builder, laminate);
+}
+
+CouponGrips assign_grips(Particles& p, double grip) {
+  CouponGrips g;
+  g.x_min = p.reference_position.col(0).minCoeff();
+  g.x_max = p.reference_position.col(0).maxCoeff();
+  g.span = g.x_max - g.x_min;
+  require(g.span > 2 * grip,
+          fmt::format("the grips ({} mm each) leave no free length in a {} mm coupon", grip * 1e3,
+                      g.span * 1e3));
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0);
+    if (x <= g.x_min + grip) {
+      p.group(i) = static_cast<int>(BoundaryGroup::kLeftGrip);
+      ++g.left;
+    } else if (x >= g.x_max - grip) {
+      p.group(i) = static_cast<int>(BoundaryGroup::kRightGrip);
+      ++g.right;
+    }
+  }
+  require(g.left > 0 && g.right > 0, "a grip holds no particle");
+  return g;
+}
+
+DofConstraints grip_constraints(const Particles& p, double left_ux, double right_ux,
+                                GripCondition grips) {
+  DofConstraints constraints(p.size());
+  const bool clamped = grips == GripCondition::kClamped;
+  for (int i = 0; i < p.size(); ++i) {
+    const int g = p.group(i);
+    if (g == static_cast<int>(BoundaryGroup::kFree)) continue;
+    constraints.fix(i, Dof::kUx,
+                    g == static_cast<int>(BoundaryGroup::kRightGrip) ? right_ux : left_ux);
+    constraints.fix(i, Dof::kUz);
+    constraints.fix(i, Dof::kThetaX);
+    constraints.fix(i, Dof::kThetaY);
+    if (clamped) {
+      constraints.fix(i, Dof::kUy);
+      constraints.fix(i, Dof::kThetaZ);
+    }
+  }
+  return constraints;
+}
+
+StaticSettings grip_solve_settings(LinearSolverKind linear_solver) {
+  StaticSettings settings;
+  settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
+  settings.linear_solver = linear_solver;
+  return settings;
+}
+
+GaugeSection gauge_section(const Particles& p, const CouponGrips& grips, double gauge_fraction,
+                           double edge_band_diameters, double particle_diameter) {
+  require(std::isfinite(gauge_fraction) && gauge_fraction > 0 && gauge_fraction < 1,
+          fmt::format("gauge fraction must lie in (0, 1), got {}", gauge_fraction));
+  GaugeSection gauge;
+  const double x_mid = 0.5 * (grips.x_min + grips.x_max);
+  const double half = 0.5 * gauge_fraction * grips.span;
+  gauge.x_begin = x_mid - half;
+  gauge.x_end = x_mid + half;
+  const double y_min = p.reference_position.col(1).minCoeff();
+  const double y_max = p.reference_position.col(1).maxCoeff();
+  const double band = std::min(edge_band_diameters * particle_diameter, 0.25 * (y_max - y_min));
+  for (int i : particles_between(p, gauge.x_begin, gauge.x_end)) {
+    const double y = p.reference_position(i, 1);
+    if (y >= y_min + band && y <= y_max - band) gauge.particles.push_back(i);
+  }
+  gauge.cross_section = cross_section_area(p, gauge.x_begin, gauge.x_end,
+                                           std::min(4.0 * particle_diameter, 0.25 * half));
+  return gauge;
+}
+
+double grip_stress(const Particles& p, double cross_section) {
+  double left_force = 0, right_force = 0;
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.group(i) == static_cast<int>(BoundaryGroup::kLeftGrip)) left_force += p.force(i, 0);
+    if (p.group(i) == static_cast<int>(BoundaryGroup::kRightGrip)) right_force += p.force(i, 0);
+  }
+  // The bonds pull the right grip towards -x and the left one towards +x.
+  return 0.5 * (left_force - right_force) / cross_section;
+}
+
+}  // namespace plydem

@@ -1,0 +1,71 @@
+#pragma once
+/// \file
+/// The coupon as the tests that pull it along x see it (the tension test,
+/// experiments/protocols/tension_test.hpp, and the strength test, strength_test.hpp): built by a
+/// strategy as one ply or a laminate, gripped at both ends, measured on a central gauge section.
+///
+/// Grips are the particles within `grip_length` of either end (BoundaryGroup kLeftGrip,
+/// kRightGrip). Their axial displacement is prescribed; they are held in z and against tilting,
+/// and, when clamped, laterally too (y and the in-plane rotation). Stress is the grip reaction
+/// over the cross-section of the gauge section; strain is the least-squares fit of the gauge
+/// particles' displacements (core/measurements.hpp), away from the grips and from the free edges.
+
+#include <vector>
+
+#include "core/model.hpp"
+#include "solvers/linear_solver.hpp"
+#include "solvers/static_solver.hpp"
+#include "strategies/laminate.hpp"
+#include "strategies/specimen.hpp"
+
+namespace plydem {
+
+enum class GripCondition { kFree, kClamped };
+
+/// The coupon of `coupon` (one ply at `ply_angle`) or, for a non-empty `layup`, the laminate with
+/// every ply turned by `ply_angle` - coupon.ply_angle, built by `builder` (which calibrates each
+/// distinct ply once).
+Specimen build_coupon(SpecimenBuilder& builder, const CouponSpec& coupon,
+                      const std::vector<double>& layup, const InterfaceStiffness& interface,
+                      double ply_angle);
+
+/// The coupon's extent along x.
+struct CouponGrips {
+  double x_min = 0, x_max = 0;
+  double span = 0;          ///< x_max - x_min [m]
+  int left = 0, right = 0;  ///< particles in each grip
+};
+
+/// Puts the particles within `grip_length` of either end into the left and right grip groups.
+/// Throws plydem::Error if the grips leave no free length or one holds no particle.
+CouponGrips assign_grips(Particles& particles, double grip_length);
+
+/// The grips' static constraints: the left grip's ux at `left_ux`, the right one's at `right_ux`
+/// [m], both held in z and against tilting; `clamped` also holds y and the in-plane rotation.
+DofConstraints grip_constraints(const Particles& particles, double left_ux, double right_ux,
+                                GripCondition grips);
+
+/// Settings of the grips' static solves: the rigid modes free grips leave (the y translation) are
+/// pinned.
+StaticSettings grip_solve_settings(LinearSolverKind linear_solver);
+
+/// The central gauge section of a gripped coupon.
+struct GaugeSection {
+  /// Particles whose displacements give the strain: the central `gauge_fraction` of the length,
+  /// at least `edge_band_diameters` particle diameters (at most a quarter of the width) from the
+  /// free edges, whose discrete boundary layer relaxes differently from the bulk.
+  std::vector<int> particles;
+  double x_begin = 0, x_end = 0;  ///< [m]
+  double cross_section = 0;       ///< mean cross-section area over the section [m^2]
+};
+
+/// Throws plydem::Error for a gauge fraction outside (0, 1).
+GaugeSection gauge_section(const Particles& particles, const CouponGrips& grips,
+                           double gauge_fraction, double edge_band_diameters,
+                           double particle_diameter);
+
+/// The grip stress at the current state: the mean of the bonds' pull on the two grips
+/// (Particles::force along x, as the kernel or a solver left it) over `cross_section` [Pa].
+double grip_stress(const Particles& particles, double cross_section);
+
+}  // namespace plydem

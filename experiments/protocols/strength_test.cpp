@@ -1,0 +1,306 @@
+#include "experiments/protocols/strength_test.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "core/measurements.hpp"
+#include "strategies/registry.hpp"
+
+namespace plydem {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The right grip's travel at load factor 1: a nominal strain of 1e-3 (the tension test's target
+// strain), so that load factors are of order one. Any value gives the same path: the model is
+// linear between events.
+constexpr double kUnitNominalStrain = 1e-3;
+
+// The stress of the coupon's plies under the mean stress sigma_x = 1 Pa (classical lamination
+// theory, A matrix), in each ply's axes.
+std::vector<PlyStress> unit_ply_stresses(const std::vector<Ply>& plies) {
+  require(!plies.empty(), "a laminate needs at least one ply");
+  const Eigen::Matrix3d A = laminate_extensional_stiffness(plies);
+  double h = 0;
+  for (const Ply& ply : plies) h += ply.thickness;
+  const Eigen::Vector3d strain = A.ldlt().solve(Eigen::Vector3d(h, 0, 0));
+  std::vector<PlyStress> stresses;
+  for (const Ply& ply : plies) {
+    const Eigen::Vector3d s =
+        rotate_reduced_stiffness(reduced_stiffness(ply.material), ply.angle) * strain;
+    stresses.push_back(to_ply_axes(s(0), s(1), s(2), ply.angle));
+  }
+  return stresses;
+}
+
+std::string family_label(const StrengthCalibration& ply, int family) {
+  if (family >= 0 && family < static_cast<int>(ply.families.size()) &&
+      !ply.families[static_cast<std::size_t>(family)].label.empty()) {
+    return ply.families[static_cast<std::size_t>(family)].label;
+  }
+  return fmt::format("{}", family + 1);
+}
+
+}  // namespace
+
+const char* strength_method_name(StrengthMethod method) {
+  return method == StrengthMethod::kEvents ? "events" : "explicit";
+}
+
+StrengthMethod parse_strength_method(const std::string& name) {
+  if (name == "events") return StrengthMethod::kEvents;
+  if (name == "explicit") return StrengthMethod::kExplicit;
+  throw Error(fmt::format("unknown strength method '{}' (events or explicit)", name));
+}
+
+double StrengthSettings::effective_weibull_modulus() const {
+  return weibull_modulus ? *weibull_modulus : coupon.material.strength.weibull_modulus;
+}
+
+void StrengthSettings::validate() const {
+  coupon.validate();
+  for (double angle : layup)
+    require(std::isfinite(angle), "a ply angle of the layup is not finite");
+  if (!layup.empty()) interface.validate();
+  interface_strength.validate();
+  require(
+      !(interface_strength.given() || interface_strength.GIc > 0 || interface_strength.GIIc > 0) ||
+          !layup.empty(),
+      "interface strengths and fracture energies need a laminate (--layup): one ply has no "
+      "interface");
+  if (weibull_modulus) {
+    require(std::isfinite(*weibull_modulus) && *weibull_modulus >= 0,
+            fmt::format("the Weibull modulus must be finite and >= 0 (0 = no scatter), got {}",
+                        *weibull_modulus));
+  }
+  require(std::isfinite(grip_length) && grip_length >= 0, "grip length must be >= 0");
+  require(std::isfinite(gauge_fraction) && gauge_fraction > 0 && gauge_fraction < 1,
+          fmt::format("gauge fraction must lie in (0, 1), got {}", gauge_fraction));
+  require(std::isfinite(edge_band_diameters) && edge_band_diameters >= 0,
+          "the gauge's edge band must be >= 0 diameters");
+  require(std::isfinite(strength_options.friction_coefficient) &&
+              strength_options.friction_coefficient >= 0,
+          fmt::format("the bonds' friction coefficient must be finite and >= 0, got {}",
+                      strength_options.friction_coefficient));
+  require(!events.on_progress && !events.on_event,
+          "the strength test sets the events solver's callbacks itself (use "
+          "StrengthTest::on_progress)");
+  events.validate();
+  plydem::validate(explicit_settings);
+}
+
+double first_ply_failure_stress(FailureCriterion criterion, const std::vector<Ply>& plies,
+                                const LaminaStrength& strength) {
+  if (plies.size() == 1) return off_axis_strength(criterion, strength, plies.front().angle);
+  double factor = std::numeric_limits<double>::infinity();
+  for (const PlyStress& s : unit_ply_stresses(plies))
+    factor = std::min(factor, failure_load_factor(criterion, s, strength));
+  return factor;
+}
+
+StrengthTest::StrengthTest(StrengthSettings settings) : settings_(std::move(settings)) {
+  settings_.validate();
+}
+
+void StrengthTest::on_progress(std::function<void(const EventProgress&)> callback) {
+  progress_ = std::move(callback);
+}
+
+StrengthResult StrengthTest::run() const {
+  const std::unique_ptr<Strategy> strategy = default_registry().create(settings_.strategy);
+  for (const auto& [name, value] : settings_.strategy_options) strategy->set_option(name, value);
+  SpecimenBuilder builder(*strategy);
+  return run(builder);
+}
+
+StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
+  const auto start = Clock::now();
+  const StrengthSettings& s = settings_;
+  const Material& material = s.coupon.material;
+  // Fail before any work on what the run cannot do.
+  require_strengths(material, "plydem strength", s.strength_options.softening);
+  if (s.method == StrengthMethod::kExplicit) {
+    throw Error(
+        "the explicit method of the strength test is not available in this build (the explicit "
+        "integrator does not break bonds yet); use the events method (--method events)");
+  }
+
+  StrengthResult result;
+  result.strategy = s.strategy;
+  result.material = material;
+  result.ply_angle = s.coupon.ply_angle;
+  result.method = s.method;
+  result.weibull_modulus = s.effective_weibull_modulus();
+  result.seed = s.seed;
+
+  // The coupon, as the tension test builds it.
+  Specimen specimen = build_coupon(builder, s.coupon, s.layup, s.interface, s.coupon.ply_angle);
+  result.build_seconds = specimen.build_seconds;
+  result.calibration = specimen.ply_calibrations.front();
+  std::vector<Ply> plies;
+  if (s.layup.empty()) {
+    plies.push_back({material, s.coupon.ply_angle, s.coupon.thickness});
+  } else {
+    plies = laminate_plies({s.coupon, s.layup, s.interface});
+    for (const Ply& ply : plies) result.layup.push_back(ply.angle);
+  }
+  require(plies.size() == specimen.ply_calibrations.size(),
+          fmt::format("the coupon was built with {} ply calibrations for {} plies",
+                      specimen.ply_calibrations.size(), plies.size()));
+
+  // Strengths: each distinct ply calibrated once, then every bond of the coupon.
+  std::map<std::string, StrengthCalibration> calibrated;
+  for (std::size_t k = 0; k < plies.size(); ++k) {
+    const std::string key = fmt::format("{:.17g}", plies[k].angle);
+    auto it = calibrated.find(key);
+    if (it == calibrated.end()) {
+      it = calibrated
+               .emplace(key, calibrate_strengths(builder.strategy(), specimen.ply_calibrations[k],
+                                                 material, plies[k].angle, s.coupon.thickness,
+                                                 s.strength_options))
+               .first;
+    }
+    result.ply_strengths.push_back(it->second);
+  }
+  assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
+                        result.weibull_modulus, s.seed);
+
+  // Theory, and the calibrated bulk's own first failure under the same load.
+  for (FailureCriterion criterion : all_criteria()) {
+    CriterionStrength theory{criterion, std::nullopt, ""};
+    try {
+      theory.strength = first_ply_failure_stress(criterion, plies, material.strength);
+    } catch (const Error& e) {
+      theory.missing = e.what();  // a strength the criterion needs is not given
+    }
+    result.theory.push_back(theory);
+  }
+  {
+    double factor = std::numeric_limits<double>::infinity();
+    const std::vector<PlyStress> stresses = unit_ply_stresses(plies);
+    for (std::size_t k = 0; k < plies.size(); ++k)
+      factor = std::min(factor, result.ply_strengths[k].first_failure_factor(stresses[k]));
+    result.model_first_failure = factor;
+  }
+
+  // Grips, gauge section, the unit loading.
+  auto model = std::make_shared<Model>(std::move(specimen.model));
+  Particles& p = model->particles;
+  const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * s.coupon.particle_diameter;
+  const CouponGrips grips = assign_grips(p, grip);
+  const GaugeSection gauge =
+      gauge_section(p, grips, s.gauge_fraction, s.edge_band_diameters, s.coupon.particle_diameter);
+  const DofConstraints unit = grip_constraints(p, 0.0, kUnitNominalStrain * grips.span, s.grips);
+  DofFlags reaction_dofs = DofFlags::Constant(p.size(), kDofsPerParticle, false);
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.group(i) == static_cast<int>(BoundaryGroup::kRightGrip))
+      reaction_dofs(i, static_cast<int>(Dof::kUx)) = true;
+  }
+  result.particles = p.size();
+  result.bonds = model->bonds.size();
+  result.cross_section = gauge.cross_section;
+  result.span = grips.span;
+
+  EventSettings events = s.events;
+  const StaticSettings grip_settings = grip_solve_settings(s.linear_solver);
+  events.static_settings.pin_rigid_modes = grip_settings.pin_rigid_modes;
+  events.static_settings.linear_solver = grip_settings.linear_solver;
+  events.on_progress = progress_;
+  result.strain.push_back(0.0);
+  result.stress.push_back(0.0);
+  double peak_stress = -std::numeric_limits<double>::infinity();
+  std::shared_ptr<const Model> peak_state;
+  long peak_event = 0;
+  events.on_event = [&](const Model& state, const EventPoint& point) {
+    result.strain.push_back(fit_gauge_strain(state.particles, gauge.particles).exx);
+    result.stress.push_back(point.reaction / gauge.cross_section);
+    if (!s.record_snapshots) return;
+    const long e = point.event;
+    if (e == 1 || (e & (e - 1)) == 0) {
+      result.snapshots.push_back({e, e == 1 ? "first failure" : fmt::format("event {}", e),
+                                  std::make_shared<const Model>(state)});
+    }
+    if (result.stress.back() > peak_stress) {
+      peak_stress = result.stress.back();
+      peak_event = e;
+      peak_state = !result.snapshots.empty() && result.snapshots.back().event == e
+                       ? result.snapshots.back().model
+                       : std::make_shared<const Model>(state);
+    }
+  };
+  const EventsResult run = run_events(*model, unit, reaction_dofs, events);
+
+  require(!run.path.empty(),
+          fmt::format("no bond of the coupon broke under the grips' pull ({}): nothing to "
+                      "measure",
+                      run.stop));
+  require(result.strain.size() == run.path.size() + 1,
+          "the events solver did not report every critical state");
+  result.path = run.path;
+  result.breaks = run.breaks;
+  result.peak = run.peak >= 0 ? run.peak : 0;
+  result.events = static_cast<long>(run.path.size());
+  result.stop = run.stop;
+  result.factorizations = run.factorizations;
+  result.solves = run.solves;
+  result.dissipated_energy = run.dissipated_energy;
+  const std::size_t peak = static_cast<std::size_t>(result.peak) + 1;
+  result.strength = result.stress[peak];
+  result.strain_at_peak = result.strain[peak];
+  result.first_failure_stress = result.stress[1];
+  result.first_failure_strain = result.strain[1];
+
+  // Broken bonds by family and mode; every family of the coupon is listed.
+  const Bonds& bonds = model->bonds;
+  std::map<std::pair<bool, std::string>, BrokenBonds> counts;
+  for (int b = 0; b < bonds.size(); ++b) {
+    const bool interface = bonds.is_interface(b);
+    const std::string label =
+        interface ? fmt::format("interface {}/{}", bonds.family(b), bonds.family(b) + 1)
+                  : family_label(
+                        result.ply_strengths[static_cast<std::size_t>(p.ply(bonds.first(b)))],
+                        bonds.family(b));
+    BrokenBonds& c = counts[{interface, label}];
+    c.family = label;
+    c.interface = interface;
+    if (bonds.state(b) == static_cast<int>(BondState::kBrokenTension)) {
+      ++c.tension;
+      ++result.broken_tension;
+    } else if (bonds.state(b) == static_cast<int>(BondState::kBrokenShear)) {
+      ++c.shear;
+      ++result.broken_shear;
+    } else if (bonds.damage(b) > 0) {
+      ++result.damaged;
+    }
+  }
+  for (auto& [key, c] : counts) result.broken.push_back(c);
+
+  if (s.record_snapshots) {
+    if (peak_state && peak_event > 1 && (peak_event & (peak_event - 1)) != 0) {
+      result.snapshots.push_back({peak_event, "peak", peak_state});
+    } else {
+      for (StrengthSnapshot& snapshot : result.snapshots)
+        if (snapshot.event == peak_event) snapshot.label += " (peak)";
+    }
+    result.snapshots.push_back({result.events + 1, "final", model});
+    std::stable_sort(
+        result.snapshots.begin(), result.snapshots.end(),
+        [](const StrengthSnapshot& a, const StrengthSnapshot& b) { return a.event < b.event; });
+  }
+  result.model = std::move(model);
+  result.wall_seconds = seconds_since(start);
+  return result;
+}
+
+}  // namespace plydem

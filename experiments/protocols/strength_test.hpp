@@ -1,0 +1,189 @@
+#pragma once
+/// \file
+/// The virtual tension test to failure (`plydem strength`): the tension test's coupon
+/// (experiments/protocols/coupon.hpp: the same build, grips, gauge section and strain fit) with
+/// breakable bonds, pulled until it fails.
+///
+/// Strengths. Each distinct ply is given its bond strengths by calibrate_strengths
+/// (strategies/strength_calibration.hpp: the relaxed bulk without scatter first breaks exactly at
+/// XT, YT and S12 in the ply's axes), and every bond of the built coupon its own by
+/// assign_bond_strengths (edge bonds scaled with their stiffness weights, Weibull scatter when a
+/// modulus is given, interface bonds from the interface strengths).
+///
+/// Loading, method `events` (sequentially linear analysis, solvers/bond_events.hpp): the left
+/// grip's ux is held at zero, the right grip's moves along +x in proportion to the load factor;
+/// both are held in z and against tilting, laterally free as in the static tension test (free
+/// grips) or held (clamped); the rigid modes free grips leave are pinned. The reaction is the sum
+/// of the right grip's ux reactions. Each critical state is one point of the curve: the gauge
+/// strain fitted as the tension test fits it (at the critical state, which is the unit state's
+/// strain times the load factor) against the reaction over the gauge cross-section. The strength
+/// is the peak stress; the first-failure stress is the first event's.
+///
+/// Theory: each classical criterion (core/failure_criteria.hpp) at the coupon's load: for one ply
+/// the off-axis strength at its angle; for a laminate the first-ply failure of classical
+/// lamination theory (the plies' stresses from the A matrix under the mean stress sigma_x, the
+/// smallest failure_load_factor over the plies).
+///
+/// Method `explicit` (the damped integrator with bonds that break in the kernel) is not
+/// available in this build: run() refuses it with a plydem::Error.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/bond_failure.hpp"
+#include "core/elasticity.hpp"
+#include "core/failure_criteria.hpp"
+#include "experiments/protocols/coupon.hpp"
+#include "solvers/bond_events.hpp"
+#include "solvers/explicit_integrator.hpp"
+#include "strategies/laminate.hpp"
+#include "strategies/strategy.hpp"
+#include "strategies/strength_calibration.hpp"
+
+namespace plydem {
+
+enum class StrengthMethod { kEvents, kExplicit };
+/// "events" or "explicit".
+const char* strength_method_name(StrengthMethod method);
+/// "events" -> kEvents, "explicit" -> kExplicit; throws plydem::Error naming anything else.
+StrengthMethod parse_strength_method(const std::string& name);
+
+struct StrengthSettings {
+  std::string strategy = "hex2d";
+  /// Strategy options (Strategy::set_option), applied in order before calibration.
+  std::vector<std::pair<std::string, double>> strategy_options;
+  /// Material (with strengths XT, YT, S12), ply angle and the coupon's size (thickness: per ply).
+  CouponSpec coupon;
+  /// Ply angles of a laminate, bottom to top [rad]; empty = the single ply at coupon.ply_angle.
+  std::vector<double> layup;
+  InterfaceStiffness interface;          ///< between the plies of a laminate
+  InterfaceStrength interface_strength;  ///< not given: the interfaces do not break
+  StrengthMethod method = StrengthMethod::kEvents;
+  /// Weibull modulus of the bonds' strength scatter; unset = the material's
+  /// (LaminaStrength::weibull_modulus), 0 = no scatter.
+  std::optional<double> weibull_modulus;
+  std::uint64_t seed = 1;  ///< random stream of the scatter (the same seed, the same strengths)
+  StrengthOptions strength_options;  ///< friction coefficient, softening
+  double grip_length = 0;            ///< [m]; 0 = two particle diameters
+  double gauge_fraction = 0.5;       ///< central fraction of the length used as gauge section
+  double edge_band_diameters = 2.0;  ///< gauge particles at least this far from a free edge
+  GripCondition grips = GripCondition::kFree;
+  LinearSolverKind linear_solver = LinearSolverKind::kAuto;
+  /// The events solver's settings (its static settings get the grips' rigid-mode pins and
+  /// `linear_solver`; its on_progress and on_event are the test's own: leave them empty).
+  EventSettings events;
+  /// The explicit method's integrator settings (validated; the method itself is refused).
+  ExplicitSettings explicit_settings;
+  /// Keep copies of the model at selected critical states (StrengthResult::snapshots), for VTU
+  /// series.
+  bool record_snapshots = false;
+
+  /// The Weibull modulus the run uses: weibull_modulus or the material's.
+  double effective_weibull_modulus() const;
+  /// Throws plydem::Error naming the first bad setting: the coupon, the layup, the interfaces
+  /// (stiffness and strength; interface strengths without a laminate), a NaN or negative Weibull
+  /// modulus, the gauge, the events and explicit settings.
+  void validate() const;
+};
+
+/// Bonds broken in one family and mode.
+struct BrokenBonds {
+  std::string family;  ///< the family's label ("1 (fibre)", ...) or "interface k-(k+1)"
+  bool interface = false;
+  int tension = 0;
+  int shear = 0;
+};
+
+/// A classical criterion's strength of the coupon: nullopt with the reason when the criterion
+/// needs a strength the material does not give.
+struct CriterionStrength {
+  FailureCriterion criterion = FailureCriterion::kMaxStress;
+  std::optional<double> strength;  ///< [Pa]
+  std::string missing;             ///< why there is no value, else ""
+};
+
+/// A copy of the model at one critical state (before its bond fails), or after the last event.
+struct StrengthSnapshot {
+  long event = 0;     ///< the event number; the final state (after the last bond broke): last + 1
+  std::string label;  ///< "first failure", "peak", "event N", "final"
+  std::shared_ptr<const Model> model;
+};
+
+struct StrengthResult {
+  std::string strategy;
+  Material material;
+  double ply_angle = 0;       ///< [rad]
+  std::vector<double> layup;  ///< ply angles as built [rad]; empty for one ply
+  StrengthMethod method = StrengthMethod::kEvents;
+  double weibull_modulus = 0;  ///< as used (0 = no scatter)
+  std::uint64_t seed = 1;
+
+  double strength = 0;              ///< peak stress [Pa]
+  double strain_at_peak = 0;        ///< gauge strain at the peak
+  double first_failure_stress = 0;  ///< stress of the first event [Pa]
+  double first_failure_strain = 0;
+  /// The stress-strain curve: the unloaded origin, then one point per critical state.
+  std::vector<double> strain, stress;
+  /// Broken bonds by family and mode (families with no broken bond are listed with zeros).
+  std::vector<BrokenBonds> broken;
+  int broken_tension = 0, broken_shear = 0;
+  int damaged = 0;                        ///< softening bonds with 0 < damage < 1 at the end
+  std::vector<CriterionStrength> theory;  ///< max-stress, Tsai-Hill, Tsai-Wu, Hashin
+  /// The calibrated bulk's first failure under this load (StrengthCalibration::
+  /// first_failure_factor of each ply's CLT stress; no edges, no scatter) [Pa].
+  double model_first_failure = 0;
+  std::vector<StrengthCalibration> ply_strengths;  ///< bottom to top
+  Calibration calibration;                         ///< of the bottom ply
+
+  long events = 0;
+  std::string stop;  ///< why the run stopped (EventsResult::stop)
+  int factorizations = 0;
+  long solves = 0;
+  double dissipated_energy = 0;  ///< [J]
+  std::vector<EventPoint> path;
+  std::vector<BondBreak> breaks;
+  int peak = -1;  ///< index into path (the curve's point peak + 1)
+
+  int particles = 0, bonds = 0;
+  double cross_section = 0;  ///< [m^2]
+  double span = 0;           ///< grip-to-grip length along x [m]
+  double build_seconds = 0;
+  double wall_seconds = 0;
+  /// The coupon after the run: bonds broken and softened, particles at the last critical state.
+  std::shared_ptr<const Model> model;
+  /// With StrengthSettings::record_snapshots: first failure, events 2^k, the peak and the final
+  /// state, in event order.
+  std::vector<StrengthSnapshot> snapshots;
+};
+
+class StrengthTest {
+ public:
+  explicit StrengthTest(StrengthSettings settings);
+  /// Progress of long runs, every EventSettings::progress_seconds.
+  void on_progress(std::function<void(const EventProgress&)> callback);
+  /// Builds, calibrates strengths and runs to failure. Throws plydem::Error: a material without
+  /// the strengths (XT, YT, S12), a strategy without a unit cell or a target it cannot reach (the
+  /// strength calibration's errors), the explicit method.
+  StrengthResult run() const;
+  /// The same with `builder`'s strategy and stiffness calibrations (shared by several tests).
+  StrengthResult run(SpecimenBuilder& builder) const;
+  const StrengthSettings& settings() const { return settings_; }
+
+ private:
+  StrengthSettings settings_;
+  std::function<void(const EventProgress&)> progress_;
+};
+
+/// The mean stress sigma_x [Pa] at which the first ply of `plies` reaches `criterion` under
+/// uniaxial membrane load along x (classical lamination theory: ply stresses Q-bar_k A^-1 N with
+/// N = (sigma_x h, 0, 0)). One ply: its off-axis strength. Throws plydem::Error like
+/// failure_load_factor.
+double first_ply_failure_stress(FailureCriterion criterion, const std::vector<Ply>& plies,
+                                const LaminaStrength& strength);
+
+}  // namespace plydem

@@ -1,0 +1,32 @@
+#pragma once
+/// \file
+/// The coupon keys every tension-type experiment config shares:
+///   material = "eglass-my750"                 (built-in name or a material TOML file)
+///   [coupon] length_mm, width_mm, thickness_mm, diameter_mm, grips ("free" or "clamped")
+///   [quick]  the same sizes, replacing those of [coupon] in a quick run (`plydem run --quick`)
+/// Defaults: the paper's coupon (10 x 0.83 x 0.2 mm, 0.05 mm particles), free grips.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "experiments/protocols/coupon.hpp"
+#include "experiments/runner/experiment.hpp"
+#include "strategies/strategy.hpp"
+
+namespace plydem {
+
+/// The material and coupon.* sizes [mm] (quick.* in a quick run). Throws plydem::Error for a bad
+/// material or size.
+CouponSpec coupon_from_config(const ExperimentConfig& config, bool quick);
+
+/// coupon.grips. Throws plydem::Error naming the file for anything but "free" or "clamped".
+GripCondition grips_from_config(const ExperimentConfig& config);
+
+/// Strategy options written "NAME=VALUE" -> (NAME, VALUE). Throws plydem::Error naming the entry,
+/// prefixed by `what` ("--strategy-option", or the config and key), when it is not NAME=VALUE or
+/// VALUE is not a finite number.
+std::vector<std::pair<std::string, double>> parse_strategy_options(
+    const std::vector<std::string>& entries, const std::string& what);
+
+}  // namespace plydem

@@ -1,0 +1,381 @@
+#include "experiments/runner/strength_experiment.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "experiments/output/figures.hpp"
+#include "experiments/output/strength_report.hpp"
+#include "experiments/runner/coupon_config.hpp"
+#include "strategies/laminate.hpp"
+#include "strategies/registry.hpp"
+
+namespace plydem {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+constexpr double kMPa = 1e-6;
+constexpr double kMm = 1e-3;
+
+std::string file_stem(std::string text) {
+  for (char& ch : text) {
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_') ch = '_';
+  }
+  return text;
+}
+
+std::string table_row(const std::vector<std::string>& cells) {
+  std::string line = "|";
+  for (const std::string& cell : cells) line += fmt::format(" {} |", cell);
+  return line + "\n";
+}
+
+std::string mpa_cell(double pascals) {
+  return std::isfinite(pascals) ? fmt::format("{:.2f}", pascals * kMPa) : "–";
+}
+
+std::string relative(double value, double reference) {
+  if (!std::isfinite(value) || !std::isfinite(reference) || reference == 0) return "–";
+  return fmt::format("{:+.2f}%", 100.0 * (value / reference - 1.0));
+}
+
+const char* source_name(FailureCriterion c) {
+  switch (c) {
+    case FailureCriterion::kMaxStress:
+      return "max-stress";
+    case FailureCriterion::kTsaiHill:
+      return "tsai-hill";
+    case FailureCriterion::kTsaiWu:
+      return "tsai-wu";
+    case FailureCriterion::kHashin:
+      return "hashin";
+  }
+  return "?";
+}
+
+}  // namespace
+
+std::string strength_model_note(const StrengthSettings& s) {
+  return fmt::format(
+      "The bonds are {} parallel bonds (PFC's criterion, core/bond_failure.hpp) whose strengths "
+      "are calibrated so that the relaxed bulk without scatter first breaks exactly at XT, YT and "
+      "S12 in the ply's axes (strategies/strength_calibration.hpp). The model is linear up to "
+      "each break: it does not represent the ply's non-linear in-plane shear response (E-glass "
+      "reaches S12 at about 4% shear strain, a linear bond at 1.25%), and XC, YC only through "
+      "the bonds' shear mode. Loading: {} (sequentially linear analysis: each critical state is "
+      "one point, no damping, no loading rate). Grips {}: the right grip's ux is prescribed, the "
+      "left one's held; stress is the right grip's reaction over the gauge cross-section, strain "
+      "the gauge particles' fitted strain.",
+      s.strength_options.softening ? "linear-softening" : "brittle", strength_method_name(s.method),
+      s.grips == GripCondition::kFree ? "free (the ends contract and shear freely)" : "clamped");
+}
+
+ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_dir,
+                                 const std::string& experiment, const std::string& case_name,
+                                 const std::string& stem) {
+  ExperimentOutput out;
+  const std::string dem = fmt::format("dem {}", r.strategy);
+  auto row = [&](const std::string& quantity, const std::string& source, double value,
+                 const std::string& unit) {
+    if (std::isfinite(value))
+      out.rows.push_back({experiment, case_name, quantity, source, value, unit});
+  };
+  row("strength", dem, r.strength * kMPa, "MPa");
+  row("strain at peak", dem, r.strain_at_peak * 100, "%");
+  row("first failure stress", dem, r.first_failure_stress * kMPa, "MPa");
+  row("first failure stress", fmt::format("{} calibrated bulk", dem), r.model_first_failure * kMPa,
+      "MPa");
+  row("broken bonds in tension", dem, r.broken_tension, "1");
+  row("broken bonds in shear", dem, r.broken_shear, "1");
+  for (const BrokenBonds& b : r.broken) {
+    row(fmt::format("broken bonds {} tension", b.family), dem, b.tension, "1");
+    row(fmt::format("broken bonds {} shear", b.family), dem, b.shear, "1");
+  }
+  row("events", dem, static_cast<double>(r.events), "1");
+  row("energy released", dem, r.dissipated_energy, "J");
+  row("wall time", dem, r.wall_seconds, "s");
+  for (const CriterionStrength& t : r.theory) {
+    if (t.strength) row("strength", source_name(t.criterion), *t.strength * kMPa, "MPa");
+  }
+
+  std::string& md = out.report_markdown;
+  md += fmt::format("### {}\n\n", case_name);
+  md += table_row({"quantity", "DEM", "unit"}) + "|---|---|---|\n";
+  md += table_row({"strength (peak stress)", mpa_cell(r.strength), "MPa"});
+  md += table_row({"strain at peak", fmt::format("{:.4f}", r.strain_at_peak * 100), "%"});
+  md += table_row({"first-failure stress", mpa_cell(r.first_failure_stress), "MPa"});
+  md += table_row({"calibrated bulk's first failure (no edges, no scatter)",
+                   mpa_cell(r.model_first_failure), "MPa"});
+  md += table_row({"events (stopped: " + r.stop + ")", fmt::format("{}", r.events), ""});
+  md += table_row({"energy released by breaking", fmt::format("{:.4g}", r.dissipated_energy), "J"});
+  md += "\n";
+  md += table_row({r.layup.empty() ? "criterion" : "criterion (first-ply failure, CLT)",
+                   "strength (MPa)", "DEM relative to it"});
+  md += "|---|---|---|\n";
+  for (const CriterionStrength& t : r.theory) {
+    md += table_row({criterion_label(t.criterion),
+                     t.strength ? mpa_cell(*t.strength) : fmt::format("– ({})", t.missing),
+                     t.strength ? relative(r.strength, *t.strength) : "–"});
+  }
+  md += "\n";
+  md += table_row({"broken bonds (family)", "tension", "shear"});
+  md += "|---|---|---|\n";
+  for (const BrokenBonds& b : r.broken)
+    md += table_row({b.family, fmt::format("{}", b.tension), fmt::format("{}", b.shear)});
+  md += table_row({"all", fmt::format("{}", r.broken_tension), fmt::format("{}", r.broken_shear)});
+  if (!r.ply_strengths.empty()) {
+    const StrengthCalibration& c = r.ply_strengths.front();
+    md += fmt::format(
+        "\nStrength calibration of the {}ply at {:g}°: the model's first failure under each "
+        "target's loading (bulk, no scatter) beside the target.\n\n",
+        r.layup.empty() ? "" : "bottom ", c.ply_angle / kDegree);
+    md += table_row({"target", "lamina (MPa)", "model first failure (MPa)", "calibrated",
+                     "breaks first"}) +
+          "|---|---|---|---|---|\n";
+    for (const StrengthTarget& t : c.targets) {
+      md += table_row({t.name, t.target > 0 ? mpa_cell(t.target) : "not given", mpa_cell(t.model),
+                       t.calibrated ? "yes" : "reported only",
+                       t.family.empty() ? "–" : fmt::format("family {} ({})", t.family, t.mode)});
+    }
+  }
+  md += "\n";
+  const Figure curve = plot_strength_curve(
+      r, out_dir, fmt::format("{}_stress_strain", stem),
+      fmt::format("{}: stress-strain to failure beside the criteria", case_name));
+  out.files.insert(out.files.end(), curve.files.begin(), curve.files.end());
+  md += figure_markdown(curve, fmt::format("{}: stress-strain to failure, the classical criteria "
+                                           "as horizontal lines",
+                                           case_name)) +
+        "\n";
+  const Figure cracks = plot_crack_pattern(r, out_dir, fmt::format("{}_cracks", stem),
+                                           fmt::format("{}: broken bonds by mode", case_name));
+  out.files.insert(out.files.end(), cracks.files.begin(), cracks.files.end());
+  md += figure_markdown(cracks,
+                        fmt::format("{}: crack pattern (bonds by state, plan view)", case_name)) +
+        "\n";
+  const std::vector<fs::path> vtu = write_strength_vtu(r, out_dir, stem);
+  out.files.insert(out.files.end(), vtu.begin(), vtu.end());
+  md += fmt::format("ParaView: `{}` ({} states; bond cell data `state`, `damage`).\n\n",
+                    vtu.front().generic_string(), (vtu.size() - 1) / 2);
+  return out;
+}
+
+namespace {
+
+class StrengthExperiment : public Experiment {
+ public:
+  ExperimentOutput run(const ExperimentConfig& c, const ExperimentContext& context) const override {
+    c.require_known_keys({"experiment",
+                          "description",
+                          "material",
+                          "strategy",
+                          "strategy_options",
+                          "angle_deg",
+                          "angles_deg",
+                          "layup",
+                          "method",
+                          "weibull_modulus",
+                          "seed",
+                          "friction",
+                          "softening",
+                          "coupon.length_mm",
+                          "coupon.width_mm",
+                          "coupon.thickness_mm",
+                          "coupon.diameter_mm",
+                          "coupon.grips",
+                          "coupon.grip_mm",
+                          "coupon.gauge_fraction",
+                          "quick.length_mm",
+                          "quick.width_mm",
+                          "quick.thickness_mm",
+                          "quick.diameter_mm",
+                          "interface.normal",
+                          "interface.shear",
+                          "interface.strength_normal",
+                          "interface.strength_shear",
+                          "interface.GIc",
+                          "interface.GIIc",
+                          "events.max_events",
+                          "events.stop_fraction",
+                          "events.tooth_stiffness_ratio",
+                          "events.max_update_rank",
+                          "output.vtu_series"});
+    const std::string name = c.name();
+    const std::string origin = c.path().string();
+    StrengthSettings base;
+    base.strategy = c.string("strategy", "hex2d");
+    base.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
+                                                   fmt::format("{}: strategy_options", origin));
+    base.coupon = coupon_from_config(c, context.quick);
+    base.grips = grips_from_config(c);
+    base.grip_length = c.number("coupon.grip_mm", 0) * kMm;
+    base.gauge_fraction = c.number("coupon.gauge_fraction", base.gauge_fraction);
+    const std::string layup_text = c.string("layup", "");
+    if (!layup_text.empty()) base.layup = parse_layup(layup_text);
+    base.interface.normal = c.number("interface.normal", 0);
+    base.interface.shear = c.number("interface.shear", 0);
+    base.interface_strength.normal = c.number("interface.strength_normal", 0);
+    base.interface_strength.shear = c.number("interface.strength_shear", 0);
+    base.interface_strength.GIc = c.number("interface.GIc", 0);
+    base.interface_strength.GIIc = c.number("interface.GIIc", 0);
+    base.method = parse_strength_method(c.string("method", "events"));
+    if (c.contains("weibull_modulus")) base.weibull_modulus = c.number("weibull_modulus", 0);
+    base.seed = static_cast<std::uint64_t>(c.integer("seed", 1));
+    if (c.contains("seed") && !(base.effective_weibull_modulus() > 0)) {
+      throw Error(fmt::format(
+          "{}: 'seed' needs strength scatter: set weibull_modulus (the material {} has none)",
+          origin, base.coupon.material.name));
+    }
+    base.strength_options.friction_coefficient = c.number("friction", 0);
+    base.strength_options.softening = c.boolean("softening", false);
+    base.events.max_events = c.integer("events.max_events", base.events.max_events);
+    base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
+    base.events.tooth_stiffness_ratio =
+        c.number("events.tooth_stiffness_ratio", base.events.tooth_stiffness_ratio);
+    base.events.max_update_rank =
+        static_cast<int>(c.integer("events.max_update_rank", base.events.max_update_rank));
+    base.record_snapshots = c.boolean("output.vtu_series", false);
+    std::vector<double> angles = c.numbers("angles_deg", {c.number("angle_deg", 0)});
+    require(!angles.empty(), fmt::format("{}: angles_deg is empty", origin));
+    base.validate();  // a bad setting fails before the first coupon is built
+    require_strengths(base.coupon.material, fmt::format("{} (kind strength)", origin),
+                      base.strength_options.softening);
+
+    const std::unique_ptr<Strategy> strategy = default_registry().create(base.strategy);
+    for (const auto& [option, value] : base.strategy_options) strategy->set_option(option, value);
+    SpecimenBuilder builder(*strategy);
+    const std::string specimen =
+        layup_text.empty() ? "ply" : fmt::format("{} laminate", layup_text);
+
+    ExperimentOutput out;
+    out.title = fmt::format("Strength against angle: the {} {} ({})", base.coupon.material.name,
+                            specimen, base.strategy);
+    std::string table = table_row({"angle", "DEM strength (MPa)", "first failure (MPa)",
+                                   "strain at peak (%)", "broken T / S", "events", "max-stress",
+                                   "Tsai-Hill", "Tsai-Wu", "Hashin", "DEM vs Tsai-Wu"}) +
+                        "|---|---|---|---|---|---|---|---|---|---|---|\n";
+    std::string sections;
+    Curve dem_points{fmt::format("DEM {} strength", base.strategy), {}, {}, true};
+    Curve dem_first{fmt::format("DEM {} first failure", base.strategy), {}, {}, true};
+    for (double angle_deg : angles) {
+      const std::string case_name = layup_text.empty()
+                                        ? fmt::format("{:g} deg", angle_deg)
+                                        : fmt::format("{} at {:g} deg", layup_text, angle_deg);
+      StrengthSettings s = base;
+      s.coupon.ply_angle = angle_deg * kDegree;
+      for (double& a : s.layup) a += s.coupon.ply_angle;
+      spdlog::info("{}: strength at {:g} deg", name, angle_deg);
+      try {
+        StrengthTest test(s);
+        test.on_progress([&](const EventProgress& p) {
+          spdlog::info("{:g} deg: {} events, {} broken, peak {:.4g} N, {:.0f} s", angle_deg,
+                       p.events, p.broken, p.peak_reaction, p.elapsed_seconds);
+        });
+        const StrengthResult r = test.run(builder);
+        std::vector<std::string> cells{fmt::format("{:g}°", angle_deg),
+                                       mpa_cell(r.strength),
+                                       mpa_cell(r.first_failure_stress),
+                                       fmt::format("{:.4f}", r.strain_at_peak * 100),
+                                       fmt::format("{} / {}", r.broken_tension, r.broken_shear),
+                                       fmt::format("{}", r.events)};
+        double tsai_wu = NAN;
+        for (const CriterionStrength& t : r.theory) {
+          cells.push_back(t.strength ? mpa_cell(*t.strength) : "–");
+          if (t.criterion == FailureCriterion::kTsaiWu && t.strength) tsai_wu = *t.strength;
+        }
+        cells.push_back(relative(r.strength, tsai_wu));
+        table += table_row(cells);
+        dem_points.x.push_back(angle_deg);
+        dem_points.y.push_back(r.strength * kMPa);
+        dem_first.x.push_back(angle_deg);
+        dem_first.y.push_back(r.first_failure_stress * kMPa);
+        const std::string stem = file_stem(fmt::format("{}_{:g}deg", name, angle_deg));
+        const ExperimentOutput one = strength_output(r, context.out_dir, name, case_name, stem);
+        out.rows.insert(out.rows.end(), one.rows.begin(), one.rows.end());
+        out.files.insert(out.files.end(), one.files.begin(), one.files.end());
+        sections += one.report_markdown;
+      } catch (const Error& e) {
+        table += table_row({fmt::format("{:g}°", angle_deg), fmt::format("refused: {}", e.what()),
+                            "", "", "", "", "", "", "", "", ""});
+      }
+    }
+
+    // The criteria as curves over 0..90 deg (every degree), the DEM points on them.
+    std::vector<Curve> curves;
+    if (!dem_points.x.empty()) {
+      curves.push_back(dem_points);
+      curves.push_back(dem_first);
+    }
+    for (FailureCriterion criterion : all_criteria()) {
+      Curve line{criterion_label(criterion), {}, {}, false};
+      try {
+        for (int degree = 0; degree <= 90; ++degree) {
+          std::vector<Ply> plies;
+          if (base.layup.empty()) {
+            plies.push_back({base.coupon.material, degree * kDegree, base.coupon.thickness});
+          } else {
+            for (double a : base.layup)
+              plies.push_back({base.coupon.material, a + degree * kDegree, base.coupon.thickness});
+          }
+          line.x.push_back(degree);
+          line.y.push_back(
+              first_ply_failure_stress(criterion, plies, base.coupon.material.strength) * kMPa);
+        }
+      } catch (const Error& e) {
+        spdlog::warn("{}: no {} curve: {}", name, criterion_label(criterion), e.what());
+        continue;
+      }
+      curves.push_back(line);
+    }
+    std::string figure_md;
+    if (!curves.empty()) {
+      PlotAxes axes;
+      axes.log_y = true;
+      const Figure figure =
+          plot_curves(curves, context.out_dir, fmt::format("{}_strength", file_stem(name)),
+                      fmt::format("{} {}: uniaxial strength against angle",
+                                  base.coupon.material.name, specimen),
+                      "angle between fibre and load [deg]", "strength sigma_x [MPa]", axes);
+      out.files.insert(out.files.end(), figure.files.begin(), figure.files.end());
+      figure_md = figure_markdown(figure, "Strength against angle: DEM beside the four criteria");
+    }
+
+    std::string& md = out.report_markdown;
+    const LaminaStrength& ls = base.coupon.material.strength;
+    md += fmt::format(
+        "Coupon {:g} × {:g} mm, ply thickness {:g} mm, particle diameter {:g} mm; strategy {}; "
+        "lamina strengths XT {:g}, XC {:g}, YT {:g}, YC {:g}, S12 {:g} MPa; {}.\n\n",
+        base.coupon.length / kMm, base.coupon.width / kMm, base.coupon.thickness / kMm,
+        base.coupon.particle_diameter / kMm, base.strategy, ls.XT * kMPa, ls.XC * kMPa,
+        ls.YT * kMPa, ls.YC * kMPa, ls.S12 * kMPa,
+        base.effective_weibull_modulus() > 0
+            ? fmt::format("Weibull strength scatter m = {:g}, seed {}",
+                          base.effective_weibull_modulus(), base.seed)
+            : "no strength scatter");
+    md += strength_model_note(base) + "\n\n";
+    md += fmt::format(
+        "## Strength against angle\n\nThe criteria are {}, computed in closed form from the "
+        "lamina strengths (core/failure_criteria.hpp; Tsai-Wu with F12* = -1/2).\n\n{}\n{}\n",
+        base.layup.empty() ? "the ply's off-axis strengths"
+                           : "first-ply failure of classical lamination theory",
+        table, figure_md);
+    md += "## Each angle\n\n" + sections;
+    return out;
+  }
+};
+
+}  // namespace
+
+void register_strength_experiment(ExperimentRegistry& registry) {
+  registry.add("strength",
+               "tension tests to failure at several angles: strength beside max-stress, "
+               "Tsai-Hill, Tsai-Wu and Hashin",
+               [] { return std::make_unique<StrengthExperiment>(); });
+}
+
+}  // namespace plydem
