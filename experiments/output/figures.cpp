@@ -272,8 +272,8 @@ Figure plot_curves(const std::vector<Curve>& curves, const fs::path& out_dir,
       "set output '../{}.png'\n"
       "set title {} noenhanced\n"
       "set xlabel {} noenhanced\nset ylabel {} noenhanced\n"
-      "set key left top noenhanced\nset grid\n{}{}\n",
-      stem, gp_quote(title), gp_quote(x_label), gp_quote(y_label),
+      "set key {} noenhanced\nset grid\n{}{}\n",
+      stem, gp_quote(title), gp_quote(x_label), gp_quote(y_label), axes.key,
       axes.log_y ? "set logscale y\n" : "", plot);
   return draw(out_dir, stem, data, script);
 }

@@ -57,7 +57,8 @@ struct Curve {
 
 /// Axes of plot_curves beyond their labels.
 struct PlotAxes {
-  bool log_y = false;  ///< logarithmic y axis (every y must then be positive)
+  bool log_y = false;            ///< logarithmic y axis (every y must then be positive)
+  std::string key = "left top";  ///< where gnuplot puts the legend (`set key ...`)
 };
 
 /// Curves in one x-y plot, e.g. stress-strain: measured points beside theory lines.

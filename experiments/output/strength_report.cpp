@@ -106,6 +106,10 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   nlohmann::json curve = nlohmann::json::array();
   for (std::size_t i = 0; i < r.strain.size(); ++i) curve.push_back({r.strain[i], r.stress[i]});
   j["curve"] = curve;
+  nlohmann::json nominal = nlohmann::json::array();
+  for (std::size_t i = 0; i < r.nominal_strain.size(); ++i)
+    nominal.push_back({r.nominal_strain[i], r.stress[i]});
+  j["curve_nominal"] = nominal;
   nlohmann::json families = nlohmann::json::object();
   for (const BrokenBonds& b : r.broken) {
     families[b.family] = {{"tension", b.tension}, {"shear", b.shear}, {"interface", b.interface}};

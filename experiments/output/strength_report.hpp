@@ -6,7 +6,9 @@
 /// The JSON keys strength, strain_at_peak, first_failure_stress [Pa], curve (list of [strain,
 /// stress]), broken_bonds (counts by family and mode), theory (max_stress, tsai_hill, tsai_wu,
 /// hashin [Pa]; null where the material lacks a strength the criterion needs), events and
-/// wall_seconds are a contract: keys may be added, never renamed.
+/// wall_seconds are a contract: keys may be added, never renamed. `curve` holds the fitted gauge
+/// strain, `curve_nominal` the same points against the grips' nominal strain (separation over
+/// initial distance), where a snap-back shows.
 
 #include <filesystem>
 #include <nlohmann/json.hpp>

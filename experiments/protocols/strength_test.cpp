@@ -144,10 +144,7 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   result.weibull_modulus = s.effective_weibull_modulus();
   result.seed = s.seed;
 
-  // The coupon, as the tension test builds it.
-  Specimen specimen = build_coupon(builder, s.coupon, s.layup, s.interface, s.coupon.ply_angle);
-  result.build_seconds = specimen.build_seconds;
-  result.calibration = specimen.ply_calibrations.front();
+  // The plies as CLT sees them, bottom to top.
   std::vector<Ply> plies;
   if (s.layup.empty()) {
     plies.push_back({material, s.coupon.ply_angle, s.coupon.thickness});
@@ -155,24 +152,31 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
     plies = laminate_plies({s.coupon, s.layup, s.interface});
     for (const Ply& ply : plies) result.layup.push_back(ply.angle);
   }
-  require(plies.size() == specimen.ply_calibrations.size(),
-          fmt::format("the coupon was built with {} ply calibrations for {} plies",
-                      specimen.ply_calibrations.size(), plies.size()));
-
-  // Strengths: each distinct ply calibrated once, then every bond of the coupon.
+  // Strengths of each distinct ply, before the coupon is built (a strategy or target the
+  // calibration refuses fails here); the builder keeps the stiffness calibrations for the build.
   std::map<std::string, StrengthCalibration> calibrated;
-  for (std::size_t k = 0; k < plies.size(); ++k) {
-    const std::string key = fmt::format("{:.17g}", plies[k].angle);
+  for (const Ply& ply : plies) {
+    CouponSpec spec = s.coupon;
+    spec.ply_angle = ply.angle;
+    const std::string key = builder.strategy().calibration_key(spec);
     auto it = calibrated.find(key);
     if (it == calibrated.end()) {
       it = calibrated
-               .emplace(key, calibrate_strengths(builder.strategy(), specimen.ply_calibrations[k],
-                                                 material, plies[k].angle, s.coupon.thickness,
-                                                 s.strength_options))
+               .emplace(key,
+                        calibrate_strengths(builder.strategy(), builder.calibration(spec), material,
+                                            ply.angle, s.coupon.thickness, s.strength_options))
                .first;
     }
     result.ply_strengths.push_back(it->second);
   }
+
+  // The coupon, as the tension test builds it, and the strength of every bond.
+  Specimen specimen = build_coupon(builder, s.coupon, s.layup, s.interface, s.coupon.ply_angle);
+  result.build_seconds = specimen.build_seconds;
+  result.calibration = specimen.ply_calibrations.front();
+  require(plies.size() == specimen.ply_calibrations.size(),
+          fmt::format("the coupon was built with {} ply calibrations for {} plies",
+                      specimen.ply_calibrations.size(), plies.size()));
   assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
                         result.weibull_modulus, s.seed);
 
@@ -219,12 +223,14 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   events.on_progress = progress_;
   result.strain.push_back(0.0);
   result.stress.push_back(0.0);
+  result.nominal_strain.push_back(0.0);
   double peak_stress = -std::numeric_limits<double>::infinity();
   std::shared_ptr<const Model> peak_state;
   long peak_event = 0;
   events.on_event = [&](const Model& state, const EventPoint& point) {
     result.strain.push_back(fit_gauge_strain(state.particles, gauge.particles).exx);
     result.stress.push_back(point.reaction / gauge.cross_section);
+    result.nominal_strain.push_back(point.load_factor * kUnitNominalStrain);
     if (!s.record_snapshots) return;
     const long e = point.event;
     if (e == 1 || (e & (e - 1)) == 0) {

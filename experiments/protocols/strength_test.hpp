@@ -129,6 +129,8 @@ struct StrengthResult {
   double first_failure_strain = 0;
   /// The stress-strain curve: the unloaded origin, then one point per critical state.
   std::vector<double> strain, stress;
+  /// The same points' nominal strain: the grips' separation over their initial distance.
+  std::vector<double> nominal_strain;
   /// Broken bonds by family and mode (families with no broken bond are listed with zeros).
   std::vector<BrokenBonds> broken;
   int broken_tension = 0, broken_shear = 0;

@@ -336,6 +336,7 @@ class StrengthExperiment : public Experiment {
     if (!curves.empty()) {
       PlotAxes axes;
       axes.log_y = true;
+      axes.key = "right top";
       const Figure figure =
           plot_curves(curves, context.out_dir, fmt::format("{}_strength", file_stem(name)),
                       fmt::format("{} {}: uniaxial strength against angle",

@@ -1,0 +1,281 @@
+// The strength test to failure as users run it (experiments/protocols/strength_test.hpp, `plydem
+// strength`, the run kind `strength`): its JSON keys, the 0 and 90 deg strengths of a coupon
+// without scatter against XT and YT, the classical criteria it reports against closed forms
+// written out here, reproducible scatter, its clear errors and the run kind on a tiny config.
+#include <doctest/doctest.h>
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include "core/error.hpp"
+#include "core/material.hpp"
+#include "experiments/output/external_tool.hpp"
+#include "experiments/output/strength_report.hpp"
+#include "experiments/protocols/strength_test.hpp"
+#include "experiments/runner/run_experiment.hpp"
+#include "support/test_support.hpp"
+
+using namespace plydem;
+using namespace plydem::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A small E-glass coupon: the same code path as the paper's, in seconds.
+StrengthSettings small_coupon(double angle_deg) {
+  StrengthSettings s;
+  s.coupon.material = eglass();
+  s.coupon.ply_angle = angle_deg * kDeg;
+  s.coupon.length = 2e-3;
+  s.coupon.width = 0.5e-3;
+  return s;
+}
+
+std::string read(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool finite_number(const nlohmann::json& j) {
+  return j.is_number() && std::isfinite(j.get<double>());
+}
+
+// The classical off-axis strengths of a ply under sigma_x, written out from the stress
+// transformation sigma1 = c^2 sx, sigma2 = s^2 sx, tau12 = -s c sx (Jones, eq. 2.84), independent
+// of core/failure_criteria.cpp.
+double max_stress_by_hand(const LaminaStrength& st, double theta) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  double f = std::numeric_limits<double>::infinity();
+  if (c * c > 0) f = std::min(f, st.XT / (c * c));
+  if (s * s > 0) f = std::min(f, st.YT / (s * s));
+  if (std::abs(s * c) > 0) f = std::min(f, st.S12 / std::abs(s * c));
+  return f;
+}
+double tsai_hill_by_hand(const LaminaStrength& st, double theta) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  const double q = std::pow(c, 4) / (st.XT * st.XT) +
+                   (1 / (st.S12 * st.S12) - 1 / (st.XT * st.XT)) * c * c * s * s +
+                   std::pow(s, 4) / (st.YT * st.YT);
+  return 1 / std::sqrt(q);
+}
+
+}  // namespace
+
+TEST_CASE(
+    "strength test: the JSON keys are present and finite, the criteria are the closed forms") {
+  const StrengthSettings s = small_coupon(30);
+  const StrengthResult r = StrengthTest(s).run();
+  const nlohmann::json j = strength_json(r, s);
+  for (const char* key : {"strength", "strain_at_peak", "first_failure_stress", "wall_seconds"}) {
+    INFO(key);
+    REQUIRE(j.contains(key));
+    CHECK(finite_number(j[key]));
+  }
+  CHECK(j["strength"].get<double>() > 0);
+  CHECK(j["first_failure_stress"].get<double>() > 0);
+  CHECK(j["first_failure_stress"].get<double>() <= j["strength"].get<double>());
+  REQUIRE(j["events"].is_number_integer());
+  CHECK(j["events"].get<long>() >= 1);
+
+  REQUIRE(j["curve"].is_array());
+  CHECK(j["curve"].size() == static_cast<std::size_t>(j["events"].get<long>()) + 1);
+  CHECK(j["curve"][0][0].get<double>() == 0);
+  CHECK(j["curve"][0][1].get<double>() == 0);
+  double peak = 0;
+  for (const nlohmann::json& point : j["curve"]) {
+    REQUIRE(point.size() == 2);
+    CHECK(finite_number(point[0]));
+    CHECK(finite_number(point[1]));
+    peak = std::max(peak, point[1].get<double>());
+  }
+  CHECK(j["strength"].get<double>() == peak);
+  CHECK(j["curve"][1][1].get<double>() == j["first_failure_stress"].get<double>());
+
+  // Broken bonds: by family and mode, adding up to what the model holds.
+  const nlohmann::json& broken = j["broken_bonds"];
+  int tension = 0, shear = 0;
+  for (const auto& [family, counts] : broken["by_family"].items()) {
+    tension += counts["tension"].get<int>();
+    shear += counts["shear"].get<int>();
+  }
+  CHECK(tension == broken["tension"].get<int>());
+  CHECK(shear == broken["shear"].get<int>());
+  int in_model = 0;
+  for (int b = 0; b < r.model->bonds.size(); ++b) in_model += r.model->bonds.is_broken(b) ? 1 : 0;
+  CHECK(broken["total"].get<int>() == in_model);
+  CHECK(in_model >= 1);
+
+  // The four criteria at 30 deg; max-stress and Tsai-Hill against the closed forms above.
+  const LaminaStrength& st = s.coupon.material.strength;
+  for (const char* key : {"max_stress", "tsai_hill", "tsai_wu", "hashin"}) {
+    INFO(key);
+    REQUIRE(j["theory"].contains(key));
+    CHECK(finite_number(j["theory"][key]));
+  }
+  CHECK(j["theory"]["max_stress"].get<double>() ==
+        doctest::Approx(max_stress_by_hand(st, 30 * kDeg)).epsilon(1e-12));
+  CHECK(j["theory"]["tsai_hill"].get<double>() ==
+        doctest::Approx(tsai_hill_by_hand(st, 30 * kDeg)).epsilon(1e-12));
+  // DAMAGE_NOTES §5: at 30 deg the criteria range from about 110 (Tsai-Wu) to 160 MPa.
+  CHECK(j["theory"]["tsai_wu"].get<double>() < j["theory"]["max_stress"].get<double>());
+}
+
+TEST_CASE("strength test: a laminate's theory is the first-ply failure of CLT") {
+  // [0/90]s under sigma_x by hand: the mid-plane strain from A/h, each ply's stress Q-bar eps in
+  // its own axes, max-stress on each ply.
+  const Material m = eglass();
+  const LaminaStrength& st = m.strength;
+  const Eigen::Matrix3d a = membrane_by_hand(m, {0, 90, 90, 0});
+  const Eigen::Vector3d strain = a.inverse() * Eigen::Vector3d(1, 0, 0);
+  double by_hand = std::numeric_limits<double>::infinity();
+  for (double deg : {0.0, 90.0}) {
+    const Eigen::Vector3d sigma = qbar_by_hand(m, deg * kDeg) * strain;  // coupon axes
+    // 0 deg ply: sigma1 = sigma_x, sigma2 = sigma_y; 90 deg: swapped (tau_xy = 0 for both).
+    const double s1 = deg == 0 ? sigma(0) : sigma(1), s2 = deg == 0 ? sigma(1) : sigma(0);
+    if (s1 > 0) by_hand = std::min(by_hand, st.XT / s1);
+    if (s2 > 0) by_hand = std::min(by_hand, st.YT / s2);
+    if (s2 < 0) by_hand = std::min(by_hand, st.YC / -s2);
+  }
+  std::vector<Ply> plies;
+  for (double deg : {0.0, 90.0, 90.0, 0.0}) plies.push_back({m, deg * kDeg, 0.2e-3});
+  CHECK(first_ply_failure_stress(FailureCriterion::kMaxStress, plies, st) ==
+        doctest::Approx(by_hand).epsilon(1e-12));
+  // One ply: its off-axis strength.
+  CHECK(first_ply_failure_stress(FailureCriterion::kTsaiHill, {{m, 30 * kDeg, 0.2e-3}}, st) ==
+        doctest::Approx(tsai_hill_by_hand(st, 30 * kDeg)).epsilon(1e-12));
+}
+
+TEST_CASE("strength test: the 0 and 90 deg coupons without scatter fail at XT and YT within 1%") {
+  for (double angle : {0.0, 90.0}) {
+    const StrengthSettings s = small_coupon(angle);
+    const StrengthResult r = StrengthTest(s).run();
+    const LaminaStrength& st = s.coupon.material.strength;
+    const double target = angle == 0 ? st.XT : st.YT;
+    INFO(fmt::format("{:g} deg: strength {:.4g} MPa, first failure {:.4g} MPa, target {:.4g} MPa",
+                     angle, r.strength * 1e-6, r.first_failure_stress * 1e-6, target * 1e-6));
+    CHECK(r.strength == doctest::Approx(target).epsilon(0.01));
+    CHECK(r.first_failure_stress == doctest::Approx(target).epsilon(0.01));
+    CHECK(r.model_first_failure == doctest::Approx(target).epsilon(1e-6));
+  }
+}
+
+TEST_CASE("the paper's coupon: 0 and 90 deg strengths within 1% of XT and YT") {
+  for (double angle : {0.0, 90.0}) {
+    StrengthSettings s = small_coupon(angle);
+    s.coupon.length = 10e-3;
+    s.coupon.width = 0.83e-3;
+    const StrengthResult r = StrengthTest(s).run();
+    const LaminaStrength& st = s.coupon.material.strength;
+    const double target = angle == 0 ? st.XT : st.YT;
+    INFO(fmt::format("{:g} deg: strength {:.4g} MPa, target {:.4g} MPa, {} events", angle,
+                     r.strength * 1e-6, target * 1e-6, r.events));
+    CHECK(r.strength == doctest::Approx(target).epsilon(0.01));
+  }
+}
+
+TEST_CASE("strength test: the same seed gives the same strengths, another seed others") {
+  StrengthSettings s = small_coupon(90);
+  s.weibull_modulus = 10;
+  s.seed = 7;
+  const StrengthResult a = StrengthTest(s).run();
+  const StrengthResult b = StrengthTest(s).run();
+  s.seed = 8;
+  const StrengthResult c = StrengthTest(s).run();
+  CHECK(a.strength == b.strength);
+  CHECK(a.stress == b.stress);
+  CHECK(a.strength != c.strength);
+  CHECK(a.weibull_modulus == 10);
+}
+
+TEST_CASE("strength test: clear errors") {
+  SUBCASE("a material without strengths") {
+    StrengthSettings s = small_coupon(0);
+    s.coupon.material.strength = {};
+    CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("XT"), Error);
+  }
+  SUBCASE("the random lattice has no unit cell to calibrate strengths on") {
+    StrengthSettings s = small_coupon(0);
+    s.strategy = "lattice";
+    s.coupon.material = mild_ply();
+    s.coupon.material.strength = eglass().strength;
+    s.coupon.length = 0.6e-3;  // the lattice's stiffness calibration runs on the coupon's packing
+    s.coupon.width = 0.3e-3;
+    CHECK_THROWS_AS(StrengthTest(s).run(), Error);
+  }
+  SUBCASE("interface strengths without a laminate") {
+    StrengthSettings s = small_coupon(0);
+    s.interface_strength.normal = 40e6;
+    s.interface_strength.shear = 70e6;
+    CHECK_THROWS_WITH_AS(StrengthTest{s}, doctest::Contains("need a laminate"), Error);
+  }
+  SUBCASE("NaN and negative values") {
+    StrengthSettings s = small_coupon(0);
+    s.weibull_modulus = std::numeric_limits<double>::quiet_NaN();
+    CHECK_THROWS_WITH_AS(StrengthTest{s}, doctest::Contains("Weibull modulus"), Error);
+    s.weibull_modulus = -2;
+    CHECK_THROWS_WITH_AS(StrengthTest{s}, doctest::Contains("Weibull modulus"), Error);
+    s.weibull_modulus.reset();
+    s.strength_options.friction_coefficient = -0.1;
+    CHECK_THROWS_WITH_AS(StrengthTest{s}, doctest::Contains("friction"), Error);
+    s.strength_options.friction_coefficient = 0;
+    s.layup = {0, 90 * kDeg, 0};
+    s.interface_strength.normal = -1;
+    CHECK_THROWS_AS(StrengthTest{s}, Error);
+  }
+  SUBCASE("the explicit method is refused until the integrator breaks bonds") {
+    StrengthSettings s = small_coupon(0);
+    s.method = StrengthMethod::kExplicit;
+    CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("--method events"), Error);
+  }
+  CHECK_THROWS_WITH_AS(parse_strength_method("implicit"), doctest::Contains("events or explicit"),
+                       Error);
+}
+
+TEST_CASE("tiny run: the kind 'strength' writes its table, rows, figures and VTU series") {
+  const fs::path out = fresh_directory("strength_tiny");
+  RunOptions options;
+  options.config = fs::path(PLYDEM_TEST_DATA_DIR) / "tiny_strength.toml";
+  options.out_dir = out;
+  const RunSummary summary = run_experiment(options);
+  const std::string report = read(summary.report);
+  CHECK(report.find("## Strength against angle") != std::string::npos);
+  CHECK(report.find("| 0° |") != std::string::npos);
+  CHECK(report.find("| 90° |") != std::string::npos);
+  const std::string csv = read(summary.results);
+  for (const char* row :
+       {"tiny_strength,0 deg,strength,dem hex2d,", "tiny_strength,90 deg,strength,dem hex2d,",
+        "tiny_strength,90 deg,strength,tsai-wu,", "tiny_strength,0 deg,strength,max-stress,",
+        "tiny_strength,90 deg,strength,hashin,", "tiny_strength,0 deg,strength,tsai-hill,"}) {
+    INFO(row);
+    CHECK(csv.find(row) != std::string::npos);
+  }
+  // The VTU series of each angle: selected events with the bond state as cell data.
+  for (const char* angle : {"0deg", "90deg"}) {
+    const fs::path pvd = out / "vtu" / fmt::format("tiny_strength_{}.pvd", angle);
+    REQUIRE(fs::exists(pvd));
+    const std::string text = read(pvd);
+    CHECK(text.find("_0_bonds.vtu") != std::string::npos);
+    const std::string bonds =
+        read(out / "vtu" / fmt::format("tiny_strength_{}_0_bonds.vtu", angle));
+    CHECK(bonds.find("Name=\"state\"") != std::string::npos);
+    CHECK(bonds.find("Name=\"damage\"") != std::string::npos);
+  }
+  if (!gnuplot_availability().available) {
+    skip("gnuplot is not installed: the figures are not drawn");
+    return;
+  }
+  CHECK(fs::exists(out / "tiny_strength_strength.png"));
+  CHECK(fs::exists(out / "tiny_strength_0deg_stress_strain.png"));
+  CHECK(fs::exists(out / "tiny_strength_90deg_cracks.png"));
+  fs::remove_all(out);
+}
