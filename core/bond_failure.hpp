@@ -45,8 +45,8 @@ namespace plydem {
 
 /// One bond's strength (the strength fields of Bonds, core/model.hpp).
 struct BondStrength {
-  double radius = 0;                                         ///< R of the section [m]
-  double tensile = std::numeric_limits<double>::infinity();  ///< sigma_c [Pa]
+  double radius = 0;                                          ///< R of the section [m]
+  double tensile = std::numeric_limits<double>::infinity();   ///< sigma_c [Pa]
   double cohesion = std::numeric_limits<double>::infinity();  ///< c [Pa]
   double friction = 0;                                        ///< tan(phi)
   double ductility = 1;                                       ///< kappa_u (1 = brittle)
@@ -76,9 +76,9 @@ inline BondStresses section_stresses(double normal_force, double shear_force, do
 
 /// The stresses of bond `b` (its current, possibly damaged, stiffnesses) at the given state of its
 /// two particles, in the bond's own orientation (first -> second).
-inline BondStresses bond_stresses(const BondParameters& b, double radius, const Eigen::Vector3d& u_i,
-                                  const Eigen::Vector3d& theta_i, const Eigen::Vector3d& u_j,
-                                  const Eigen::Vector3d& theta_j) {
+inline BondStresses bond_stresses(const BondParameters& b, double radius,
+                                  const Eigen::Vector3d& u_i, const Eigen::Vector3d& theta_i,
+                                  const Eigen::Vector3d& u_j, const Eigen::Vector3d& theta_j) {
   const Eigen::Vector3d& n = b.normal;
   const Eigen::Vector3d du = contact_relative_displacement(b, u_i, theta_i, u_j, theta_j);
   const double du_n = n.dot(du);
@@ -185,9 +185,9 @@ inline BondStrength bond_strength(const Bonds& bonds, int b) {
 
 /// One broken (or, for softening, fully softened) bond, as solvers log it.
 struct BondBreak {
-  int bond = 0;                                   ///< row in Bonds
-  BondState mode = BondState::kBrokenTension;     ///< tension or shear
-  double at = 0;  ///< event number (events solver) or time [s] (explicit)
+  int bond = 0;                                ///< row in Bonds
+  BondState mode = BondState::kBrokenTension;  ///< tension or shear
+  double at = 0;    ///< event number (events solver) or time [s] (explicit)
   double load = 0;  ///< the grip displacement or strain at the break, as the solver states it
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< the bond's contact point [m]
 };

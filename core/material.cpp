@@ -80,9 +80,9 @@ std::string builtin_list() {
   return list;
 }
 
-constexpr std::string_view kNumberKeys[] = {"E1",  "E2", "G12", "nu12",    "nu23",     "density",
-                                            "XT",  "XC", "YT",  "YC",      "S12",      "G_fibre",
-                                            "G_matrix", "weibull_modulus"};
+constexpr std::string_view kNumberKeys[] = {
+    "E1", "E2", "G12", "nu12", "nu23",    "density",  "XT",
+    "XC", "YT", "YC",  "S12",  "G_fibre", "G_matrix", "weibull_modulus"};
 
 // The optional strength entries, by key.
 double* strength_entry(LaminaStrength& s, std::string_view key) {
@@ -235,10 +235,10 @@ void require_strengths(const Material& material, const std::string& purpose, boo
     need("G_fibre", s.G_fibre);
     need("G_matrix", s.G_matrix);
   }
-  require(missing.empty(),
-          "material " + in_quotes(material.name) + " has no " + missing + ": " + purpose +
-              " needs them (add them to the material file: XT, YT, S12 in Pa" +
-              (softening ? ", G_fibre and G_matrix in J/m^2" : "") + ")");
+  require(missing.empty(), "material " + in_quotes(material.name) + " has no " + missing + ": " +
+                               purpose +
+                               " needs them (add them to the material file: XT, YT, S12 in Pa" +
+                               (softening ? ", G_fibre and G_matrix in J/m^2" : "") + ")");
 }
 
 std::vector<std::string> builtin_material_names() {

@@ -11,11 +11,11 @@ namespace plydem {
 /// A ply's strengths and fracture energies (paper's future work; ../shared/DAMAGE_NOTES.md §1),
 /// all optional: 0 = not given. Strengths are magnitudes (XC and YC positive in compression).
 struct LaminaStrength {
-  double XT = 0;   ///< longitudinal tensile strength [Pa]
-  double XC = 0;   ///< longitudinal compressive strength [Pa]
-  double YT = 0;   ///< transverse tensile strength [Pa]
-  double YC = 0;   ///< transverse compressive strength [Pa]
-  double S12 = 0;  ///< in-plane shear strength [Pa]
+  double XT = 0;        ///< longitudinal tensile strength [Pa]
+  double XC = 0;        ///< longitudinal compressive strength [Pa]
+  double YT = 0;        ///< transverse tensile strength [Pa]
+  double YC = 0;        ///< transverse compressive strength [Pa]
+  double S12 = 0;       ///< in-plane shear strength [Pa]
   double G_fibre = 0;   ///< fracture energy of a crack across the fibres [J/m^2]
   double G_matrix = 0;  ///< fracture energy of a crack along the fibres [J/m^2]
   /// Weibull modulus m of the bonds' strength scatter; 0 = no scatter.
@@ -59,7 +59,8 @@ std::vector<std::string> builtin_material_names();
 
 /// A built-in material by name, or a TOML file with keys name, E1, E2, G12, nu12, nu23 (SI, Pa) and
 /// optionally density (kg/m^3), strengths XT, XC, YT, YC, S12 (Pa), fracture energies G_fibre,
-/// G_matrix (J/m^2) and weibull_modulus. Validated before it is returned; throws plydem::Error otherwise.
+/// G_matrix (J/m^2) and weibull_modulus. Validated before it is returned; throws plydem::Error
+/// otherwise.
 Material load_material(const std::string& name_or_file);
 
 }  // namespace plydem

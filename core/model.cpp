@@ -90,25 +90,27 @@ void check_bond_strength(const Bonds& b, int k) {
   for (const auto& [name, value] : {std::pair{"tensile strength", b.tensile_strength(k)},
                                     std::pair{"cohesion", b.cohesion(k)}}) {
     if (!(value > 0))
-      throw Error(fmt::format("bond {} has a {} of {} Pa: a strength must be positive (+inf for "
-                              "a bond that never breaks)",
-                              k, name, value));
+      throw Error(
+          fmt::format("bond {} has a {} of {} Pa: a strength must be positive (+inf for "
+                      "a bond that never breaks)",
+                      k, name, value));
   }
   if (breakable && !(std::isfinite(b.strength_radius(k)) && b.strength_radius(k) > 0))
     throw Error(fmt::format("bond {} has a strength but its cross-section radius is {} m", k,
                             b.strength_radius(k)));
   if (!(std::isfinite(b.friction_coefficient(k)) && b.friction_coefficient(k) >= 0))
-    throw Error(fmt::format("bond {} has a friction coefficient of {} (must be finite and >= 0)",
-                            k, b.friction_coefficient(k)));
+    throw Error(fmt::format("bond {} has a friction coefficient of {} (must be finite and >= 0)", k,
+                            b.friction_coefficient(k)));
   if (!(std::isfinite(b.ductility(k)) && b.ductility(k) >= 1))
     throw Error(fmt::format("bond {} has a ductility of {} (kappa_u >= 1; 1 = brittle)", k,
                             b.ductility(k)));
   if (!(b.damage(k) >= 0 && b.damage(k) <= 1))
     throw Error(fmt::format("bond {} has a damage of {} (must lie in [0, 1])", k, b.damage(k)));
   if (!(b.state(k) >= 0 && b.state(k) <= static_cast<int>(BondState::kBrokenShear)))
-    throw Error(fmt::format("bond {} has state {}, which is no BondState (0 intact, 1 broken in "
-                            "tension, 2 broken in shear)",
-                            k, b.state(k)));
+    throw Error(
+        fmt::format("bond {} has state {}, which is no BondState (0 intact, 1 broken in "
+                    "tension, 2 broken in shear)",
+                    k, b.state(k)));
 }
 
 }  // namespace

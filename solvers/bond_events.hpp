@@ -25,12 +25,12 @@ namespace plydem {
 
 /// One critical state: the load factor at which the next bond fails, before it does.
 struct EventPoint {
-  long event = 0;           ///< 1, 2, ...
-  double load_factor = 0;   ///< times the unit prescribed values
-  double reaction = 0;      ///< sum of the reactions on the reaction dofs at that state [N, N m]
-  int bond = 0;             ///< the bond that fails (or softens) at this state
-  int broken = 0;           ///< bonds broken after this event
-  double strain_energy = 0; ///< at the critical state [J]
+  long event = 0;            ///< 1, 2, ...
+  double load_factor = 0;    ///< times the unit prescribed values
+  double reaction = 0;       ///< sum of the reactions on the reaction dofs at that state [N, N m]
+  int bond = 0;              ///< the bond that fails (or softens) at this state
+  int broken = 0;            ///< bonds broken after this event
+  double strain_energy = 0;  ///< at the critical state [J]
 };
 
 struct EventProgress {

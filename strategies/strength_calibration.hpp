@@ -13,9 +13,9 @@
 /// through its shear mode.
 ///
 /// Fracture energy (softening): a bond's share of crack area is A_crack = 1 / sum_g (rho_g L_g
-/// |n_g . n_b|) for a crack normal to it (rho_g bonds of family g per unit volume, L_g their length),
-/// so that a straight crack normal to a bond direction cuts bonds whose shares add up to its area;
-/// families within 15 deg of the fibre get G_fibre, the others G_matrix; ductility from
+/// |n_g . n_b|) for a crack normal to it (rho_g bonds of family g per unit volume, L_g their
+/// length), so that a straight crack normal to a bond direction cuts bonds whose shares add up to
+/// its area; families within 15 deg of the fibre get G_fibre, the others G_matrix; ductility from
 /// bond_ductility with the family's energy at its calibrated first failure.
 
 #include <cstdint>
@@ -49,13 +49,13 @@ struct StrengthOptions {
 
 /// One bond family's strength, for the bonds and for reports.
 struct FamilyStrength {
-  std::string label;  ///< as the family's FamilyCalibration
+  std::string label;                                          ///< as the family's FamilyCalibration
   double tensile = std::numeric_limits<double>::infinity();   ///< sigma_c [Pa]
   double cohesion = std::numeric_limits<double>::infinity();  ///< c [Pa]
-  double friction = 0;                                         ///< tan(phi)
-  double radius = 0;      ///< R of the section [m]
-  double crack_area = 0;  ///< A_crack [m^2]
-  double ductility = 1;   ///< kappa_u (1 = brittle)
+  double friction = 0;                                        ///< tan(phi)
+  double radius = 0;                                          ///< R of the section [m]
+  double crack_area = 0;                                      ///< A_crack [m^2]
+  double ductility = 1;                                       ///< kappa_u (1 = brittle)
   /// Which target set each strength ("XT", "YT", "S12"; "" if no target loads the mode).
   std::string tensile_set_by, cohesion_set_by;
 };

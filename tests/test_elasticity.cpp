@@ -470,6 +470,58 @@ TEST_CASE("built-in material eglass-my750 is paper Table 1") {
   CHECK(m.nu12 == 0.278);
   CHECK(m.nu23 == 0.4);
   CHECK(m.density == 2000.0);
+  // WWFE-I (Soden, Hinton & Kaddour 1998; DAMAGE_NOTES §1).
+  CHECK(m.strength.XT == 1280e6);
+  CHECK(m.strength.XC == 800e6);
+  CHECK(m.strength.YT == 40e6);
+  CHECK(m.strength.YC == 145e6);
+  CHECK(m.strength.S12 == 73e6);
+  CHECK(m.strength.tensile_and_shear());
+  CHECK_FALSE(m.strength.fracture_energies());
+  CHECK_NOTHROW(plydem::require_strengths(m, "a test"));
+  CHECK(contains(error_message([&] { plydem::require_strengths(m, "softening", true); }),
+                 "has no G_fibre, G_matrix: softening needs them"));
+}
+
+TEST_CASE("material files with strengths") {
+  const std::string elastic =
+      "name = \"g\"\nE1 = 45.6e9\nE2 = 16.2e9\nG12 = 5.83e9\nnu12 = 0.278\nnu23 = 0.4\n";
+  SUBCASE("strengths, fracture energies and scatter are read in SI units") {
+    TempFile file("strengths", elastic +
+                                   "XT = 1280e6\nXC = 800e6\nYT = 40e6\nYC = 145e6\nS12 = 73e6\n"
+                                   "G_fibre = 40000\nG_matrix = 250\nweibull_modulus = 12\n");
+    const Material m = plydem::load_material(file.path());
+    CHECK(m.strength.XT == 1280e6);
+    CHECK(m.strength.XC == 800e6);
+    CHECK(m.strength.YT == 40e6);
+    CHECK(m.strength.YC == 145e6);
+    CHECK(m.strength.S12 == 73e6);
+    CHECK(m.strength.G_fibre == 40000);
+    CHECK(m.strength.G_matrix == 250);
+    CHECK(m.strength.weibull_modulus == 12);
+    CHECK(m.strength.fracture_energies());
+  }
+  SUBCASE("no strengths: elastic work is fine, a test to failure names what is missing") {
+    TempFile file("no_strengths", elastic + "XT = 1280e6\n");
+    const Material m = plydem::load_material(file.path());
+    CHECK_FALSE(m.strength.tensile_and_shear());
+    CHECK(contains(error_message([&] { plydem::require_strengths(m, "plydem strength"); }),
+                   "material 'g' has no YT, S12: plydem strength needs them"));
+  }
+  SUBCASE("a negative, zero or NaN strength is an error naming the key") {
+    for (const std::string bad : {"YT = -40e6\n", "S12 = 0\n", "XT = nan\n", "G_matrix = -1\n"}) {
+      CAPTURE(bad);
+      TempFile file("bad_strength", elastic + bad);
+      const std::string message = error_message([&] { plydem::load_material(file.path()); });
+      CHECK(contains(message, bad.substr(0, bad.find(' ')) + " must be finite and positive"));
+      CHECK(contains(message, file.path()));
+    }
+  }
+  SUBCASE("validate() checks strengths set in code") {
+    Material m = plydem::load_material("eglass-my750");
+    m.strength.YT = std::nan("");
+    CHECK(contains(error_message([&] { plydem::validate(m); }), "YT must be finite"));
+  }
 }
 
 TEST_CASE("material TOML files") {
