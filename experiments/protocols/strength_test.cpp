@@ -1,6 +1,7 @@
 #include "experiments/protocols/strength_test.hpp"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <chrono>
@@ -134,6 +135,13 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
     throw Error(
         "the explicit method of the strength test is not available in this build (the explicit "
         "integrator does not break bonds yet); use the events method (--method events)");
+  }
+
+  if (!s.strength_options.softening &&
+      (s.interface_strength.GIc > 0 || s.interface_strength.GIIc > 0)) {
+    spdlog::warn(
+        "the interface fracture energies GIc, GIIc are used by softening bonds only "
+        "(--softening); these brittle interfaces ignore them");
   }
 
   StrengthResult result;
