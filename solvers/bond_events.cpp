@@ -44,6 +44,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The smallest pivot of the capacitance matrix, relative to its column of W^-1, that the updates
+// accept (see UnitLoadSolver::change).
+constexpr double kPivotFloor = 1e-8;
+
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -277,11 +281,13 @@ class UnitLoadSolver {
     c22.diagonal() += w.cwiseInverse();
     const Eigen::MatrixXd schur = c22 - x.transpose() * x;
     const Eigen::LLT<Eigen::MatrixXd> llt(schur);
-    // A pivot lost to cancellation: C is (nearly) singular in these columns, so the updated
-    // factor would be inaccurate; factor the current stiffness instead.
-    const double scale = w.cwiseInverse().maxCoeff();
+    // C <= W^-1, and a pivot far below its column's W^-1 is lost to cancellation: the current
+    // stiffness nearly loses that direction (a near-mechanism), and the updated factor would be
+    // inaccurate there. Factor the current stiffness instead.
     const Eigen::MatrixXd l22 = llt.matrixL();
-    if (llt.info() != Eigen::Success || !(l22.diagonal().cwiseAbs2().minCoeff() > 1e-10 * scale)) {
+    bool accurate = llt.info() == Eigen::Success;
+    for (int e = 0; accurate && e < q; ++e) accurate = l22(e, e) * l22(e, e) * w(e) > kPivotFloor;
+    if (!accurate) {
       stale_ = true;
       return;
     }

@@ -76,8 +76,11 @@ struct EventSettings {
   /// kappa_u and breaks (see the file comment).
   double last_tooth_stiffness = 1e-3;
   /// Low-rank updates of the last factorization up to this rank; then refactor (0: refactor after
-  /// every change, as refactor_every_event).
-  int max_update_rank = 600;
+  /// every change, as refactor_every_event). An equilibrium costs O(active dofs x rank) and the
+  /// correction keeps that many columns: on the paper's coupon (3,791 particles, 3 columns per
+  /// changed bond) 100 to 300 gave the most events per CPU second (bench/events_bench.cpp), 600
+  /// 30% fewer.
+  int max_update_rank = 200;
   /// The benchmark's baseline: factor the stiffness afresh for every event.
   bool refactor_every_event = false;
   /// The static solver's settings for each factorization. The events solver needs a factor:
