@@ -31,6 +31,7 @@
 ///   kCollapsedEnergy of its first value (the grips are no longer connected), when after the peak
 ///   the reaction falls below stop_fraction of the peak, or when a factorization finds a mechanism
 ///   (EventsResult::message says where).
+/// - Breaks are logged with the bond's contact point in the reference configuration.
 /// - Energy. When a bond fails at load factor lambda at fixed grips, the structure releases
 ///   lambda^2 (E_1 - E_1'), E_1 and E_1' the strain energies of the unit solutions before and
 ///   after; dissipated_energy sums these, which is the work of the grips along the saw-tooth path
@@ -116,8 +117,9 @@ struct EventsResult {
 /// of `unit` (their values at load factor 1), the reaction summed over the dofs flagged in
 /// `reaction_dofs` (one row per particle, Dof columns). Changes model.bonds (damage, state and
 /// stiffnesses of the bonds that failed) and leaves the model's particles at the last critical
-/// state. Throws plydem::Error for bad settings, unbreakable bonds, or constraints the static
-/// solver refuses.
+/// state (at the unit-load solution if no bond was loaded). Throws plydem::Error for bad settings,
+/// unbreakable bonds, bad strength fields (Model::check_consistency), a reaction dof that is not
+/// prescribed, or constraints the static solver refuses.
 EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
                         const EventSettings& settings = {});
 

@@ -185,6 +185,40 @@ TEST_CASE("a chain in series breaks at its weakest bond at the load factor compu
   CHECK(m.particles.displacement(2, 0) > 0);
 }
 
+TEST_CASE("a chain held only along x: the particle that comes loose is fixed and the rest pinned") {
+  // The ends prescribe ux (and uz, theta_x, theta_y) only: the rigid modes in the x-y plane are
+  // pinned. When the end bond breaks, the end particle keeps free dofs (uy, theta_z) and no bond,
+  // and the rest of the chain keeps its pins: the solver fixes the lone particle, factors afresh,
+  // finds the grips disconnected and stops.
+  const double d = 1e-4, travel = 1e-6;
+  std::vector<Eigen::Vector3d> x;
+  for (int i = 0; i < 5; ++i) x.emplace_back(i * d, 0, 0);
+  Model m = particles_at(x, 0.5 * d);
+  std::vector<BondSpec> specs;
+  for (int b = 0; b < 4; ++b)
+    specs.push_back({b, b + 1, 1e6, 0.5e6, 1e-3, 1e-3, 2e-5, b == 0 ? 40e6 : 60e6, kInf});
+  add_bonds(m, specs);
+  DofConstraints unit(5);
+  for (int i : {0, 4}) {
+    unit.fix(i, Dof::kUx, i == 4 ? travel : 0.0);
+    unit.fix(i, Dof::kUz);
+    unit.fix(i, Dof::kThetaX);
+    unit.fix(i, Dof::kThetaY);
+  }
+  DofFlags reaction = flags_for(5);
+  reaction(4, 0) = true;
+  EventSettings settings;
+  settings.static_settings.pin_rigid_modes = true;
+  const EventsResult r = run_events(m, unit, reaction, settings);
+  REQUIRE(r.path.size() == 1);
+  CHECK(r.path[0].bond == 0);
+  // Four equal springs in series: lambda = sigma_c A / (k_n / 4 travel).
+  CHECK(relative(r.path[0].load_factor, 40e6 * kPi * 4e-10 * 4 / (1e6 * travel)) < 1e-12);
+  CHECK(r.stop == "failed");
+  CHECK(r.message.empty());
+  CHECK(r.factorizations == 2);
+}
+
 TEST_CASE("equal critical loads: the lowest bond index breaks first") {
   const double d = 1e-4;
   std::vector<Eigen::Vector3d> x;
