@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/elasticity.hpp"
+#include "core/parallel_bond.hpp"
 
 namespace plydem {
 
@@ -53,6 +54,33 @@ Eigen::Matrix3d voigt_unit_strain(int k);
 Matrix6d affine_stiffness(const UnitCell& cell, const std::vector<FamilyStiffness>& families);
 /// Relaxed stiffness: spins and sublattice shifts condensed out at minimum energy.
 Matrix6d relaxed_stiffness(const UnitCell& cell, const std::vector<FamilyStiffness>& families);
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+/// The state of a cell's basis particles under a macroscopic strain with the internal degrees of
+/// freedom (spins and sublattice shifts) at minimum energy, as relaxed_stiffness condenses them:
+/// the image of particle i in cell `image`, at x = basis[i] + lattice_vectors image, moves by
+/// strain x + fluctuation[i] and turns by rotation[i]. The first particle's fluctuation is zero
+/// (it fixes the cell's rigid translation); internal zero-energy modes (a layer's out-of-plane
+/// motion, which in-plane strains do not load) are left at zero.
+struct CellMotion {
+  Eigen::Matrix3d strain = Eigen::Matrix3d::Zero();  ///< the symmetric strain tensor E
+  std::vector<Eigen::Vector3d> fluctuation;          ///< translation beyond E x, per particle [m]
+  std::vector<Eigen::Vector3d> rotation;             ///< per particle [rad]
+  /// Displacement of particle `particle`'s image in cell `image` [m].
+  Eigen::Vector3d displacement(const UnitCell& cell, int particle,
+                               const Eigen::Vector3i& image) const;
+};
+
+/// The relaxed motion of `cell` under the macroscopic strain `strain` (Voigt order 11, 22, 33, 23,
+/// 13, 12, engineering shear): the same static condensation as relaxed_stiffness, whose stresses
+/// are those of this motion.
+CellMotion relaxed_motion(const UnitCell& cell, const std::vector<FamilyStiffness>& families,
+                          const Vector6d& strain);
+
+/// Bond b of `cell` as the bond law (core/parallel_bond.hpp) sees it, with stiffness `stiffness`
+/// (its family's): unit normal first -> second image, contact point midway in the gap.
+BondParameters cell_bond(const UnitCell& cell, int b, const FamilyStiffness& stiffness);
 
 /// The in-plane (xx, yy, xy) block of a 6x6 stiffness, for a layer with no bonds across its
 /// thickness (whose sigma_zz is zero by construction: plane stress).

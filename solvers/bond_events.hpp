@@ -12,6 +12,30 @@
 /// since are a low-rank correction (Woodbury: at most 12 columns per changed bond), until the
 /// correction's rank passes EventSettings::max_update_rank, when the current stiffness is
 /// factored afresh. A particle left without any bond is fixed where it is (it carries nothing).
+///
+/// Details (solvers/bond_events.cpp says why):
+/// - Teeth. A softening bond (ductility kappa_u > 1) of stiffness fraction s = 1 - damage fails at
+///   kappa = softening_ratio(damage, kappa_u), on the softening line, and keeps s r of its
+///   stiffness (r = EventSettings::tooth_stiffness_ratio), until its next tooth would fall below
+///   EventSettings::last_tooth_stiffness: that tooth is its last, it fails at kappa = kappa_u, the
+///   end of the softening line, and breaks. A brittle bond (kappa_u = 1) breaks at kappa = 1.
+/// - Ties. Critical load factors within a relative kTieTolerance of the smallest are a tie: the
+///   lowest bond index fails first, whatever the round-off of the solve.
+/// - Pieces that come loose. When a break splits the intact bonds into more clusters, a particle
+///   left alone has its free dofs fixed where the unit solution put it (it then moves with the
+///   load factor, carrying nothing), a cluster with no prescribed dof is fixed at its mean
+///   translation (rigidly: its intact bonds stay unloaded), and the free rigid-body modes of the
+///   other clusters are pinned at zero (rigid_mode_pins on the intact bonds), all of which carries
+///   no force. The free set changes, so the stiffness is factored afresh.
+/// - Failure. The run stops as "failed" when the strain energy at unit load has fallen to
+///   kCollapsedEnergy of its first value (the grips are no longer connected), when after the peak
+///   the reaction falls below stop_fraction of the peak, or when a factorization finds a mechanism
+///   (EventsResult::message says where).
+/// - Breaks are logged with the bond's contact point in the reference configuration.
+/// - Energy. When a bond fails at load factor lambda at fixed grips, the structure releases
+///   lambda^2 (E_1 - E_1'), E_1 and E_1' the strain energies of the unit solutions before and
+///   after; dissipated_energy sums these, which is the work of the grips along the saw-tooth path
+///   minus the strain energy at its end.
 
 #include <functional>
 #include <string>
@@ -48,10 +72,20 @@ struct EventSettings {
   double stop_fraction = 0.02;
   /// Softening bonds: each tooth keeps this fraction of the bond's current stiffness.
   double tooth_stiffness_ratio = 0.5;
-  /// Low-rank updates of the last factorization up to this rank; then refactor.
-  int max_update_rank = 600;
+  /// Softening bonds: the smallest stiffness fraction (1 - damage) a tooth may have, between 0 and
+  /// tooth_stiffness_ratio. The tooth whose next one would fall below it is the last: it fails at
+  /// kappa_u and breaks (see the file comment).
+  double last_tooth_stiffness = 1e-3;
+  /// Low-rank updates of the last factorization up to this rank; then refactor (0: refactor after
+  /// every change, as refactor_every_event). An equilibrium costs O(active dofs x rank) and the
+  /// correction keeps that many columns: on the paper's coupon (3,791 particles, 3 columns per
+  /// changed bond) 100 to 300 gave the most events per CPU second (bench/events_bench.cpp), 600
+  /// 30% fewer.
+  int max_update_rank = 200;
   /// The benchmark's baseline: factor the stiffness afresh for every event.
   bool refactor_every_event = false;
+  /// The static solver's settings for each factorization. The events solver needs a factor:
+  /// StaticMethod::kAuto means kDirect here, and kIterative is refused.
   StaticSettings static_settings;
   std::function<void(const EventProgress&)> on_progress;
   double progress_seconds = 2.0;
@@ -61,14 +95,21 @@ struct EventSettings {
   void validate() const;
 };
 
+/// Critical load factors within this relative distance of the smallest are a tie.
+inline constexpr double kTieTolerance = 1e-9;
+/// The strain energy at unit load, relative to its first value, below which the grips are taken
+/// as disconnected (the specimen has failed).
+inline constexpr double kCollapsedEnergy = 1e-12;
+
 struct EventsResult {
   std::vector<EventPoint> path;   ///< the critical states, in order
   std::vector<BondBreak> breaks;  ///< bonds broken (at = event number, load = load factor)
-  int peak = -1;                  ///< index into path of the largest reaction
+  int peak = -1;                  ///< index into path of the largest |reaction|
   std::string stop;               ///< why it stopped: "failed", "event limit", "no bond loaded"
-  int factorizations = 0;
-  long solves = 0;
-  double dissipated_energy = 0;  ///< energy released by broken and softened bonds [J]
+  std::string message;            ///< where a factorization found a mechanism ("failed"), else ""
+  int factorizations = 0;         ///< of the stiffness (the first one included)
+  long solves = 0;                ///< equilibrium solutions at unit load
+  double dissipated_energy = 0;   ///< energy released by broken and softened bonds [J]
   double wall_seconds = 0;
 };
 
@@ -76,8 +117,9 @@ struct EventsResult {
 /// of `unit` (their values at load factor 1), the reaction summed over the dofs flagged in
 /// `reaction_dofs` (one row per particle, Dof columns). Changes model.bonds (damage, state and
 /// stiffnesses of the bonds that failed) and leaves the model's particles at the last critical
-/// state. Throws plydem::Error for bad settings, unbreakable bonds, or constraints the static
-/// solver refuses.
+/// state (at the unit-load solution if no bond was loaded). Throws plydem::Error for bad settings,
+/// unbreakable bonds, bad strength fields (Model::check_consistency), a reaction dof that is not
+/// prescribed, or constraints the static solver refuses.
 EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
                         const EventSettings& settings = {});
 

@@ -592,6 +592,26 @@ int StaticSystem::solves() const {
   return impl_->solves;
 }
 
+const DofConstraints& StaticSystem::constraints() const {
+  return impl_->constraints;
+}
+
+const std::vector<int>& StaticSystem::free_dofs() const {
+  return impl_->free_dofs;
+}
+
+void StaticSystem::solve_free_in_place(Eigen::MatrixXd& b) const {
+  const Impl& m = *impl_;
+  require(b.rows() == m.nf,
+          fmt::format("static solve: {} rows given for the system's {} free dofs", b.rows(), m.nf));
+  if (m.nf == 0) return;
+  require(m.direct, "static solve: the iterative method keeps no factor to solve with");
+  // K_ff = S^-1 A S^-1, so K_ff^-1 = S A^-1 S (A the Jacobi-scaled matrix that was factored).
+  b.array().colwise() *= m.s.array();
+  m.cholesky->solve_in_place(b);
+  b.array().colwise() *= m.s.array();
+}
+
 StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
   const Impl& m = *impl_;
   Particles& p = model.particles;

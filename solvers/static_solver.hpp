@@ -198,6 +198,19 @@ class StaticSystem {
   int factorizations() const;
   int solves() const;
 
+  // For solvers that reuse the factor with their own right-hand sides (the events solver's
+  // low-rank updates, solvers/bond_events.hpp).
+
+  /// The constraints the system solves with: the constructor's and the rigid-mode pins (at zero).
+  const DofConstraints& constraints() const;
+  /// The free dofs, as solve_free_in_place numbers them: free_dofs()[f] = 6 * particle + component.
+  const std::vector<int>& free_dofs() const;
+  /// Solves K_ff X = B in place for every column of `b` (one row per free dof, in free_dofs()
+  /// order), K_ff the free-free block of the stiffness the system was built from. Direct method
+  /// only: throws plydem::Error for the iterative one (it keeps no factor) or for `b` of the wrong
+  /// row count.
+  void solve_free_in_place(Eigen::MatrixXd& b) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -234,6 +234,12 @@ Model HcpStrategyBase::assemble(const CouponSpec& coupon, const Calibration& cal
   return model;
 }
 
+std::optional<UnitCell> HcpStrategyBase::unit_cell(const Calibration& calibration,
+                                                   double thickness) const {
+  // finish_calibration() computes the calibration's relaxed stiffness on this cell.
+  return HcpLamina(1.0, 0.5 * layer_spacing_radii_, calibration.lattice_angle).unit_cell(thickness);
+}
+
 // --- hcp: exact on the relaxed lamina -------------------------------------------------------
 
 std::string HcpStrategy::description() const {

@@ -68,6 +68,10 @@ class HcpStrategyBase : public Strategy {
   std::vector<StrategyOption> options() const override;
   void set_option(const std::string& name, double value) override;
   Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
+  /// The three-particle lamina cell of unit spacing (layer spacing c) turned by
+  /// calibration.lattice_angle, with the six families of the coupon.
+  std::optional<UnitCell> unit_cell(const Calibration& calibration,
+                                    double thickness) const override;
 
   /// Layer spacing c in particle radii (default the close-packed 2 sqrt(2/3)).
   double layer_spacing_radii() const { return layer_spacing_radii_; }

@@ -139,6 +139,13 @@ BoundaryCompletion Hex2dStrategy::boundary_completion() const {
   return {HexagonalLayer::kFamilyCount, 2};
 }
 
+std::optional<UnitCell> Hex2dStrategy::unit_cell(const Calibration& calibration,
+                                                 double thickness) const {
+  // calibrate() solves on a cell of unit spacing with the bond radius 1/2 (parallel_bond_rule);
+  // assemble() numbers the coupon's families as HexagonalLayer at the same lattice angle.
+  return HexagonalLayer(1.0, calibration.lattice_angle).unit_cell(thickness);
+}
+
 std::string Hex2dPaperStrategy::description() const {
   return "hex2d as the paper prints it: lattice along x, eq. (27) as printed (C11 + C22), no "
          "relaxation; for comparison, not for use";

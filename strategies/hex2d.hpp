@@ -30,6 +30,9 @@ class Hex2dStrategy : public Strategy {
                         double thickness) const override;
   Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
   BoundaryCompletion boundary_completion() const override;
+  /// The one-particle hexagonal cell of unit spacing turned by calibration.lattice_angle.
+  std::optional<UnitCell> unit_cell(const Calibration& calibration,
+                                    double thickness) const override;
 };
 
 /// `hex2d-paper`: the paper's Hex2D as printed: the lattice fixed with family 1 along x

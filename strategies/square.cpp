@@ -347,6 +347,13 @@ BoundaryCompletion SquareStrategy::boundary_completion() const {
   return {SquareLayer::kFamilyCount, 2};
 }
 
+std::optional<UnitCell> SquareStrategy::unit_cell(const Calibration& calibration,
+                                                  double thickness) const {
+  // The cell fill_stiffness() computes the calibration's relaxed stiffness on; assemble() numbers
+  // the coupon's families as SquareLayer at the same lattice angle.
+  return SquareLayer(1.0, calibration.lattice_angle).unit_cell(thickness);
+}
+
 std::string SquarePaperStrategy::description() const {
   return "square layer with eq. (33) exactly as printed (C16, C26 dropped; lattice along x, no "
          "relaxed correction): reproduces the paper's formula for comparison, not the target";
@@ -381,6 +388,11 @@ Model SquarePaperStrategy::assemble(const CouponSpec& coupon,
 
 BoundaryCompletion SquarePaperStrategy::boundary_completion() const {
   return {SquareLayer::kFamilyCount, 2};
+}
+
+std::optional<UnitCell> SquarePaperStrategy::unit_cell(const Calibration& calibration,
+                                                       double thickness) const {
+  return SquareLayer(1.0, calibration.lattice_angle).unit_cell(thickness);
 }
 
 void register_square(Registry& registry) {

@@ -76,6 +76,9 @@ class SquareStrategy : public Strategy {
                         double thickness) const override;
   Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
   BoundaryCompletion boundary_completion() const override;
+  /// The one-particle square cell of unit spacing turned by calibration.lattice_angle.
+  std::optional<UnitCell> unit_cell(const Calibration& calibration,
+                                    double thickness) const override;
 
  private:
   double fibre_offset_deg_ = -1;
@@ -91,6 +94,9 @@ class SquarePaperStrategy : public Strategy {
                         double thickness) const override;
   Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
   BoundaryCompletion boundary_completion() const override;
+  /// As SquareStrategy's.
+  std::optional<UnitCell> unit_cell(const Calibration& calibration,
+                                    double thickness) const override;
 };
 
 }  // namespace plydem

@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -121,6 +122,21 @@ class Strategy {
   virtual Model assemble(const CouponSpec& coupon, const Calibration& calibration) const = 0;
   /// How the coupon's boundary cells are completed; by default not redoable (see the struct).
   virtual BoundaryCompletion boundary_completion() const { return {}; }
+  /// The periodic cell `calibration` (this strategy's calibrate() for a ply of thickness
+  /// `thickness`) was solved on, in the specimen frame (x along the coupon), at the particle size
+  /// its families' bending and twisting stiffnesses belong to (unit spacing for the built-in
+  /// strategies), its bond families numbered as the built coupon's Bonds::family: with
+  /// calibration.families as stiffnesses, in_plane_block(relaxed_stiffness(cell)) is
+  /// calibration.relaxed. A layer cell (periodic in the plane, volume = area x thickness). The
+  /// strength calibration (strategies/strength_calibration.hpp) reads the relaxed bond forces from
+  /// it. nullopt (the default) for a strategy that has none whatever the calibration (lattice's
+  /// random packing: no uniform bond state).
+  virtual std::optional<UnitCell> unit_cell(const Calibration& calibration,
+                                            double thickness) const {
+    (void)calibration;
+    (void)thickness;
+    return std::nullopt;
+  }
 
   /// Calibrates and builds the coupon.
   Specimen build(const CouponSpec& coupon) const;

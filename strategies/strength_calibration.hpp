@@ -17,6 +17,29 @@
 /// length), so that a straight crack normal to a bond direction cuts bonds whose shares add up to
 /// its area; families within 15 deg of the fibre get G_fibre, the others G_matrix; ductility from
 /// bond_ductility with the family's energy at its calibrated first failure.
+///
+/// Rules the calibration follows (measured figures: tests/test_strength_calibration.cpp):
+///  - A family's strength in a mode is its largest demand over its cell bonds at +XT, +YT, +S12 and
+///    -S12 (the demand of shear: tau + (F_n / A) tan(phi)). A target is met when the model's first
+///    failure under it lies within 1e-9 of it; S12 must be met under both signs.
+///  - A mode that none of the four loads reaches keeps +inf. No uniaxial tension test of the ply at
+///    any angle can load it: its stress is a positively homogeneous convex function of the ply
+///    stress (a linear part plus norms), <= 0 at the four loads and so on their cone, which holds
+///    every such state (sigma1 = cos^2, sigma2 = sin^2, tau12 = -sin cos, times sigma_x >= 0).
+///    Non-uniform fields (near grips, notches) may load it; it does not break there.
+///  - The refusal names each target missed, the model's first failure there and the family that
+///    breaks first, the nearest consistent strengths (the model's own first failures, and for
+///    each target missed: that target kept with the others lowered as little as needed), and the
+///    registered strategies that meet all three for this material and angle.
+///  - Friction: PFC's shear capacity c - sigma tan(phi) falls in tension, so a bond pulled to a
+///    large sigma by XT needs a cohesion of sigma tan(phi): a friction angle of a few degrees
+///    already takes S12 out of reach of a bond family that XT stretches.
+///  - A coupon, as built and solved by the engine, first breaks at the targets when it carries the
+///    relaxed bulk's uniform state: with grips that hold it (displacement and spin) and free long
+///    edges along lattice lines (square at 0 and 90 deg, hex2d at 0 deg), or an affine frame. Grips
+///    that move rigidly along x (the tension test's) restrain the ply's Poisson contraction and
+///    break it first next to them; hex2d's zig-zag edges at 90 deg, where boundary completion is
+///    not exact, first break about 14% below YT.
 
 #include <cstdint>
 #include <limits>
@@ -45,6 +68,13 @@ struct InterfaceStrength {
 struct StrengthOptions {
   double friction_coefficient = 0;  ///< tan(phi) of every in-ply bond
   bool softening = false;           ///< linear softening from G_fibre, G_matrix (else brittle)
+  /// The particle diameter the family strengths are stated for [m]; 0 = CouponSpec's default.
+  /// At a fixed calibration a bond's section stresses under a given strain scale as 1/R (forces
+  /// as R, the section as R^2), so assign_bond_strengths rescales each bond to its own radius:
+  /// the model's strengths do not depend on this choice, only the reported numbers do.
+  double particle_diameter = 0;
+  /// Throws plydem::Error naming a negative or non-finite entry.
+  void validate() const;
 };
 
 /// One bond family's strength, for the bonds and for reports.
@@ -56,6 +86,10 @@ struct FamilyStrength {
   double radius = 0;                                          ///< R of the section [m]
   double crack_area = 0;                                      ///< A_crack [m^2]
   double ductility = 1;                                       ///< kappa_u (1 = brittle)
+  double fracture_energy = 0;  ///< G of the family (G_fibre or G_matrix) [J/m^2]; 0 = brittle
+  /// The bond's energy at its calibrated first failure [J] (0 if no target loads it), from which
+  /// ductility = bond_ductility(fracture_energy, crack_area, peak_energy).
+  double peak_energy = 0;
   /// Which target set each strength ("XT", "YT", "S12"; "" if no target loads the mode).
   std::string tensile_set_by, cohesion_set_by;
 };
@@ -80,9 +114,10 @@ class StrengthCalibration {
   /// simulates it, for the envelopes (sigma1-sigma2, sigma2-tau12).
   double first_failure_factor(const PlyStress& stress) const;
 
-  /// Per family and unit ply stress component (sigma1, sigma2, tau12), the bond's generalized
-  /// deformation-driven resultants, for first_failure_factor: rows F_n, F_s (3), M_b (3), M_t of
-  /// the family's most loaded cell bond are linear in the stress. Filled by calibrate_strengths.
+  /// Per cell bond (one entry each; a cell may hold several bonds of a family) and unit ply stress
+  /// component (sigma1, sigma2, tau12 = 1 Pa, columns), the bond's resultants in the relaxed bulk,
+  /// for first_failure_factor: rows F_n [N], F_s (3) [N], M_b (3) [N m], M_t [N m], linear in the
+  /// stress, for a bond of its family's section radius. Filled by calibrate_strengths.
   struct UnitResponse {
     int family = 0;
     Eigen::Matrix<double, 8, 3> resultants = Eigen::Matrix<double, 8, 3>::Zero();
@@ -107,6 +142,18 @@ StrengthCalibration calibrate_strengths(const Strategy& strategy, const Calibrat
 /// `weibull_modulus` m > 0 (random stream from `seed`: the same seed, the same strengths);
 /// interface bonds from `interface` (unbreakable when not given). Throws plydem::Error if the
 /// plies do not match the specimen.
+///  - Section radius: the smaller particle radius of the bond. Strengths are rescaled from the
+///    family's radius to the bond's as 1/R (StrengthOptions::particle_diameter).
+///  - Scatter: draw k of std::mt19937_64(seed) belongs to bond row k (every row draws, interface
+///    bonds too, which do not use it), U = (draw / 2^11 + 1/2) / 2^53; tensile strength and
+///    cohesion of a bond share its factor; its ductility keeps G A_crack / E_peak with the peak
+///    energy of its own strength.
+///  - Interface bonds: a bond of interface area a (its particles' areas split over their interface
+///    bonds, as strategies/laminate.hpp gives it k_n = K_n a) breaks when F_n / a reaches `normal`
+///    or |F_s| / a reaches `shear`: section strengths normal a / (pi R^2), shear a / (pi R^2), no
+///    friction; no scatter; ductility G a / E_peak from GIc (pure mode I, E_peak = (normal a)^2 /
+///    (2 k_n)) and GIIc (mode II, with k_s), the smaller of those given.
+///  - The specimen must be intact (no damaged or broken bond).
 void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
                            const InterfaceStrength& interface = {}, double weibull_modulus = 0,
                            std::uint64_t seed = 1);

@@ -1,0 +1,175 @@
+#include "core/failure_criteria.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+
+namespace plydem {
+namespace {
+
+constexpr double kNever = std::numeric_limits<double>::infinity();
+
+// The strength `value` named `name`, which the criterion needs for this stress: an Error if the
+// material does not give it (0).
+double needed(double value, const char* name, FailureCriterion criterion) {
+  if (!(value > 0)) {
+    throw Error(
+        fmt::format("the {} criterion needs the lamina strength {} for this stress, which "
+                    "the material does not give",
+                    criterion_name(criterion), name));
+  }
+  return value;
+}
+
+// The positive root of a lambda^2 + b lambda = 1 (a >= 0): the load factor of a criterion whose
+// left-hand side is a quadratic (a) plus a linear (b) form of the stress. +inf if the stress never
+// reaches it (a = 0 and b <= 0).
+double positive_root(double a, double b) {
+  if (a > 0) {
+    // Written without cancellation for b > 0: (-b + sqrt(b^2 + 4a)) / (2a) = 2 / (b + sqrt(..)).
+    const double root = std::sqrt(b * b + 4 * a);
+    return b >= 0 ? 2.0 / (b + root) : (root - b) / (2 * a);
+  }
+  return b > 0 ? 1.0 / b : kNever;
+}
+
+double max_stress(const PlyStress& s, const LaminaStrength& x) {
+  const FailureCriterion c = FailureCriterion::kMaxStress;
+  double factor = kNever;
+  if (s.sigma1 > 0) factor = std::min(factor, needed(x.XT, "XT", c) / s.sigma1);
+  if (s.sigma1 < 0) factor = std::min(factor, needed(x.XC, "XC", c) / -s.sigma1);
+  if (s.sigma2 > 0) factor = std::min(factor, needed(x.YT, "YT", c) / s.sigma2);
+  if (s.sigma2 < 0) factor = std::min(factor, needed(x.YC, "YC", c) / -s.sigma2);
+  if (s.tau12 != 0) factor = std::min(factor, needed(x.S12, "S12", c) / std::abs(s.tau12));
+  return factor;
+}
+
+double tsai_hill(const PlyStress& s, const LaminaStrength& x) {
+  const FailureCriterion c = FailureCriterion::kTsaiHill;
+  double a = 0;
+  if (s.sigma1 != 0) {
+    const double X = s.sigma1 > 0 ? needed(x.XT, "XT", c) : needed(x.XC, "XC", c);
+    a += (s.sigma1 * s.sigma1 - s.sigma1 * s.sigma2) / (X * X);
+  }
+  if (s.sigma2 != 0) {
+    const double Y = s.sigma2 > 0 ? needed(x.YT, "YT", c) : needed(x.YC, "YC", c);
+    a += s.sigma2 * s.sigma2 / (Y * Y);
+  }
+  if (s.tau12 != 0) {
+    const double S = needed(x.S12, "S12", c);
+    a += s.tau12 * s.tau12 / (S * S);
+  }
+  return positive_root(a, 0.0);
+}
+
+double tsai_wu(const PlyStress& s, const LaminaStrength& x) {
+  const FailureCriterion c = FailureCriterion::kTsaiWu;
+  double a = 0, b = 0;
+  double f11 = 0, f22 = 0;
+  if (s.sigma1 != 0) {
+    const double XT = needed(x.XT, "XT", c), XC = needed(x.XC, "XC", c);
+    f11 = 1.0 / (XT * XC);
+    a += f11 * s.sigma1 * s.sigma1;
+    b += (1.0 / XT - 1.0 / XC) * s.sigma1;
+  }
+  if (s.sigma2 != 0) {
+    const double YT = needed(x.YT, "YT", c), YC = needed(x.YC, "YC", c);
+    f22 = 1.0 / (YT * YC);
+    a += f22 * s.sigma2 * s.sigma2;
+    b += (1.0 / YT - 1.0 / YC) * s.sigma2;
+  }
+  if (s.tau12 != 0) {
+    const double S = needed(x.S12, "S12", c);
+    a += s.tau12 * s.tau12 / (S * S);
+  }
+  // F12 = F12* sqrt(F11 F22) with F12* = -1/2 (its term vanishes unless both normal stresses act).
+  a += 2.0 * (-0.5 * std::sqrt(f11 * f22)) * s.sigma1 * s.sigma2;
+  return positive_root(a, b);
+}
+
+double hashin(const PlyStress& s, const LaminaStrength& x) {
+  const FailureCriterion c = FailureCriterion::kHashin;
+  const double shear = s.tau12 != 0 ? s.tau12 / needed(x.S12, "S12", c) : 0.0;
+  double factor = kNever;
+  // Fibre mode: tension (sigma1 >= 0) (s1/XT)^2 + (t/S12)^2 = 1; compression (s1/XC)^2 = 1.
+  if (s.sigma1 >= 0) {
+    const double r = s.sigma1 > 0 ? s.sigma1 / needed(x.XT, "XT", c) : 0.0;
+    factor = std::min(factor, positive_root(r * r + shear * shear, 0.0));
+  } else {
+    factor = std::min(factor, needed(x.XC, "XC", c) / -s.sigma1);
+  }
+  // Matrix mode: tension (sigma2 >= 0) (s2/YT)^2 + (t/S12)^2 = 1; compression
+  // (s2/(2 S23))^2 + [(YC/(2 S23))^2 - 1] s2/YC + (t/S12)^2 = 1 with S23 = YC/2.
+  if (s.sigma2 >= 0) {
+    const double r = s.sigma2 > 0 ? s.sigma2 / needed(x.YT, "YT", c) : 0.0;
+    factor = std::min(factor, positive_root(r * r + shear * shear, 0.0));
+  } else {
+    const double YC = needed(x.YC, "YC", c);
+    const double S23 = 0.5 * YC;
+    const double r = s.sigma2 / (2.0 * S23);
+    const double linear = ((YC / (2.0 * S23)) * (YC / (2.0 * S23)) - 1.0) * s.sigma2 / YC;
+    factor = std::min(factor, positive_root(r * r + shear * shear, linear));
+  }
+  return factor;
+}
+
+}  // namespace
+
+PlyStress to_ply_axes(double sigma_x, double sigma_y, double tau_xy, double ply_angle) {
+  const double c = std::cos(ply_angle), s = std::sin(ply_angle);
+  PlyStress p;
+  p.sigma1 = c * c * sigma_x + s * s * sigma_y + 2 * s * c * tau_xy;
+  p.sigma2 = s * s * sigma_x + c * c * sigma_y - 2 * s * c * tau_xy;
+  p.tau12 = -s * c * sigma_x + s * c * sigma_y + (c * c - s * s) * tau_xy;
+  return p;
+}
+
+const char* criterion_name(FailureCriterion criterion) {
+  switch (criterion) {
+    case FailureCriterion::kMaxStress:
+      return "max_stress";
+    case FailureCriterion::kTsaiHill:
+      return "tsai_hill";
+    case FailureCriterion::kTsaiWu:
+      return "tsai_wu";
+    case FailureCriterion::kHashin:
+      return "hashin";
+  }
+  return "unknown";
+}
+
+std::vector<FailureCriterion> all_criteria() {
+  return {FailureCriterion::kMaxStress, FailureCriterion::kTsaiHill, FailureCriterion::kTsaiWu,
+          FailureCriterion::kHashin};
+}
+
+double failure_load_factor(FailureCriterion criterion, const PlyStress& stress,
+                           const LaminaStrength& strength) {
+  require(
+      std::isfinite(stress.sigma1) && std::isfinite(stress.sigma2) && std::isfinite(stress.tau12),
+      fmt::format("the {} criterion got a non-finite stress ({}, {}, {}) Pa",
+                  criterion_name(criterion), stress.sigma1, stress.sigma2, stress.tau12));
+  switch (criterion) {
+    case FailureCriterion::kMaxStress:
+      return max_stress(stress, strength);
+    case FailureCriterion::kTsaiHill:
+      return tsai_hill(stress, strength);
+    case FailureCriterion::kTsaiWu:
+      return tsai_wu(stress, strength);
+    case FailureCriterion::kHashin:
+      return hashin(stress, strength);
+  }
+  throw Error("unknown failure criterion");
+}
+
+double off_axis_strength(FailureCriterion criterion, const LaminaStrength& strength,
+                         double ply_angle) {
+  require(std::isfinite(ply_angle), "off-axis strength: the ply angle is not finite");
+  return failure_load_factor(criterion, to_ply_axes(1.0, 0.0, 0.0, ply_angle), strength);
+}
+
+}  // namespace plydem

@@ -1,0 +1,692 @@
+#include "solvers/bond_events.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numeric>
+#include <utility>
+#include <vector>
+
+#include "contacts/bond_kernel.hpp"
+#include "core/error.hpp"
+
+namespace plydem {
+
+void EventSettings::validate() const {
+  require(max_events > 0, fmt::format("events: max_events is {}, must be positive", max_events));
+  require(stop_fraction >= 0 && stop_fraction < 1,
+          fmt::format("events: stop_fraction is {}, must lie in [0, 1)", stop_fraction));
+  require(tooth_stiffness_ratio > 0 && tooth_stiffness_ratio < 1,
+          fmt::format("events: tooth_stiffness_ratio is {}, must lie in (0, 1)",
+                      tooth_stiffness_ratio));
+  require(last_tooth_stiffness > 0 && last_tooth_stiffness <= tooth_stiffness_ratio,
+          fmt::format("events: last_tooth_stiffness is {}, must lie in (0, tooth_stiffness_ratio "
+                      "= {}] (a softening bond has at least one tooth)",
+                      last_tooth_stiffness, tooth_stiffness_ratio));
+  require(max_update_rank >= 0,
+          fmt::format("events: max_update_rank is {}, must be >= 0", max_update_rank));
+  require(progress_seconds > 0,
+          fmt::format("events: progress_seconds is {}, must be positive", progress_seconds));
+  plydem::validate(static_settings);
+  require(static_settings.method != StaticMethod::kIterative,
+          "events: the events solver updates a factor of the stiffness, so it needs the direct "
+          "method (StaticMethod::kDirect or kAuto), not the conjugate gradient");
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The smallest pivot of the capacitance matrix, relative to its column of W^-1, that the updates
+// accept (see UnitLoadSolver::change).
+constexpr double kPivotFloor = 1e-8;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+Eigen::Vector3d segment(const Eigen::VectorXd& u, int particle, int offset) {
+  return u.segment<3>(kDofsPerParticle * particle + offset);
+}
+
+// The 12 dofs of bond b in the order of parallel_bond_stiffness: (u_i, theta_i, u_j, theta_j).
+std::array<int, 12> bond_dofs(const Bonds& bonds, int b) {
+  std::array<int, 12> dofs{};
+  for (int c = 0; c < kDofsPerParticle; ++c) {
+    dofs[c] = kDofsPerParticle * bonds.first(b) + c;
+    dofs[kDofsPerParticle + c] = kDofsPerParticle * bonds.second(b) + c;
+  }
+  return dofs;
+}
+
+Matrix12d symmetric_bond_stiffness(const BondParameters& params) {
+  const Matrix12d k = parallel_bond_stiffness(params);
+  return 0.5 * (k + k.transpose());  // as the assembly does (solvers/stiffness_assembly.hpp)
+}
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void unite(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// Clusters of particles joined by intact bonds: a label per particle (0 .. count - 1).
+int intact_clusters(const Model& model, std::vector<int>& label) {
+  const int n = model.particles.size();
+  UnionFind sets(n);
+  for (int b = 0; b < model.bonds.size(); ++b)
+    if (!model.bonds.is_broken(b)) sets.unite(model.bonds.first(b), model.bonds.second(b));
+  label.assign(n, -1);
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    const int root = sets.find(i);
+    if (label[root] < 0) label[root] = count++;
+    label[i] = label[root];
+  }
+  return count;
+}
+
+void check_inputs(const Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs) {
+  model.check_consistency();  // sizes, stiffnesses, and the strength fields of every bond
+  const Bonds& bonds = model.bonds;
+  require(bonds.breakable(),
+          "events: every bond of the model is unbreakable (infinite tensile strength and "
+          "cohesion): assign strengths before running to failure");
+  const int n = model.particles.size();
+  require(unit.fixed.rows() == n && unit.value.rows() == n,
+          fmt::format("events: the prescribed dofs are for {} particles, the model has {}",
+                      unit.fixed.rows(), n));
+  require(reaction_dofs.rows() == n,
+          fmt::format("events: the reaction dofs are for {} particles, the model has {}",
+                      reaction_dofs.rows(), n));
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < kDofsPerParticle; ++c)
+      if (reaction_dofs(i, c) && !unit.fixed(i, c))
+        throw Error(
+            fmt::format("events: the reaction is summed over {} of particle {}, which is "
+                        "not prescribed (only prescribed dofs carry a reaction)",
+                        dof_name(static_cast<Dof>(c)), i));
+  require(reaction_dofs.any(), "events: no reaction dof is flagged");
+  for (int b = 0; b < bonds.size(); ++b) {
+    const bool zero_stiffness = bonds.normal_stiffness(b) == 0 && bonds.shear_stiffness(b) == 0 &&
+                                bonds.bending_stiffness(b) == 0 && bonds.twisting_stiffness(b) == 0;
+    if (bonds.is_broken(b) && !(zero_stiffness && bonds.damage(b) == 1))
+      throw Error(
+          fmt::format("events: bond {} is broken but has damage {} and a non-zero "
+                      "stiffness (a broken bond has damage 1 and zero stiffness)",
+                      b, bonds.damage(b)));
+    if (!bonds.is_broken(b) && !(bonds.damage(b) < 1))
+      throw Error(fmt::format("events: bond {} has damage 1 but its state is intact", b));
+  }
+}
+
+/// The equilibrium at unit load with the current stiffness: a factor of the stiffness at the last
+/// factorization (StaticSystem), corrected for the bonds changed since by Woodbury's identity.
+///
+/// With K0 the factored free-free stiffness and each change of a bond a removed stiffness
+/// Delta K >= 0 (k_old - k_new in every component), the current one is K = K0 - V W V^T: for each
+/// change, the bond's Delta K restricted to its free dofs, M = D^-1 Q Lambda Q^T D^-1, from the
+/// eigen-decomposition of its Jacobi-scaled form D M D (D = diag(M)^-1/2, so that translations
+/// and rotations are equally resolved), gives the columns V = D^-1 Q and weights W = Lambda of its
+/// non-zero eigenvalues (rank 6 at most for a bond with both ends free). Then
+///   K^-1 = K0^-1 + Z C^-1 Z^T,   Z = K0^-1 V,   C = W^-1 - V^T Z,
+/// C positive definite as long as K is. The changed bonds also change the right-hand side -K_fp g
+/// by V a (the part of Delta K coupling their free dofs to prescribed ones lies in the range of
+/// V), so the solution is
+///   u_f = u0 + Z (a + C^-1 (V^T u0 + G a)),   G = V^T Z,   u0 = K0^-1 b0.
+/// Z, G and the Cholesky factor of C grow by the columns of each change (a bordered Cholesky),
+/// so a change costs its few solves with K0's factor and O(rank^2), an equilibrium O(dofs rank).
+///
+/// Only the dofs the load reaches matter: the stiffness graph of a layer in the x-y plane falls
+/// apart into in-plane and out-of-plane dofs, and the solution is exactly zero on the part that no
+/// prescribed non-zero value touches. Those "active" dofs are found once per set of constraints;
+/// the columns of a change are kept on them alone (half the rank for a hex2d layer pulled in its
+/// plane), and exactly so: Delta K never couples active to inactive dofs.
+class UnitLoadSolver {
+ public:
+  UnitLoadSolver(const EventSettings& settings, const DofConstraints& unit)
+      : settings_(settings.static_settings),
+        constraints_(unit),
+        refactor_every_change_(settings.refactor_every_event || settings.max_update_rank == 0),
+        max_rank_(settings.max_update_rank) {
+    if (settings_.method == StaticMethod::kAuto) settings_.method = StaticMethod::kDirect;
+  }
+
+  /// The constraints with the pins and the fixed loose pieces.
+  const DofConstraints& constraints() const { return constraints_; }
+  int factorizations() const { return factorizations_; }
+  int rank() const { return rank_; }
+
+  /// A new set of prescribed dofs (more of them): the stiffness is factored at the next solve.
+  void set_constraints(const DofConstraints& constraints) {
+    constraints_ = constraints;
+    stale_ = true;
+    active_stale_ = true;
+  }
+
+  /// The unit-load solution (every dof, 6 * particle + component) for the model's current bonds.
+  /// May factor the stiffness (then it writes the factored system's solution into the model's
+  /// particles, as StaticSystem::solve does) and throws plydem::Error as StaticSystem does.
+  void solve(Model& model, Eigen::VectorXd& u) {
+    if (stale_) factor(model);
+    u = u0_;
+    if (rank_ == 0) return;
+    const int r = rank_;
+    const Eigen::VectorXd h = y0_.head(r) + g_.topLeftCorner(r, r) * a_.head(r);
+    Eigen::VectorXd x = l_.topLeftCorner(r, r).triangularView<Eigen::Lower>().solve(h);
+    l_.topLeftCorner(r, r).triangularView<Eigen::Lower>().transpose().solveInPlace(x);
+    const Eigen::VectorXd du = z_.leftCols(r) * (a_.head(r) + x);
+    for (std::size_t k = 0; k < active_dofs_.size(); ++k) u(active_dofs_[k]) += du(k);
+  }
+
+  /// Bond b's stiffness lost `removed` (its BondParameters with the stiffness taken away);
+  /// model.bonds holds the new stiffness already.
+  void change(const Model& model, int b, const BondParameters& removed) {
+    if (stale_) return;
+    if (refactor_every_change_) {
+      stale_ = true;
+      return;
+    }
+    const std::array<int, 12> dofs = bond_dofs(model.bonds, b);
+    const Matrix12d k = symmetric_bond_stiffness(removed);
+    std::array<int, 12> local{};  // the bond's active dofs, as rows 0..na-1 of k
+    int na = 0;
+    for (int r = 0; r < 12; ++r)
+      if (active_of_dof_[dofs[r]] >= 0) local[na++] = r;
+    if (na == 0) return;  // the load does not reach this bond's dofs
+
+    // Delta K on the active dofs, its right-hand side part (Delta K)_fp g, and the scaling D.
+    Eigen::MatrixXd m(na, na);
+    Eigen::VectorXd db = Eigen::VectorXd::Zero(na), d(na);
+    for (int r = 0; r < na; ++r) {
+      for (int c = 0; c < na; ++c) m(r, c) = k(local[r], local[c]);
+      for (int c = 0; c < 12; ++c) {
+        const int particle = dofs[c] / kDofsPerParticle, component = dofs[c] % kDofsPerParticle;
+        if (constraints_.fixed(particle, component))
+          db(r) += k(local[r], c) * constraints_.value(particle, component);
+      }
+      d(r) = m(r, r) > 0 ? 1 / std::sqrt(m(r, r)) : 1.0;
+    }
+    const Eigen::MatrixXd scaled = d.asDiagonal() * m * d.asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
+    const double largest = eigen.eigenvalues().maxCoeff();
+    if (!(largest > 0)) return;
+    std::vector<int> kept;
+    for (int e = 0; e < na; ++e)
+      if (eigen.eigenvalues()(e) > 1e-12 * largest) kept.push_back(e);
+    const int q = static_cast<int>(kept.size());
+    if (rank_ + q > max_rank_) {
+      stale_ = true;
+      return;
+    }
+    Eigen::MatrixXd v(na, q), qk(na, q);
+    Eigen::VectorXd w(q);
+    for (int e = 0; e < q; ++e) {
+      qk.col(e) = eigen.eigenvectors().col(kept[e]);
+      w(e) = eigen.eigenvalues()(kept[e]);
+    }
+    v = d.cwiseInverse().asDiagonal() * qk;
+    const Eigen::VectorXd a = qk.transpose() * d.cwiseProduct(db);
+    Eigen::VectorXd u0_local(na);
+    for (int r = 0; r < na; ++r) u0_local(r) = u0_(dofs[local[r]]);
+    const Eigen::VectorXd y0 = v.transpose() * u0_local;
+
+    // Z = K0^-1 V, on the active dofs.
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(free_count_, q);
+    for (int r = 0; r < na; ++r) rhs.row(free_of_dof_[dofs[local[r]]]) = v.row(r);
+    system_->solve_free_in_place(rhs);
+    Eigen::MatrixXd z(active_dofs_.size(), q);
+    for (std::size_t k2 = 0; k2 < active_dofs_.size(); ++k2)
+      z.row(k2) = rhs.row(free_of_active_[k2]);
+
+    // G's new columns: V_s^T Z over every earlier change s, and this change's own block.
+    const int r0 = rank_;
+    Eigen::MatrixXd g_cross(r0, q);
+    for (const Term& t : terms_) {
+      Eigen::MatrixXd z_rows(t.rows.size(), q);
+      for (std::size_t k2 = 0; k2 < t.rows.size(); ++k2) z_rows.row(k2) = z.row(t.rows[k2]);
+      g_cross.middleRows(t.column, t.v.cols()) = t.v.transpose() * z_rows;
+    }
+    Term term;
+    term.column = r0;
+    term.v = v;
+    term.rows.resize(na);
+    Eigen::MatrixXd z_own(na, q);
+    for (int r = 0; r < na; ++r) {
+      term.rows[r] = active_of_dof_[dofs[local[r]]];
+      z_own.row(r) = z.row(term.rows[r]);
+    }
+    Eigen::MatrixXd g_own = v.transpose() * z_own;
+    g_own = 0.5 * (g_own + g_own.transpose()).eval();
+
+    // Bordered Cholesky of C = W^-1 - G: L21 = C21 L11^-T, L22 L22^T = C22 - L21 L21^T.
+    Eigen::MatrixXd x = -g_cross;
+    if (r0 > 0) l_.topLeftCorner(r0, r0).triangularView<Eigen::Lower>().solveInPlace(x);
+    Eigen::MatrixXd c22 = -g_own;
+    c22.diagonal() += w.cwiseInverse();
+    const Eigen::MatrixXd schur = c22 - x.transpose() * x;
+    const Eigen::LLT<Eigen::MatrixXd> llt(schur);
+    // C <= W^-1, and a pivot far below its column's W^-1 is lost to cancellation: the current
+    // stiffness nearly loses that direction (a near-mechanism), and the updated factor would be
+    // inaccurate there. Factor the current stiffness instead.
+    const Eigen::MatrixXd l22 = llt.matrixL();
+    bool accurate = llt.info() == Eigen::Success;
+    for (int e = 0; accurate && e < q; ++e) accurate = l22(e, e) * l22(e, e) * w(e) > kPivotFloor;
+    if (!accurate) {
+      stale_ = true;
+      return;
+    }
+
+    reserve(r0 + q);
+    z_.middleCols(r0, q) = z;
+    g_.block(0, r0, r0, q) = g_cross;
+    g_.block(r0, 0, q, r0) = g_cross.transpose();
+    g_.block(r0, r0, q, q) = g_own;
+    l_.block(r0, 0, q, r0) = x.transpose();
+    l_.block(0, r0, r0, q).setZero();
+    l_.block(r0, r0, q, q) = l22;
+    a_.segment(r0, q) = a;
+    y0_.segment(r0, q) = y0;
+    terms_.push_back(std::move(term));
+    rank_ = r0 + q;
+  }
+
+ private:
+  struct Term {
+    int column = 0;         // first column of its block
+    Eigen::MatrixXd v;      // its columns of V on its active dofs
+    std::vector<int> rows;  // active index of each of those dofs
+  };
+
+  void reserve(int columns) {
+    if (columns <= z_.cols()) return;
+    const int capacity = std::min(max_rank_, std::max(columns, 2 * static_cast<int>(z_.cols())));
+    const int old = rank_;
+    z_.conservativeResize(static_cast<Eigen::Index>(active_dofs_.size()), capacity);
+    Eigen::MatrixXd g = Eigen::MatrixXd::Zero(capacity, capacity), l = g;
+    g.topLeftCorner(old, old) = g_.topLeftCorner(old, old);
+    l.topLeftCorner(old, old) = l_.topLeftCorner(old, old);
+    g_.swap(g);
+    l_.swap(l);
+    a_.conservativeResize(capacity);
+    y0_.conservativeResize(capacity);
+  }
+
+  void factor(Model& model) {
+    system_ = std::make_unique<StaticSystem>(model, constraints_, settings_);
+    ++factorizations_;
+    constraints_ = system_->constraints();  // with the pins of the first factorization
+    system_->solve(model, constraints_.value);
+    const Particles& p = model.particles;
+    const int n = p.size();
+    u0_.resize(kDofsPerParticle * n);
+    for (int i = 0; i < n; ++i)
+      for (int c = 0; c < 3; ++c) {
+        u0_(kDofsPerParticle * i + c) = p.displacement(i, c);
+        u0_(kDofsPerParticle * i + 3 + c) = p.rotation(i, c);
+      }
+    const std::vector<int>& free = system_->free_dofs();
+    free_count_ = static_cast<int>(free.size());
+    free_of_dof_.assign(kDofsPerParticle * n, -1);
+    for (int f = 0; f < free_count_; ++f) free_of_dof_[free[f]] = f;
+    if (active_stale_) find_active_dofs(model);
+    free_of_active_.resize(active_dofs_.size());
+    for (std::size_t k = 0; k < active_dofs_.size(); ++k)
+      free_of_active_[k] = free_of_dof_[active_dofs_[k]];
+    rank_ = 0;
+    terms_.clear();
+    stale_ = false;
+  }
+
+  // The free dofs connected, through the bonds' stiffness pattern, to a prescribed dof with a
+  // non-zero value. Bonds only lose stiffness, so the pattern (and this set) holds until the
+  // constraints change.
+  void find_active_dofs(const Model& model) {
+    const int dofs = kDofsPerParticle * model.particles.size();
+    const int source = dofs;
+    UnionFind sets(dofs + 1);
+    auto prescribed = [&](int dof) {
+      return constraints_.fixed(dof / kDofsPerParticle, dof % kDofsPerParticle);
+    };
+    auto value = [&](int dof) {
+      return constraints_.value(dof / kDofsPerParticle, dof % kDofsPerParticle);
+    };
+    for (int b = 0; b < model.bonds.size(); ++b) {
+      if (model.bonds.is_broken(b)) continue;
+      const std::array<int, 12> bd = bond_dofs(model.bonds, b);
+      const Matrix12d k = symmetric_bond_stiffness(bond_parameters(model.bonds, b));
+      for (int r = 0; r < 12; ++r) {
+        if (prescribed(bd[r])) continue;
+        for (int c = 0; c < 12; ++c) {
+          if (k(r, c) == 0) continue;
+          if (!prescribed(bd[c]))
+            sets.unite(bd[r], bd[c]);
+          else if (value(bd[c]) != 0)
+            sets.unite(bd[r], source);
+        }
+      }
+    }
+    active_dofs_.clear();
+    active_of_dof_.assign(dofs, -1);
+    const int root = sets.find(source);
+    for (int dof = 0; dof < dofs; ++dof)
+      if (!prescribed(dof) && sets.find(dof) == root) {
+        active_of_dof_[dof] = static_cast<int>(active_dofs_.size());
+        active_dofs_.push_back(dof);
+      }
+    active_stale_ = false;
+    z_.resize(0, 0);
+    g_.resize(0, 0);
+    l_.resize(0, 0);
+    a_.resize(0);
+    y0_.resize(0);
+  }
+
+  StaticSettings settings_;
+  DofConstraints constraints_;
+  bool refactor_every_change_ = false;
+  int max_rank_ = 0;
+  std::unique_ptr<StaticSystem> system_;
+  bool stale_ = true;
+  bool active_stale_ = true;
+  int factorizations_ = 0;
+  int free_count_ = 0;
+  Eigen::VectorXd u0_;               // every dof
+  std::vector<int> free_of_dof_;     // dof -> free index of system_, or -1
+  std::vector<int> active_dofs_;     // active index -> dof
+  std::vector<int> active_of_dof_;   // dof -> active index, or -1
+  std::vector<int> free_of_active_;  // active index -> free index
+  int rank_ = 0;
+  std::vector<Term> terms_;
+  Eigen::MatrixXd z_, g_, l_;  // Z (active dofs x capacity), G and L (capacity x capacity)
+  Eigen::VectorXd a_, y0_;
+};
+
+// What one equilibrium at unit load gives.
+struct UnitState {
+  double energy = 0;           // strain energy at unit load [J]
+  double reaction = 0;         // summed over the reaction dofs
+  DofArray force;              // the bonds' generalized forces on each particle (force, torque)
+  std::vector<double> factor;  // critical load factor of each bond (+inf: none)
+  std::vector<BondState> mode;
+};
+
+bool softening(const Bonds& bonds, int b) {
+  return bonds.ductility(b) > 1;
+}
+
+// Whether a softening bond's current tooth is its last (its next would be below the floor).
+bool last_tooth(const Bonds& bonds, int b, const EventSettings& settings) {
+  return (1.0 - bonds.damage(b)) * settings.tooth_stiffness_ratio < settings.last_tooth_stiffness;
+}
+
+// The utilisation at which bond b fails next (see the file comment of bond_events.hpp).
+double failure_kappa(const Bonds& bonds, int b, const EventSettings& settings) {
+  if (!softening(bonds, b) || bonds.damage(b) == 0) return 1.0;
+  if (last_tooth(bonds, b, settings)) return bonds.ductility(b);
+  return softening_ratio(bonds.damage(b), bonds.ductility(b));
+}
+
+void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reaction_dofs,
+              const EventSettings& settings, UnitState& s) {
+  const Bonds& bonds = model.bonds;
+  const int n = model.particles.size(), m = bonds.size();
+  s.energy = 0;
+  s.force = DofArray::Zero(n, kDofsPerParticle);
+  s.factor.assign(m, std::numeric_limits<double>::infinity());
+  s.mode.assign(m, BondState::kIntact);
+  for (int b = 0; b < m; ++b) {
+    if (bonds.is_broken(b)) continue;
+    const int i = bonds.first(b), j = bonds.second(b);
+    const BondParameters params = bond_parameters(bonds, b);
+    const Eigen::Vector3d ui = segment(u, i, 0), ti = segment(u, i, 3);
+    const Eigen::Vector3d uj = segment(u, j, 0), tj = segment(u, j, 3);
+    const BondResponse r = parallel_bond_response(params, ui, ti, uj, tj);
+    s.energy += r.energy;
+    for (int c = 0; c < 3; ++c) {
+      s.force(i, c) += r.force_on_first(c);
+      s.force(j, c) -= r.force_on_first(c);
+      s.force(i, 3 + c) += r.torque_on_first(c);
+      s.force(j, 3 + c) += r.torque_on_second(c);
+    }
+    if (!std::isfinite(bonds.tensile_strength(b)) && !std::isfinite(bonds.cohesion(b))) continue;
+    const BondStresses stresses = intact_stresses(
+        bond_stresses(params, bonds.strength_radius(b), ui, ti, uj, tj), bonds.damage(b));
+    const CriticalLoad critical =
+        critical_load(stresses, bond_strength(bonds, b), failure_kappa(bonds, b, settings));
+    if (critical.factor > 0) {
+      s.factor[b] = critical.factor;
+      s.mode[b] = critical.mode;
+    }
+  }
+  // The support's reaction is K u on its dof: minus the bonds' generalized force there.
+  s.reaction = -(s.force * reaction_dofs.cast<double>()).sum();
+}
+
+// The bond that fails next: the smallest finite critical factor, ties to the lowest index.
+int critical_bond(const UnitState& s) {
+  double smallest = std::numeric_limits<double>::infinity();
+  for (double f : s.factor) smallest = std::min(smallest, f);
+  if (!std::isfinite(smallest)) return -1;
+  const double limit = smallest * (1 + kTieTolerance);
+  for (std::size_t b = 0; b < s.factor.size(); ++b)
+    if (s.factor[b] <= limit) return static_cast<int>(b);
+  return -1;
+}
+
+// Writes the state lambda (u, force) into the particles.
+void write_state(Particles& p, double lambda, const Eigen::VectorXd& u, const DofArray& force) {
+  for (int i = 0; i < p.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      p.displacement(i, c) = lambda * u(kDofsPerParticle * i + c);
+      p.rotation(i, c) = lambda * u(kDofsPerParticle * i + 3 + c);
+      p.force(i, c) = lambda * force(i, c);
+      p.torque(i, c) = lambda * force(i, 3 + c);
+    }
+}
+
+// After a break: fixes the pieces that came loose (bond_events.hpp, "Pieces that come loose").
+// `clusters` is the number of intact-bond clusters before the break. Returns whether
+// `constraints` changed.
+bool fix_loose_pieces(const Model& model, const Eigen::VectorXd& u, int& clusters,
+                      DofConstraints& constraints) {
+  std::vector<int> label;
+  const int count = intact_clusters(model, label);
+  if (count <= clusters) return false;
+  clusters = count;
+  const int n = model.particles.size();
+  std::vector<std::vector<int>> members(count);
+  std::vector<bool> held(count, false);
+  for (int i = 0; i < n; ++i) {
+    members[label[i]].push_back(i);
+    if (constraints.fixed.row(i).any()) held[label[i]] = true;
+  }
+  bool changed = false;
+  for (int k = 0; k < count; ++k) {
+    if (members[k].size() == 1) {
+      const int i = members[k].front();
+      for (int c = 0; c < kDofsPerParticle; ++c)
+        if (!constraints.fixed(i, c)) {
+          constraints.fix(i, static_cast<Dof>(c), u(kDofsPerParticle * i + c));
+          changed = true;
+        }
+    } else if (!held[k]) {
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (int i : members[k]) mean += segment(u, i, 0);
+      mean /= static_cast<double>(members[k].size());
+      for (int i : members[k]) constraints.fix_particle(i, mean, Eigen::Vector3d::Zero());
+      changed = true;
+    }
+  }
+  std::vector<int> intact;
+  for (int b = 0; b < model.bonds.size(); ++b)
+    if (!model.bonds.is_broken(b)) intact.push_back(b);
+  Model held_together;
+  held_together.particles = model.particles;
+  held_together.bonds = model.bonds.select(intact);
+  for (const PinnedDof& pin : rigid_mode_pins(held_together, constraints)) {
+    constraints.fix(pin.particle, pin.dof, 0.0);
+    changed = true;
+  }
+  return changed;
+}
+
+}  // namespace
+
+EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
+                        const EventSettings& settings) {
+  const auto start = Clock::now();
+  settings.validate();
+  check_inputs(model, unit, reaction_dofs);
+  Bonds& bonds = model.bonds;
+  const double r = settings.tooth_stiffness_ratio;
+
+  EventsResult result;
+  UnitLoadSolver solver(settings, unit);
+  std::vector<int> label;
+  int clusters = intact_clusters(model, label);
+  int broken = 0;
+  for (int b = 0; b < bonds.size(); ++b) broken += bonds.is_broken(b) ? 1 : 0;
+
+  Eigen::VectorXd u, critical_u;
+  UnitState state;
+  DofArray critical_force;
+  double critical_lambda = 1, first_energy = -1, previous_energy = 0, peak_reaction = 0;
+  std::string pending_stop;
+  double last_progress = 0;
+  long events = 0;
+
+  while (true) {
+    if (events == 0) {
+      solver.solve(model, u);  // errors here are the caller's: bad constraints
+    } else {
+      try {
+        solver.solve(model, u);
+      } catch (const Error& e) {  // a factorization after breaks found a mechanism
+        result.stop = "failed";
+        result.message = e.what();
+        break;
+      }
+    }
+    ++result.solves;
+    evaluate(model, u, reaction_dofs, settings, state);
+    if (events > 0)
+      result.dissipated_energy +=
+          critical_lambda * critical_lambda * (previous_energy - state.energy);
+    if (!pending_stop.empty()) {
+      result.stop = pending_stop;
+      break;
+    }
+    if (first_energy < 0) first_energy = state.energy;
+    if (events > 0 && state.energy <= kCollapsedEnergy * first_energy) {
+      result.stop = "failed";
+      break;
+    }
+    const int b = critical_bond(state);
+    if (b < 0) {
+      result.stop = "no bond loaded";
+      break;
+    }
+
+    // The critical state.
+    ++events;
+    const double lambda = state.factor[b];
+    const BondState mode = state.mode[b];
+    EventPoint point;
+    point.event = events;
+    point.load_factor = lambda;
+    point.reaction = lambda * state.reaction;
+    point.bond = b;
+    point.strain_energy = lambda * lambda * state.energy;
+    critical_u = u;
+    critical_force = state.force;
+    critical_lambda = lambda;
+    previous_energy = state.energy;
+
+    // The bond fails: a tooth of stiffness, or all of it.
+    const BondParameters before = bond_parameters(bonds, b);
+    const bool breaks = !softening(bonds, b) || last_tooth(bonds, b, settings);
+    const double keep = breaks ? 0.0 : r;
+    BondParameters removed = before;
+    removed.normal_stiffness *= 1 - keep;
+    removed.shear_stiffness *= 1 - keep;
+    removed.bending_stiffness *= 1 - keep;
+    removed.twisting_stiffness *= 1 - keep;
+    point.broken = broken + (breaks ? 1 : 0);
+    result.path.push_back(point);
+    const int index = static_cast<int>(result.path.size()) - 1;
+    if (result.peak < 0 || std::abs(point.reaction) > peak_reaction) {
+      result.peak = index;
+      peak_reaction = std::abs(point.reaction);
+    }
+    if (settings.on_event) {
+      write_state(model.particles, lambda, u, state.force);
+      settings.on_event(model, point);
+    }
+
+    if (breaks) {
+      bonds.normal_stiffness(b) = 0;
+      bonds.shear_stiffness(b) = 0;
+      bonds.bending_stiffness(b) = 0;
+      bonds.twisting_stiffness(b) = 0;
+      bonds.damage(b) = 1;
+      bonds.state(b) = static_cast<int>(mode);
+      ++broken;
+      BondBreak record;
+      record.bond = b;
+      record.mode = mode;
+      record.at = static_cast<double>(events);
+      record.load = lambda;
+      const int i = bonds.first(b);
+      record.position = model.particles.reference_position.row(i).transpose().matrix() +
+                        bonds.lever_first(b) * bonds.normal.row(b).transpose().matrix();
+      result.breaks.push_back(record);
+      DofConstraints constraints = solver.constraints();
+      if (fix_loose_pieces(model, u, clusters, constraints)) solver.set_constraints(constraints);
+    } else {
+      bonds.normal_stiffness(b) *= r;
+      bonds.shear_stiffness(b) *= r;
+      bonds.bending_stiffness(b) *= r;
+      bonds.twisting_stiffness(b) *= r;
+      bonds.damage(b) = 1.0 - (1.0 - bonds.damage(b)) * r;
+    }
+    solver.change(model, b, removed);
+
+    const double elapsed = seconds_since(start);
+    if (settings.on_progress && elapsed - last_progress >= settings.progress_seconds) {
+      last_progress = elapsed;
+      settings.on_progress({events, broken, lambda, peak_reaction, elapsed});
+    }
+    if (index > result.peak && std::abs(point.reaction) < settings.stop_fraction * peak_reaction)
+      pending_stop = "failed";
+    else if (events >= settings.max_events)
+      pending_stop = "event limit";
+  }
+
+  if (events > 0)
+    write_state(model.particles, critical_lambda, critical_u, critical_force);
+  else
+    write_state(model.particles, 1.0, u, state.force);
+  result.factorizations = solver.factorizations();
+  result.wall_seconds = seconds_since(start);
+  if (settings.on_progress)
+    settings.on_progress({events, broken, critical_lambda, peak_reaction, result.wall_seconds});
+  return result;
+}
+
+}  // namespace plydem
