@@ -67,6 +67,10 @@ struct TensionOptions : CouponOptions {
 };
 
 struct StrengthCommandOptions : CouponOptions {
+  StrengthCommandOptions() {
+    strategy = plydem::StrengthSettings{}.strategy;
+    grips = "uniform";
+  }
   std::string method = "events";
   double weibull_modulus = 0;
   std::uint64_t seed = 1;
@@ -76,8 +80,9 @@ struct StrengthCommandOptions : CouponOptions {
   double interface_GIc = 0, interface_GIIc = 0;
   double friction = 0;
   bool softening = false;
-  long max_events = plydem::EventSettings{}.max_events;
-  double stop_fraction = plydem::EventSettings{}.stop_fraction;
+  long max_events = plydem::StrengthSettings{}.events.max_events;
+  double stop_fraction = plydem::StrengthSettings{}.events.stop_fraction;
+  double tooth_stiffness_ratio = plydem::StrengthSettings{}.events.tooth_stiffness_ratio;
   std::string out;
 };
 
@@ -96,7 +101,8 @@ void add_ply_options(CLI::App& app, CouponOptions& o) {
 }
 
 // The coupon a tension-type test pulls: its size, grips, gauge, laminate and interfaces.
-void add_coupon_options(CLI::App& app, CouponOptions& o) {
+void add_coupon_options(CLI::App& app, CouponOptions& o, const std::string& grips_help,
+                        const std::vector<std::string>& grips) {
   add_ply_options(app, o);
   app.add_option("--length-mm", o.length_mm, "coupon length along x [mm]")->capture_default_str();
   app.add_option("--width-mm", o.width_mm, "coupon width along y [mm]")->capture_default_str();
@@ -119,8 +125,8 @@ void add_coupon_options(CLI::App& app, CouponOptions& o) {
                  "shear stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
                  "10 G12/t; the paper used 1e13")
       ->capture_default_str();
-  app.add_option("--grips", o.grips, "free (uniaxial stress) or clamped (ends held laterally)")
-      ->check(CLI::IsMember({"free", "clamped"}))
+  app.add_option("--grips", o.grips, grips_help)
+      ->check(CLI::IsMember(grips))
       ->capture_default_str();
   app.add_option("--linear-solver", o.linear_solver,
                  "factorization of the static solves: auto (by size), direct (plydem's supernodal "
@@ -132,7 +138,8 @@ void add_coupon_options(CLI::App& app, CouponOptions& o) {
 }
 
 void add_tension_options(CLI::App& app, TensionOptions& o) {
-  add_coupon_options(app, o);
+  add_coupon_options(app, o, "free (uniaxial stress) or clamped (ends held laterally)",
+                     {"free", "clamped"});
   app.add_option("--target-strain", o.target_strain, "nominal strain at the last load stage")
       ->capture_default_str();
   app.add_option("--stages", o.stages, "load stages (points of the stress-strain fit)")
@@ -161,7 +168,11 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
 }
 
 void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
-  add_coupon_options(app, o);
+  add_coupon_options(app, o,
+                     "uniform (held at the bulk's uniform state under sigma_x: uniform uniaxial "
+                     "stress up to the grips), free or clamped (the tension test's rigid grips, "
+                     "which break the ply next to them)",
+                     {"uniform", "free", "clamped"});
   app.add_option("--method", o.method,
                  "events (quasi-static, one bond at a time: sequentially linear analysis) or "
                  "explicit (damped dynamics with breaking bonds)")
@@ -197,6 +208,10 @@ void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
   app.add_option("--stop-fraction", o.stop_fraction,
                  "the coupon has failed when, after the peak, the stress falls below this "
                  "fraction of the peak")
+      ->capture_default_str();
+  app.add_option("--tooth-stiffness-ratio", o.tooth_stiffness_ratio,
+                 "softening bonds: the fraction of its stiffness a bond keeps at each tooth of its "
+                 "saw-tooth")
       ->capture_default_str();
   app.add_option("--out", o.out,
                  "also write report.md, results.csv, the stress-strain and crack-pattern PNGs and "
@@ -235,7 +250,6 @@ void set_coupon(const CouponOptions& o, Settings& s) {
   s.interface.shear = o.interface_shear;
   s.grip_length = o.grip_mm * mm;
   s.gauge_fraction = o.gauge_fraction;
-  s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
   s.linear_solver = plydem::parse_linear_solver(o.linear_solver);
   make_strategy(o);  // unknown strategies and options fail here, before any work
 }
@@ -244,6 +258,7 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
   constexpr double mm = 1e-3;
   plydem::TensionSettings s;
   set_coupon(o, s);
+  s.grips = o.grips == "clamped" ? plydem::GripCondition::kClamped : plydem::GripCondition::kFree;
   s.target_strain = o.target_strain;
   s.load_stages = o.stages;
   s.ramp_cycles = o.ramp_cycles;
@@ -261,6 +276,7 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
 plydem::StrengthSettings to_settings(const StrengthCommandOptions& o) {
   plydem::StrengthSettings s;
   set_coupon(o, s);
+  s.grips = plydem::parse_strength_grips(o.grips);
   s.method = plydem::parse_strength_method(o.method);
   if (o.weibull_option->count() > 0) s.weibull_modulus = o.weibull_modulus;
   s.seed = o.seed;
@@ -272,6 +288,7 @@ plydem::StrengthSettings to_settings(const StrengthCommandOptions& o) {
   s.strength_options.softening = o.softening;
   s.events.max_events = o.max_events;
   s.events.stop_fraction = o.stop_fraction;
+  s.events.tooth_stiffness_ratio = o.tooth_stiffness_ratio;
   s.record_snapshots = !o.out.empty();
   s.validate();  // NaN and negative values fail here, before any work
   if (o.seed_option->count() > 0 && !(s.effective_weibull_modulus() > 0)) {

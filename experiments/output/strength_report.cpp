@@ -16,10 +16,6 @@ namespace {
 constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr double kMPa = 1e-6;
 
-const char* grips_name(GripCondition g) {
-  return g == GripCondition::kFree ? "free" : "clamped";
-}
-
 std::string specimen_text(const StrengthResult& r) {
   if (r.layup.empty()) return fmt::format("ply angle {:g} deg", r.ply_angle / kDegree);
   return fmt::format("laminate {}", format_layup(r.layup));
@@ -56,9 +52,10 @@ const char* criterion_label(FailureCriterion criterion) {
 }
 
 std::string format_strength_table(const StrengthResult& r, const StrengthSettings& s) {
-  std::string out = fmt::format(
-      "plydem strength test: strategy {}, material {}, {}, method {}, grips {}\n", r.strategy,
-      r.material.name, specimen_text(r), strength_method_name(r.method), grips_name(s.grips));
+  std::string out =
+      fmt::format("plydem strength test: strategy {}, material {}, {}, method {}, grips {}\n",
+                  r.strategy, r.material.name, specimen_text(r), strength_method_name(r.method),
+                  strength_grips_name(s.grips));
   out += fmt::format(
       "coupon {:g} mm x {:g} mm x {:g} mm{}, particle diameter {:g} mm; {} particles, {} bonds; "
       "{}; {}\n\n",
@@ -146,7 +143,12 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
         {"normal", is.normal}, {"shear", is.shear}, {"GIc", is.GIc}, {"GIIc", is.GIIc}};
   }
   j["method"] = strength_method_name(r.method);
-  j["grips"] = grips_name(s.grips);
+  j["grips"] = strength_grips_name(s.grips);
+  if (s.grips == StrengthGrips::kUniform) {
+    j["uniform_grips"] = {
+        {"strain_per_unit_exx", {r.uniform_strain(0), r.uniform_strain(1), r.uniform_strain(2)}},
+        {"spin_per_unit_exx", r.uniform_spin}};
+  }
   j["softening"] = s.strength_options.softening;
   j["friction_coefficient"] = s.strength_options.friction_coefficient;
   j["weibull_modulus"] = r.weibull_modulus;

@@ -63,6 +63,29 @@ DofConstraints grip_constraints(const Particles& p, double left_ux, double right
   return constraints;
 }
 
+DofConstraints uniform_grip_constraints(const Particles& p, const Eigen::Vector3d& strain,
+                                        const std::vector<double>& ply_spin) {
+  const Eigen::Vector3d low = p.reference_position.colwise().minCoeff().transpose();
+  const Eigen::Vector3d high = p.reference_position.colwise().maxCoeff().transpose();
+  const Eigen::Vector3d centre = 0.5 * (low + high);
+  DofConstraints constraints(p.size());
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.group(i) == static_cast<int>(BoundaryGroup::kFree)) continue;
+    require(p.ply(i) >= 0 && p.ply(i) < static_cast<int>(ply_spin.size()),
+            fmt::format("particle {} of ply {} has no spin for its grip ({} plies)", i, p.ply(i),
+                        ply_spin.size()));
+    const double dx = p.reference_position(i, 0) - centre.x();
+    const double dy = p.reference_position(i, 1) - centre.y();
+    constraints.fix(i, Dof::kUx, strain(0) * dx + 0.5 * strain(2) * dy);
+    constraints.fix(i, Dof::kUy, 0.5 * strain(2) * dx + strain(1) * dy);
+    constraints.fix(i, Dof::kUz);
+    constraints.fix(i, Dof::kThetaX);
+    constraints.fix(i, Dof::kThetaY);
+    constraints.fix(i, Dof::kThetaZ, ply_spin[static_cast<std::size_t>(p.ply(i))]);
+  }
+  return constraints;
+}
+
 StaticSettings grip_solve_settings(LinearSolverKind linear_solver) {
   StaticSettings settings;
   settings.pin_rigid_modes = true;  // free grips leave the y translation to pin

@@ -45,6 +45,13 @@ CouponGrips assign_grips(Particles& particles, double grip_length);
 DofConstraints grip_constraints(const Particles& particles, double left_ux, double right_ux,
                                 GripCondition grips);
 
+/// Grips held at a uniform in-plane state: each grip particle at the displacement E (x - c) of
+/// the strain `strain` (xx, yy, gamma_xy; c the centre of the coupon's extent) and the in-plane
+/// rotation ply_spin[its ply], and at zero uz, theta_x, theta_y. Throws plydem::Error if a
+/// particle's ply has no spin.
+DofConstraints uniform_grip_constraints(const Particles& particles, const Eigen::Vector3d& strain,
+                                        const std::vector<double>& ply_spin);
+
 /// Settings of the grips' static solves: the rigid modes free grips leave (the y translation) are
 /// pinned.
 StaticSettings grip_solve_settings(LinearSolverKind linear_solver);

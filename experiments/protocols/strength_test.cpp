@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/homogenizer.hpp"
 #include "core/measurements.hpp"
 #include "strategies/registry.hpp"
 
@@ -55,6 +56,25 @@ std::string family_label(const StrengthCalibration& ply, int family) {
 
 }  // namespace
 
+const char* strength_grips_name(StrengthGrips grips) {
+  switch (grips) {
+    case StrengthGrips::kUniform:
+      return "uniform";
+    case StrengthGrips::kFree:
+      return "free";
+    case StrengthGrips::kClamped:
+      return "clamped";
+  }
+  return "?";
+}
+
+StrengthGrips parse_strength_grips(const std::string& name) {
+  if (name == "uniform") return StrengthGrips::kUniform;
+  if (name == "free") return StrengthGrips::kFree;
+  if (name == "clamped") return StrengthGrips::kClamped;
+  throw Error(fmt::format("unknown grips '{}' (uniform, free or clamped)", name));
+}
+
 const char* strength_method_name(StrengthMethod method) {
   return method == StrengthMethod::kEvents ? "events" : "explicit";
 }
@@ -90,10 +110,7 @@ void StrengthSettings::validate() const {
           fmt::format("gauge fraction must lie in (0, 1), got {}", gauge_fraction));
   require(std::isfinite(edge_band_diameters) && edge_band_diameters >= 0,
           "the gauge's edge band must be >= 0 diameters");
-  require(std::isfinite(strength_options.friction_coefficient) &&
-              strength_options.friction_coefficient >= 0,
-          fmt::format("the bonds' friction coefficient must be finite and >= 0, got {}",
-                      strength_options.friction_coefficient));
+  strength_options.validate();
   require(!events.on_progress && !events.on_event,
           "the strength test sets the events solver's callbacks itself (use "
           "StrengthTest::on_progress)");
@@ -169,10 +186,12 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
     const std::string key = builder.strategy().calibration_key(spec);
     auto it = calibrated.find(key);
     if (it == calibrated.end()) {
+      // Family strengths stated for the coupon's particles (the report's numbers are the bonds').
+      StrengthOptions options = s.strength_options;
+      if (options.particle_diameter == 0) options.particle_diameter = s.coupon.particle_diameter;
       it = calibrated
-               .emplace(key,
-                        calibrate_strengths(builder.strategy(), builder.calibration(spec), material,
-                                            ply.angle, s.coupon.thickness, s.strength_options))
+               .emplace(key, calibrate_strengths(builder.strategy(), builder.calibration(spec),
+                                                 material, ply.angle, s.coupon.thickness, options))
                .first;
     }
     result.ply_strengths.push_back(it->second);
@@ -207,13 +226,43 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   }
 
   // Grips, gauge section, the unit loading.
+  const std::vector<Calibration> specimen_calibrations = specimen.ply_calibrations;
   auto model = std::make_shared<Model>(std::move(specimen.model));
   Particles& p = model->particles;
   const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * s.coupon.particle_diameter;
   const CouponGrips grips = assign_grips(p, grip);
   const GaugeSection gauge =
       gauge_section(p, grips, s.gauge_fraction, s.edge_band_diameters, s.coupon.particle_diameter);
-  const DofConstraints unit = grip_constraints(p, 0.0, kUnitNominalStrain * grips.span, s.grips);
+  DofConstraints unit;
+  if (s.grips == StrengthGrips::kUniform) {
+    // The relaxed bulk's uniform state under sigma_x: the plies' relaxed stiffness summed as CLT
+    // sums Q-bar, its strain per unit eps_xx, and each ply's spin under that strain.
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+    for (const Calibration& c : specimen_calibrations) A += c.relaxed;
+    Eigen::Vector3d e = A.ldlt().solve(Eigen::Vector3d(1, 0, 0));
+    require(e(0) > 0, "the coupon's relaxed stiffness gives no positive strain under sigma_x");
+    e /= e(0);
+    result.uniform_strain = e;
+    for (const Calibration& c : specimen_calibrations) {
+      const std::optional<UnitCell> cell = builder.strategy().unit_cell(c, s.coupon.thickness);
+      double spin = 0;
+      if (cell && cell->basis.size() == 1) {
+        std::vector<FamilyStiffness> families;
+        for (const FamilyCalibration& f : c.families) families.push_back(f.stiffness);
+        Vector6d voigt;
+        voigt << e(0), e(1), 0, 0, 0, e(2);
+        spin = relaxed_motion(*cell, families, voigt).rotation[0].z();
+      }
+      result.uniform_spin.push_back(spin);
+    }
+    std::vector<double> spin = result.uniform_spin;
+    for (double& w : spin) w *= kUnitNominalStrain;
+    unit = uniform_grip_constraints(p, kUnitNominalStrain * e, spin);
+  } else {
+    unit = grip_constraints(
+        p, 0.0, kUnitNominalStrain * grips.span,
+        s.grips == StrengthGrips::kClamped ? GripCondition::kClamped : GripCondition::kFree);
+  }
   DofFlags reaction_dofs = DofFlags::Constant(p.size(), kDofsPerParticle, false);
   for (int i = 0; i < p.size(); ++i) {
     if (p.group(i) == static_cast<int>(BoundaryGroup::kRightGrip))
