@@ -604,19 +604,25 @@ void StrengthOptions::validate() const {
 }
 
 double StrengthCalibration::first_failure_factor(const PlyStress& stress) const {
+  const std::vector<double> factors = family_failure_factors(stress);
+  return factors.empty() ? kInf : *std::min_element(factors.begin(), factors.end());
+}
+
+std::vector<double> StrengthCalibration::family_failure_factors(const PlyStress& stress) const {
   require(
       std::isfinite(stress.sigma1) && std::isfinite(stress.sigma2) && std::isfinite(stress.tau12),
       "first failure factor: the ply stress is not finite");
-  double factor = kInf;
+  std::vector<double> factors(families.size(), kInf);
   for (const UnitResponse& r : responses) {
     require(r.family >= 0 && r.family < static_cast<int>(families.size()),
-            fmt::format("first failure factor: a response refers to bond family {} of {}", r.family,
-                        families.size()));
+            fmt::format("family failure factors: a response refers to bond family {} of {}",
+                        r.family, families.size()));
     const FamilyStrength& f = families[r.family];
-    factor = std::min(
-        factor, critical_load(stresses_of(r.resultants, f.radius, stress), strength_of(f)).factor);
+    factors[r.family] =
+        std::min(factors[r.family],
+                 critical_load(stresses_of(r.resultants, f.radius, stress), strength_of(f)).factor);
   }
-  return factor;
+  return factors;
 }
 
 StrengthCalibration calibrate_strengths(const Strategy& strategy, const Calibration& calibration,

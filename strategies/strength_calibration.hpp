@@ -113,6 +113,9 @@ class StrengthCalibration {
   /// relaxed bulk to fail (+inf if never): the model's first-failure surface, as the engine
   /// simulates it, for the envelopes (sigma1-sigma2, sigma2-tau12).
   double first_failure_factor(const PlyStress& stress) const;
+  /// The same per bond family (index = Bonds::family): the factor at which the family's most
+  /// loaded cell bond fails (+inf for a family the stress does not load).
+  std::vector<double> family_failure_factors(const PlyStress& stress) const;
 
   /// Per cell bond (one entry each; a cell may hold several bonds of a family) and unit ply stress
   /// component (sigma1, sigma2, tau12 = 1 Pa, columns), the bond's resultants in the relaxed bulk,

@@ -80,6 +80,7 @@ struct StrengthCommandOptions : CouponOptions {
   double interface_GIc = 0, interface_GIIc = 0;
   double friction = 0;
   bool softening = false;
+  std::string edge_strengths = "bulk";
   long max_events = plydem::StrengthSettings{}.events.max_events;
   double stop_fraction = plydem::StrengthSettings{}.events.stop_fraction;
   double tooth_stiffness_ratio = plydem::StrengthSettings{}.events.tooth_stiffness_ratio;
@@ -200,6 +201,11 @@ void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
   app.add_option("--friction", o.friction,
                  "friction coefficient tan(phi) of the bonds' shear strength c - sigma tan(phi)")
       ->capture_default_str();
+  app.add_option("--edge-strengths", o.edge_strengths,
+                 "bulk (bonds that the coupon's edges or grips load beyond the relaxed bulk get "
+                 "strengths to fail with the bulk: edges of a turned lattice do not set the "
+                 "strength) or weighted (strengths from the stiffness weights alone)")
+      ->check(CLI::IsMember({"bulk", "weighted"}));
   app.add_flag("--softening", o.softening,
                "linear-softening bonds dissipating the fracture energies G_fibre, G_matrix "
                "(default: brittle)");
@@ -290,6 +296,7 @@ plydem::StrengthSettings to_settings(const StrengthCommandOptions& o) {
   s.events.stop_fraction = o.stop_fraction;
   s.events.tooth_stiffness_ratio = o.tooth_stiffness_ratio;
   s.record_snapshots = !o.out.empty();
+  s.consistent_edges = o.edge_strengths == "bulk";
   s.validate();  // NaN and negative values fail here, before any work
   if (o.seed_option->count() > 0 && !(s.effective_weibull_modulus() > 0)) {
     throw plydem::Error(fmt::format(

@@ -67,6 +67,11 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
   out += fmt::format("{:<34} {:>14}\n", "first-failure stress", mpa(r.first_failure_stress));
   out += fmt::format("{:<34} {:>14}  (calibrated bulk: no edges, no scatter)\n",
                      "model's own first failure", mpa(r.model_first_failure));
+  if (r.edge_strengthened_bonds > 0) {
+    out += fmt::format(
+        "{:<34} {:>14}  (edge and grip bonds raised to fail with the bulk, by up to {:.3f}x)\n",
+        "bonds with bulk-consistent strength", r.edge_strengthened_bonds, r.edge_strength_factor);
+  }
   const LaminaStrength& ls = r.material.strength;
   auto given = [](double v) { return v > 0 ? fmt::format("{:g}", v * kMPa) : std::string("-"); };
   out += fmt::format("\nlamina strengths [MPa]: XT {}, XC {}, YT {}, YC {}, S12 {}\n\n",
@@ -130,6 +135,8 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   j["wall_seconds"] = r.wall_seconds;
 
   j["model_first_failure"] = finite_or_null(r.model_first_failure);
+  j["edge_strengthened_bonds"] = r.edge_strengthened_bonds;
+  j["edge_strength_factor"] = r.edge_strength_factor;
   const LaminaStrength& ls = r.material.strength;
   j["lamina_strengths"] = {
       {"XT", ls.XT}, {"XC", ls.XC}, {"YT", ls.YT}, {"YC", ls.YC}, {"S12", ls.S12}};

@@ -10,6 +10,7 @@
 #include <map>
 #include <numbers>
 
+#include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
 #include "core/measurements.hpp"
@@ -52,6 +53,62 @@ std::string family_label(const StrengthCalibration& ply, int family) {
     return ply.families[static_cast<std::size_t>(family)].label;
   }
   return fmt::format("{}", family + 1);
+}
+
+// A bond fails "before its family" below this relative margin.
+constexpr double kEdgeTolerance = 1e-6;
+
+// The factor by which each bond's strengths must grow so that, in the coupon solved at the unit
+// load `unit`, it fails no earlier than the first bond of its ply's relaxed bulk under the same
+// uniform stress (`ply_stress` per ply, at the unit load); 1 for every other bond. See
+// StrengthSettings::consistent_edges.
+std::vector<double> edge_strength_factors(const Model& model, const DofConstraints& unit,
+                                          const StaticSettings& settings,
+                                          const std::vector<StrengthCalibration>& plies,
+                                          const std::vector<PlyStress>& ply_stress) {
+  Model solved = model;
+  StaticSystem(solved, unit, settings).solve(solved, unit.value);
+  std::vector<double> bulk_first;
+  for (std::size_t k = 0; k < plies.size(); ++k)
+    bulk_first.push_back(plies[k].first_failure_factor(ply_stress[k]));
+  const Particles& p = solved.particles;
+  const Bonds& bonds = solved.bonds;
+  std::vector<double> factors(static_cast<std::size_t>(bonds.size()), 1.0);
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_interface(b) || bonds.is_broken(b)) continue;
+    const BondStrength strength = bond_strength(bonds, b);
+    if (!std::isfinite(strength.tensile) && !std::isfinite(strength.cohesion)) continue;
+    const int i = bonds.first(b), j = bonds.second(b);
+    const BondStresses stresses = intact_stresses(
+        bond_stresses(bond_parameters(bonds, b), strength.radius, p.displacement.row(i).transpose(),
+                      p.rotation.row(i).transpose(), p.displacement.row(j).transpose(),
+                      p.rotation.row(j).transpose()),
+        bonds.damage(b));
+    const double own = critical_load(stresses, strength).factor;
+    const auto ply = static_cast<std::size_t>(p.ply(i));
+    const auto family = static_cast<std::size_t>(bonds.family(b));  // checked, not used
+    require(ply < bulk_first.size() && family < plies[ply].families.size(),
+            fmt::format("bond {} belongs to ply {} family {}, which the strength calibration "
+                        "does not have",
+                        b, ply, family));
+    const double target = bulk_first[ply];
+    // Round-off leaves the bulk's own bonds within ~1e-12 of their family: they keep theirs.
+    if (std::isfinite(target) && own < target * (1.0 - kEdgeTolerance))
+      factors[static_cast<std::size_t>(b)] = target / own;
+  }
+  return factors;
+}
+
+// Multiplies bond b's strengths by factors[b], keeping a softening bond's dissipated energy (its
+// peak energy grows as the square of its strength, so kappa_u falls by it).
+void raise_strengths(Bonds& bonds, const std::vector<double>& factors) {
+  for (int b = 0; b < bonds.size(); ++b) {
+    const double f = factors[static_cast<std::size_t>(b)];
+    if (f == 1.0) continue;
+    bonds.tensile_strength(b) *= f;
+    bonds.cohesion(b) *= f;
+    bonds.ductility(b) = std::max(1.0, bonds.ductility(b) / (f * f));
+  }
 }
 
 }  // namespace
@@ -204,8 +261,10 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   require(plies.size() == specimen.ply_calibrations.size(),
           fmt::format("the coupon was built with {} ply calibrations for {} plies",
                       specimen.ply_calibrations.size(), plies.size()));
+  // Without scatter first: the edge consistency below compares the strengths as calibrated.
+  const bool consistent_edges = s.consistent_edges && s.grips == StrengthGrips::kUniform;
   assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
-                        result.weibull_modulus, s.seed);
+                        consistent_edges ? 0.0 : result.weibull_modulus, s.seed);
 
   // Theory, and the calibrated bulk's own first failure under the same load.
   for (FailureCriterion criterion : all_criteria()) {
@@ -273,8 +332,31 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   result.cross_section = gauge.cross_section;
   result.span = grips.span;
 
-  EventSettings events = s.events;
   const StaticSettings grip_settings = grip_solve_settings(s.linear_solver);
+  if (consistent_edges) {
+    std::vector<PlyStress> ply_stress;
+    for (std::size_t k = 0; k < plies.size(); ++k) {
+      const Eigen::Vector3d sigma =
+          specimen_calibrations[k].relaxed * (kUnitNominalStrain * result.uniform_strain);
+      ply_stress.push_back(to_ply_axes(sigma(0), sigma(1), sigma(2), plies[k].angle));
+    }
+    const std::vector<double> factors =
+        edge_strength_factors(*model, unit, grip_settings, result.ply_strengths, ply_stress);
+    if (result.weibull_modulus > 0) {
+      Specimen scattered{std::move(*model), specimen_calibrations, 0.0};
+      assign_bond_strengths(scattered, result.ply_strengths, s.interface_strength,
+                            result.weibull_modulus, s.seed);
+      *model = std::move(scattered.model);
+    }
+    raise_strengths(model->bonds, factors);
+    for (double f : factors) {
+      if (f == 1.0) continue;
+      ++result.edge_strengthened_bonds;
+      result.edge_strength_factor = std::max(result.edge_strength_factor, f);
+    }
+  }
+
+  EventSettings events = s.events;
   events.static_settings.pin_rigid_modes = grip_settings.pin_rigid_modes;
   events.static_settings.linear_solver = grip_settings.linear_solver;
   events.on_progress = progress_;
