@@ -51,6 +51,14 @@ const char* criterion_label(FailureCriterion criterion) {
   return "?";
 }
 
+double criteria_compared_stress(const StrengthResult& r) {
+  return r.layup.empty() ? r.strength : r.first_failure_stress;
+}
+
+const char* criteria_compared_name(const StrengthResult& r) {
+  return r.layup.empty() ? "strength" : "first failure";
+}
+
 std::string format_strength_table(const StrengthResult& r, const StrengthSettings& s) {
   std::string out =
       fmt::format("plydem strength test: strategy {}, material {}, {}, method {}, grips {}\n",
@@ -76,14 +84,16 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
   auto given = [](double v) { return v > 0 ? fmt::format("{:g}", v * kMPa) : std::string("-"); };
   out += fmt::format("\nlamina strengths [MPa]: XT {}, XC {}, YT {}, YC {}, S12 {}\n\n",
                      given(ls.XT), given(ls.XC), given(ls.YT), given(ls.YC), given(ls.S12));
-  out += fmt::format("{:<14} {:>14} {:>16}\n", r.layup.empty() ? "criterion" : "criterion (FPF)",
-                     "strength", "DEM rel. to it");
+  out += fmt::format("{:<15} {:>14}   DEM {} rel. to it\n",
+                     r.layup.empty() ? "criterion" : "criterion (FPF)", "strength",
+                     criteria_compared_name(r));
   for (const CriterionStrength& t : r.theory) {
     if (t.strength) {
-      out += fmt::format("{:<14} {:>14} {:>+15.2f}%\n", criterion_label(t.criterion),
-                         mpa(*t.strength), 100.0 * (r.strength / *t.strength - 1.0));
+      out +=
+          fmt::format("{:<15} {:>14} {:>+12.2f}%\n", criterion_label(t.criterion), mpa(*t.strength),
+                      100.0 * (criteria_compared_stress(r) / *t.strength - 1.0));
     } else {
-      out += fmt::format("{:<14} {:>14}  ({})\n", criterion_label(t.criterion), "-", t.missing);
+      out += fmt::format("{:<15} {:>14}  ({})\n", criterion_label(t.criterion), "-", t.missing);
     }
   }
   out += fmt::format("\n{:<28} {:>8} {:>8}\n", "broken bonds (family)", "tension", "shear");

@@ -23,6 +23,13 @@ namespace plydem {
 /// "max-stress", "Tsai-Hill", "Tsai-Wu", "Hashin".
 const char* criterion_label(FailureCriterion criterion);
 
+/// The DEM stress the classical criteria are set beside: the strength (peak) of one ply, whose
+/// criteria predict its failure; the first failure of a laminate, whose criteria are first-ply
+/// failure.
+double criteria_compared_stress(const StrengthResult& result);
+/// What that is: "strength" or "first failure".
+const char* criteria_compared_name(const StrengthResult& result);
+
 std::string format_strength_table(const StrengthResult& result, const StrengthSettings& settings);
 nlohmann::json strength_json(const StrengthResult& result, const StrengthSettings& settings);
 

@@ -120,12 +120,13 @@ ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_di
   md += table_row({"energy released by breaking", fmt::format("{:.4g}", r.dissipated_energy), "J"});
   md += "\n";
   md += table_row({r.layup.empty() ? "criterion" : "criterion (first-ply failure, CLT)",
-                   "strength (MPa)", "DEM relative to it"});
+                   "strength (MPa)",
+                   fmt::format("DEM {} relative to it", criteria_compared_name(r))});
   md += "|---|---|---|\n";
   for (const CriterionStrength& t : r.theory) {
     md += table_row({criterion_label(t.criterion),
                      t.strength ? mpa_cell(*t.strength) : fmt::format("– ({})", t.missing),
-                     t.strength ? relative(r.strength, *t.strength) : "–"});
+                     t.strength ? relative(criteria_compared_stress(r), *t.strength) : "–"});
   }
   md += "\n";
   md += table_row({"broken bonds (family)", "tension", "shear"});
@@ -263,7 +264,8 @@ class StrengthExperiment : public Experiment {
     std::string table =
         table_row({"angle", "DEM strength (MPa)", "first failure (MPa)", "bulk first failure (MPa)",
                    "strain at peak (%)", "broken T / S", "events", "max-stress", "Tsai-Hill",
-                   "Tsai-Wu", "Hashin", "DEM vs Tsai-Wu"}) +
+                   "Tsai-Wu", "Hashin",
+                   base.layup.empty() ? "DEM vs Tsai-Wu" : "first failure vs Tsai-Wu (FPF)"}) +
         "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     std::string sections;
     Curve dem_points{fmt::format("DEM {} strength", base.strategy), {}, {}, true};
@@ -295,7 +297,7 @@ class StrengthExperiment : public Experiment {
           cells.push_back(t.strength ? mpa_cell(*t.strength) : "–");
           if (t.criterion == FailureCriterion::kTsaiWu && t.strength) tsai_wu = *t.strength;
         }
-        cells.push_back(relative(r.strength, tsai_wu));
+        cells.push_back(relative(criteria_compared_stress(r), tsai_wu));
         table += table_row(cells);
         dem_points.x.push_back(angle_deg);
         dem_points.y.push_back(r.strength * kMPa);
