@@ -189,6 +189,7 @@ class StrengthExperiment : public Experiment {
                           "seed",
                           "friction",
                           "softening",
+                          "edge_strengths",
                           "coupon.length_mm",
                           "coupon.width_mm",
                           "coupon.thickness_mm",
@@ -239,6 +240,11 @@ class StrengthExperiment : public Experiment {
     }
     base.strength_options.friction_coefficient = c.number("friction", 0);
     base.strength_options.softening = c.boolean("softening", false);
+    const std::string edges = c.string("edge_strengths", "bulk");
+    require(edges == "bulk" || edges == "weighted",
+            fmt::format("{}: edge_strengths must be \"bulk\" or \"weighted\", got \"{}\"", origin,
+                        edges));
+    base.consistent_edges = edges == "bulk";
     base.events.max_events = c.integer("events.max_events", base.events.max_events);
     base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
     base.events.tooth_stiffness_ratio =

@@ -11,7 +11,7 @@
 ///   angles_deg = [0, 15, 30]         (or angle_deg = 30; default 0)
 ///   layup = "[0/90]s"                (optional: a laminate, turned by each angle)
 ///   method = "events"                weibull_modulus = 0     seed = 1
-///   friction = 0                     softening = false
+///   friction = 0                     softening = false      edge_strengths = "bulk"
 ///   [coupon] length_mm, width_mm, thickness_mm, diameter_mm, grips, grip_mm, gauge_fraction
 ///   [quick]  length_mm, width_mm, thickness_mm, diameter_mm
 ///   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa), GIc, GIIc (J/m^2)
