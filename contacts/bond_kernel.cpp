@@ -75,7 +75,8 @@ double bond_strain_energy(const Particles& particles, const Bonds& bonds) {
   return energy;
 }
 
-BondDeformation bond_deformation(const Particles& p, const Bonds& bonds, int b) {
+BondDeformation bond_deformation(const Particles& p, const Bonds& bonds, int b, double* du_out,
+                                 double* dtheta_out) {
   const int i = bonds.first(b), j = bonds.second(b);
   const double n[3] = {bonds.normal(b, 0), bonds.normal(b, 1), bonds.normal(b, 2)};
   const double sigma = 0.5 * (bonds.lever_first(b) + bonds.lever_second(b));
@@ -88,6 +89,8 @@ BondDeformation bond_deformation(const Particles& p, const Bonds& bonds, int b) 
   du[0] = (p.displacement(j, 0) - p.displacement(i, 0)) - (a[1] * n[2] - a[2] * n[1]);
   du[1] = (p.displacement(j, 1) - p.displacement(i, 1)) - (a[2] * n[0] - a[0] * n[2]);
   du[2] = (p.displacement(j, 2) - p.displacement(i, 2)) - (a[0] * n[1] - a[1] * n[0]);
+  for (int c = 0; c < 3 && du_out; ++c) du_out[c] = du[c];
+  for (int c = 0; c < 3 && dtheta_out; ++c) dtheta_out[c] = dtheta[c];
   return deformation_of(du, dtheta, n);
 }
 
@@ -537,21 +540,12 @@ void assess_slot(GatherBonds& g, int k, int slot, const double du[3], const doub
     g.slot_damage()[cell] = u.damage;
     g.slot_kappa()[cell] = u.kappa;
   }
+  if (u.broken) g.clear_slot(k, slot);
+  pass.changed = true;
   const std::int32_t bond = g.slot_bond(cell);
-  const bool first_end = (bond & 1) == 0;
-  if (first_end) pass.released[k / lanes::kCount] += u.released;
-  if (u.broken) {
-    g.clear_slot(k, slot);
-    pass.broke = true;
-    if (first_end) {
-      SlotBreak event;
-      event.bond = bond >> 1;
-      event.cycle = pass.cycle;
-      event.mode = u.mode;
-      for (int c = 0; c < 3; ++c) event.displacement[c] = u_own[c];
-      pass.breaks->push_back(event);
-    }
-  }
+  if ((bond & 1) == 0)
+    pass.events->push_back(
+        damage_event(bond >> 1, pass.cycle, u, damage, intact, du, dtheta, n, u_own));
 }
 
 void GatherBonds::drop_bond(int first, int second) {

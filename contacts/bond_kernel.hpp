@@ -104,8 +104,10 @@ struct BondStiffness {
 /// Bond b's deformation at the particles' current state, for the reference loop. The lever term
 /// (s_i theta_i + s_j theta_j) x n is written as (sigma (theta_i + theta_j) + delta (theta_j -
 /// theta_i)) x n with sigma = (s_i + s_j) / 2 and delta = (s_j - s_i) / 2, the form the fused kernel
-/// computes from either end alike (gather_breaking_block).
-BondDeformation bond_deformation(const Particles& particles, const Bonds& bonds, int b);
+/// computes from either end alike (gather_breaking_block). With `du_out` and `dtheta_out`, also
+/// writes du and dtheta there.
+BondDeformation bond_deformation(const Particles& particles, const Bonds& bonds, int b,
+                                 double* du_out = nullptr, double* dtheta_out = nullptr);
 
 /// What the failure law does to one bond at one cycle (update_bond_damage).
 struct BondDamageUpdate {
@@ -115,9 +117,6 @@ struct BondDamageUpdate {
   double damage = 0;       ///< after this cycle
   double kappa = 1;        ///< largest utilisation so far (softening), after this cycle
   double utilisation = 0;  ///< U at this cycle (intact-equivalent stresses)
-  /// Strain energy the bond gives up: (damage after - damage before) times its intact energy at
-  /// this deformation [J] (all it holds, for a brittle break).
-  double released = 0;
 };
 
 /// The one failure law applied to a bond of intact stiffnesses `intact`, damage `damage` and
@@ -155,12 +154,6 @@ inline BondDamageUpdate update_bond_damage(const BondDeformation& d, const BondS
       r.mode = u.mode;  // U >= ductility >= 1: tension or shear
       r.damage = 1;
     }
-  }
-  if (r.damage > damage) {
-    const double energy =
-        0.5 * (intact.normal * d.normal * d.normal + intact.shear * d.shear * d.shear +
-               intact.twisting * d.twist * d.twist + intact.bending * d.bend * d.bend);
-    r.released = (r.damage - damage) * energy;
   }
   return r;
 }
@@ -561,27 +554,57 @@ template <bool kEnergy>
   }
 }
 
-/// A break that one end of a bond decided; the bond's first end logs it.
-struct SlotBreak {
-  int bond = 0;   ///< model bond
+/// A damage step (a break, or a softening step) that a bond's first end decided. The energy the
+/// step releases needs the bond's deformation at the next state: with q the deformation and K the
+/// intact stiffness, a step from damage d to d' decided at q_n (acting from n + 1) takes
+/// 1/2 (d' - d) q_n.K q_n+1 out of the leapfrog account exactly (the trapezoidal work of the bond
+/// over the step, less its change of energy). The event keeps K q_n for that.
+struct SlotEvent {
+  int bond = 0;    ///< model bond
   long cycle = 0;  ///< BreakingPass::cycle of the pass
-  BondState mode = BondState::kBrokenTension;
-  double displacement[3] = {0, 0, 0};  ///< of the bond's first particle, at the decision's state
+  bool broken = false;
+  BondState mode = BondState::kIntact;  ///< how it broke
+  double damage_before = 0, damage_after = 0;
+  double force[3] = {0, 0, 0};   ///< intact force k_n du_n n + k_s du_s on the first end at q_n
+  double moment[3] = {0, 0, 0};  ///< intact moment k_t dtheta_n n + k_b dtheta_s at q_n
+  double displacement[3] = {0, 0, 0};  ///< of the bond's first particle, at q_n's state
 };
+
+/// The event of a bond whose first end saw `update` at deformation (du, dtheta) along n with
+/// intact stiffnesses `k` (both kernels build them alike).
+inline SlotEvent damage_event(int bond, long cycle, const BondDamageUpdate& update,
+                              double damage_before, const BondStiffness& k, const double du[3],
+                              const double dtheta[3], const double n[3],
+                              const double displacement[3]) {
+  SlotEvent e;
+  e.bond = bond;
+  e.cycle = cycle;
+  e.broken = update.broken;
+  e.mode = update.mode;
+  e.damage_before = damage_before;
+  e.damage_after = update.damage;
+  const double du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
+  const double dt_n = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
+  for (int c = 0; c < 3; ++c) {
+    e.force[c] = k.normal * du_n * n[c] + k.shear * (du[c] - du_n * n[c]);
+    e.moment[c] = k.twisting * dt_n * n[c] + k.bending * (dtheta[c] - dt_n * n[c]);
+    e.displacement[c] = displacement[c];
+  }
+  return e;
+}
 
 /// What one thread's breaking pass writes besides forces.
 struct BreakingPass {
-  std::vector<SlotBreak>* breaks = nullptr;  ///< this thread's breaks (first ends only)
-  double* released = nullptr;  ///< per block [J]: a bond's first end adds what it releases
+  std::vector<SlotEvent>* events = nullptr;  ///< this thread's damage steps (first ends only)
   long cycle = 0;
-  bool broke = false;  ///< a slot of this pass broke (either end)
+  bool changed = false;  ///< a slot of this pass broke or softened (either end)
 };
 
 /// The exact failure law (update_bond_damage) for slot `slot` of kernel particle `k`, at the
 /// deformation the kernel computed (du, dtheta and n of that end, as gather_breaking_block has
 /// them): updates the slot's damage and kappa (softening), clears the slot if the bond breaks
-/// (GatherBonds::clear_slot), and, at the bond's first end, adds the released energy to `pass`
-/// and logs the break. `u_own` is k's displacement.
+/// (GatherBonds::clear_slot), and, at the bond's first end, logs the step in `pass`. `u_own` is
+/// k's displacement.
 void assess_slot(GatherBonds& g, int k, int slot, const double du[3], const double dtheta[3],
                  const double n[3], const double u_own[3], BreakingPass& pass);
 

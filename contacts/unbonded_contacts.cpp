@@ -199,6 +199,67 @@ long UnbondedContacts::check(const ContactState& s, double dt) {
   return std::max(1L, static_cast<long>(cycles));
 }
 
+namespace {
+
+// The contact law for one candidate at state `s` (see the header): updates its spring and
+// overlap, adds slip losses to `friction`, and returns whether it touches, with its force on the
+// first particle `f` and the normal `n`.
+bool contact_law(UnbondedContact& contact, const ContactState& s, double dt, double mu, int i,
+                 int j, double f[3], double n[3], double& friction) {
+  double d[3];
+  for (int c = 0; c < 3; ++c)
+    d[c] = contact.branch[c] + (s.displacement[c][j] - s.displacement[c][i]);
+  const double distance = std::sqrt(dot3(d, d));
+  const double overlap = contact.distance - distance;
+  if (!(overlap > 0) || !(distance > 0)) {
+    friction += 0.5 * contact.shear_stiffness * dot3(contact.spring, contact.spring);
+    for (double& x : contact.spring) x = 0;
+    contact.overlap = 0;
+    return false;
+  }
+  for (int c = 0; c < 3; ++c) n[c] = d[c] / distance;
+  // The contact points' relative velocity, and its tangential part.
+  double a[3], v[3], a_cross_n[3];
+  for (int c = 0; c < 3; ++c)
+    a[c] = contact.lever_first * s.angular_velocity[c][i] +
+           contact.lever_second * s.angular_velocity[c][j];
+  cross3(a, n, a_cross_n);
+  for (int c = 0; c < 3; ++c) v[c] = (s.velocity[c][j] - s.velocity[c][i]) - a_cross_n[c];
+  const double v_n = dot3(v, n);
+  // The spring, turned into the current tangent plane with its length kept, then stretched.
+  double* spring = contact.spring;
+  const double length2 = dot3(spring, spring);
+  if (length2 > 0) {
+    const double s_n = dot3(spring, n);
+    double t[3];
+    for (int c = 0; c < 3; ++c) t[c] = spring[c] - s_n * n[c];
+    const double t2 = dot3(t, t);
+    const double scale = t2 > 0 ? std::sqrt(length2 / t2) : 0.0;
+    for (int c = 0; c < 3; ++c) spring[c] = scale * t[c];
+  }
+  for (int c = 0; c < 3; ++c) spring[c] += dt * (v[c] - v_n * n[c]);
+  const double normal_force = contact.normal_stiffness * overlap;
+  const double limit = mu * normal_force;
+  const double spring2 = dot3(spring, spring);
+  const double shear_force = contact.shear_stiffness * std::sqrt(spring2);
+  if (shear_force > limit) {
+    const double scale = limit / shear_force;
+    for (int c = 0; c < 3; ++c) spring[c] *= scale;
+    friction += 0.5 * contact.shear_stiffness * spring2 * (1.0 - scale * scale);
+  }
+  contact.overlap = overlap;
+  for (int c = 0; c < 3; ++c) f[c] = -normal_force * n[c] + contact.shear_stiffness * spring[c];
+  return true;
+}
+
+double contact_energy(const UnbondedContact& c) {
+  return c.overlap > 0 ? 0.5 * c.normal_stiffness * c.overlap * c.overlap +
+                             0.5 * c.shear_stiffness * dot3(c.spring, c.spring)
+                       : 0.0;
+}
+
+}  // namespace
+
 void UnbondedContacts::apply(const ContactState& s, double dt, const ContactForces& out) {
   for (int k : touched_)
     for (int c = 0; c < 3; ++c) {
@@ -206,56 +267,11 @@ void UnbondedContacts::apply(const ContactState& s, double dt, const ContactForc
       out.torque[c][k] = 0;
     }
   touched_.clear();
-  const double mu = settings_.friction;
   for (UnbondedContact& contact : contacts_) {
     const int i = index_[contact.first], j = index_[contact.second];
-    double d[3];
-    for (int c = 0; c < 3; ++c)
-      d[c] = contact.branch[c] + (s.displacement[c][j] - s.displacement[c][i]);
-    const double distance = std::sqrt(dot3(d, d));
-    const double overlap = contact.distance - distance;
-    if (!(overlap > 0) || !(distance > 0)) {
-      const double s2 = dot3(contact.spring, contact.spring);
-      friction_dissipation_ += 0.5 * contact.shear_stiffness * s2;
-      for (double& x : contact.spring) x = 0;
-      contact.overlap = 0;
+    double f[3], n[3];
+    if (!contact_law(contact, s, dt, settings_.friction, i, j, f, n, friction_dissipation_))
       continue;
-    }
-    double n[3];
-    for (int c = 0; c < 3; ++c) n[c] = d[c] / distance;
-    // The contact points' relative velocity, and its tangential part.
-    double a[3], v[3], a_cross_n[3];
-    for (int c = 0; c < 3; ++c)
-      a[c] = contact.lever_first * s.angular_velocity[c][i] +
-             contact.lever_second * s.angular_velocity[c][j];
-    cross3(a, n, a_cross_n);
-    for (int c = 0; c < 3; ++c)
-      v[c] = (s.velocity[c][j] - s.velocity[c][i]) - a_cross_n[c];
-    const double v_n = dot3(v, n);
-    // The spring, turned into the current tangent plane with its length kept, then stretched.
-    double* spring = contact.spring;
-    const double length2 = dot3(spring, spring);
-    if (length2 > 0) {
-      const double s_n = dot3(spring, n);
-      double t[3];
-      for (int c = 0; c < 3; ++c) t[c] = spring[c] - s_n * n[c];
-      const double t2 = dot3(t, t);
-      const double scale = t2 > 0 ? std::sqrt(length2 / t2) : 0.0;
-      for (int c = 0; c < 3; ++c) spring[c] = scale * t[c];
-    }
-    for (int c = 0; c < 3; ++c) spring[c] += dt * (v[c] - v_n * n[c]);
-    const double normal_force = contact.normal_stiffness * overlap;
-    const double limit = mu * normal_force;
-    const double spring2 = dot3(spring, spring);
-    const double shear_force = contact.shear_stiffness * std::sqrt(spring2);
-    if (shear_force > limit) {
-      const double scale = limit / shear_force;
-      for (int c = 0; c < 3; ++c) spring[c] *= scale;
-      friction_dissipation_ += 0.5 * contact.shear_stiffness * spring2 * (1.0 - scale * scale);
-    }
-    contact.overlap = overlap;
-    double f[3];
-    for (int c = 0; c < 3; ++c) f[c] = -normal_force * n[c] + contact.shear_stiffness * spring[c];
     double n_cross_f[3];
     cross3(n, f, n_cross_f);
     for (int c = 0; c < 3; ++c) {
@@ -269,13 +285,25 @@ void UnbondedContacts::apply(const ContactState& s, double dt, const ContactForc
   }
 }
 
+double UnbondedContacts::handover(int b, const ContactState& s, double dt) const {
+  require(b >= 0 && b < bond_first_.size(), fmt::format("contacts: no bond {}", b));
+  UnbondedContact contact = broken_pair(b);
+  const int i = index_[contact.first], j = index_[contact.second];
+  double f[3], n[3], friction = 0;
+  if (!contact_law(contact, s, dt, settings_.friction, i, j, f, n, friction)) return 0;
+  double n_cross_f[3];
+  cross3(n, f, n_cross_f);
+  double work = 0;  // over the step just made: du = v dt, dtheta = w dt
+  for (int c = 0; c < 3; ++c)
+    work += dt * (f[c] * (s.velocity[c][i] - s.velocity[c][j]) +
+                  n_cross_f[c] * (contact.lever_first * s.angular_velocity[c][i] +
+                                  contact.lever_second * s.angular_velocity[c][j]));
+  return contact_energy(contact) + friction + 0.5 * work;
+}
+
 double UnbondedContacts::stored_energy() const {
   double energy = 0;
-  for (const UnbondedContact& c : contacts_) {
-    if (!(c.overlap > 0)) continue;
-    energy += 0.5 * c.normal_stiffness * c.overlap * c.overlap +
-              0.5 * c.shear_stiffness * dot3(c.spring, c.spring);
-  }
+  for (const UnbondedContact& c : contacts_) energy += contact_energy(c);
   return energy;
 }
 

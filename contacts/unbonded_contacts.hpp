@@ -106,6 +106,13 @@ class UnbondedContacts {
   /// The array indices the last pass wrote (repeats possible).
   const std::vector<int>& touched() const { return touched_; }
 
+  /// What the contact of bond b, broken at the last cycle, takes over from it at state `s` (the
+  /// one after that cycle, with the velocities of the step to it): the energy its first pass will
+  /// hold and dissipate plus half the work its force does over that step. A break releases its
+  /// bond's energy less this (a compressed bond that breaks into a contact as stiff releases no
+  /// normal energy). Does not change the contacts.
+  double handover(int b, const ContactState& s, double dt) const;
+
   /// The skin rule (see the file comment) at state `s`: searches again if it must. Returns the
   /// cycles until the next check.
   long check(const ContactState& s, double dt);

@@ -99,14 +99,13 @@ struct FusedState {
   std::vector<double> partial;
   int parity = 0;  // the buffer holding the current displacements and rotations
   // Breaking: the contacts' forces and which blocks have any; the account's per-particle sums of
-  // - F (v_old + v_new) (prescribed) and damping (v_old + v_new) (free); per block, the energy its
-  // bonds released (the report cycle's apart, not yet counted); per thread, breaks and a flag.
+  // - F (v_old + v_new) (prescribed) and damping (v_old + v_new) (free); per thread, its damage
+  // steps and a flag.
   lanes::Array contact_force[3], contact_torque[3];
   std::vector<std::uint8_t> contact_block;
   lanes::Array work_sum, damping_sum;
-  std::vector<double> released, released_report;
-  std::vector<std::vector<SlotBreak>> thread_breaks;
-  std::vector<int> broke_flags;
+  std::vector<std::vector<SlotEvent>> thread_events;
+  std::vector<int> changed_flags;
 
   std::size_t bytes() const {
     std::size_t arrays = 0;
@@ -119,7 +118,7 @@ struct FusedState {
               damping_sum.bytes();
     return arrays + bonds.bytes() + (order.size() + position.size()) * sizeof(int) + motion.size() +
            classes.size() * sizeof(MotionClass) + partial.size() * sizeof(double) +
-           contact_block.size() + (released.size() + released_report.size()) * sizeof(double);
+           contact_block.size();
   }
 };
 
@@ -219,7 +218,6 @@ template <bool kReport, int kMode>
     Doubles force[3] = {}, torque[3] = {};
     Doubles energy{}, bond_force{};
     if constexpr (kBreaking) {
-      if constexpr (kReport) k.released_report[block] = 0;
       gather_breaking_block<kReport, kSoften, kSlotStrength>(k.bonds, first, state, force, torque,
                                                              energy, bond_force, *a.pass);
       if (k.contact_block[block]) {
@@ -458,8 +456,6 @@ void ExplicitIntegrator::start_breaking() {
     k.contact_block.assign(static_cast<std::size_t>(k.blocks), 0);
     k.work_sum = lanes::Array(padded);
     k.damping_sum = lanes::Array(padded);
-    k.released.assign(static_cast<std::size_t>(k.blocks), 0.0);
-    k.released_report.assign(static_cast<std::size_t>(k.blocks), 0.0);
   } else {
     work_sum_.setZero(n);
     damping_sum_.setZero(n);
@@ -649,9 +645,9 @@ CycleReport ExplicitIntegrator::step(long cycles) {
     initial_energy_ = bond_strain_energy(now, model_.bonds) + 0.5 * kinetic;
     initial_set_ = true;
   }
+  released_ += released_pending_;
+  released_pending_ = 0;
   if (!fused_) {
-    released_ += released_pending_;
-    released_pending_ = 0;
     CycleReport report;
     for (long c = 0; c < cycles; ++c) {
       if (contacts_ && contact_countdown_ <= 0) {
@@ -677,12 +673,6 @@ CycleReport ExplicitIntegrator::step(long cycles) {
     return report;
   }
   FusedState& k = fused_->state;
-  if (breaking_) {
-    for (int b = 0; b < k.blocks; ++b) {
-      k.released[b] += k.released_report[b];
-      k.released_report[b] = 0;
-    }
-  }
   long remaining = cycles;
   while (remaining > 0) {
     if (contacts_ && contact_countdown_ <= 0) {
@@ -701,7 +691,14 @@ CycleReport ExplicitIntegrator::step(long cycles) {
     if (contacts_) contact_countdown_ -= ran;
     for (long c = 0; c < ran; ++c) time_ += dt;
     cycles_ += ran;
-    if (breaking_) merge_breaks();
+    if (breaking_) {
+      std::vector<SlotEvent> events;
+      for (auto& thread : k.thread_events) {
+        events.insert(events.end(), thread.begin(), thread.end());
+        thread.clear();
+      }
+      resolve_events(events, remaining == 0 ? cycles_ - 1 : -1);
+    }
   }
   // Block sums in block order: the report does not depend on the number of threads.
   double sums[kPartials] = {0, 0, 0, 0, 0, 0};
@@ -740,16 +737,17 @@ long ExplicitIntegrator::fused_cycles(long cycles, bool report_last) {
   const int first_parity = k.parity;
   const bool breaking = breaking_;
   const bool contacts = contacts_ && !contacts_->contacts().empty();
-  // Each thread raises its flag for the cycle's parity when a slot of its blocks broke; after the
-  // cycle's barrier every thread reads all flags alike, so all stop after the same cycle (its
-  // breaks are merged, their contacts added, before the next). A flag of parity q is written
+  // Each thread raises its flag for the cycle's parity when a slot of its blocks broke or softened;
+  // after the cycle's barrier every thread reads all flags alike, so all stop after the same cycle
+  // (its steps are resolved against the next state, and the contacts of its breaks added, before
+  // the next cycle). A flag of parity q is written
   // again two cycles later, after every thread has passed the barrier that follows its reads.
   constexpr int kFlagStride = 16;  // one cache line per flag
   const int max_threads = omp_get_max_threads();
   if (breaking) {
-    k.thread_breaks.resize(static_cast<std::size_t>(max_threads));
-    for (auto& b : k.thread_breaks) b.clear();
-    k.broke_flags.assign(static_cast<std::size_t>(2 * max_threads * kFlagStride), 0);
+    k.thread_events.resize(static_cast<std::size_t>(max_threads));
+    for (auto& e : k.thread_events) e.clear();
+    k.changed_flags.assign(static_cast<std::size_t>(2 * max_threads * kFlagStride), 0);
   }
   const long start_cycle = cycles_;
   long ran = cycles;
@@ -761,7 +759,7 @@ long ExplicitIntegrator::fused_cycles(long cycles, bool report_last) {
     const int end = static_cast<int>(blocks * (thread + 1) / threads);
     StepArgs mine = args;
     BreakingPass pass;
-    if (breaking) pass.breaks = &k.thread_breaks[static_cast<std::size_t>(thread)];
+    if (breaking) pass.events = &k.thread_events[static_cast<std::size_t>(thread)];
     mine.pass = &pass;
     for (long s = 0; s < cycles; ++s) {
       mine.parity = static_cast<int>((first_parity + s) & 1);
@@ -785,15 +783,14 @@ long ExplicitIntegrator::fused_cycles(long cycles, bool report_last) {
         }
       }
       pass.cycle = start_cycle + s;
-      pass.broke = false;
-      if (breaking) pass.released = report ? k.released_report.data() : k.released.data();
+      pass.changed = false;
       step_blocks(mine, report, begin, end);
       const std::size_t flags = static_cast<std::size_t>(s & 1) * max_threads;
-      if (breaking) k.broke_flags[(flags + thread) * kFlagStride] = pass.broke ? 1 : 0;
+      if (breaking) k.changed_flags[(flags + thread) * kFlagStride] = pass.changed ? 1 : 0;
 #pragma omp barrier
       if (breaking) {
         bool any = false;
-        for (long t = 0; t < threads; ++t) any |= k.broke_flags[(flags + t) * kFlagStride] != 0;
+        for (long t = 0; t < threads; ++t) any |= k.changed_flags[(flags + t) * kFlagStride] != 0;
         if (any) {
           if (thread == 0) ran = s + 1;
           break;
@@ -829,17 +826,58 @@ void ExplicitIntegrator::log_break(int bond, BondState mode, long cycle,
   }
 }
 
-void ExplicitIntegrator::merge_breaks() {
-  FusedState& k = fused_->state;
-  std::vector<SlotBreak> all;
-  for (auto& thread : k.thread_breaks) {
-    all.insert(all.end(), thread.begin(), thread.end());
-    thread.clear();
-  }
-  std::sort(all.begin(), all.end(), [](const SlotBreak& a, const SlotBreak& b) {
+void ExplicitIntegrator::resolve_events(std::vector<SlotEvent>& events, long report_cycle) {
+  std::sort(events.begin(), events.end(), [](const SlotEvent& a, const SlotEvent& b) {
     return a.cycle != b.cycle ? a.cycle < b.cycle : a.bond < b.bond;
   });
-  for (const SlotBreak& b : all) log_break(b.bond, b.mode, b.cycle, b.displacement);
+  // The state now is the one after each event's cycle (runs stop after a cycle with steps).
+  const Particles& p = model_.particles;
+  const Bonds& bonds = model_.bonds;
+  auto state = [&](int i, int c, bool rotation) {
+    if (!fused_) return rotation ? p.rotation(i, c) : p.displacement(i, c);
+    const FusedState& k = fused_->state;
+    const int j = k.position[i];
+    return rotation ? k.rotation[k.parity][c][j] : k.displacement[k.parity][c][j];
+  };
+  for (const SlotEvent& e : events) {
+    const int b = e.bond, i = bonds.first(b), j = bonds.second(b);
+    double n[3], a[3], dtheta[3], du[3];
+    for (int c = 0; c < 3; ++c) {
+      n[c] = bonds.normal(b, c);
+      a[c] = bonds.lever_first(b) * state(i, c, true) + bonds.lever_second(b) * state(j, c, true);
+      dtheta[c] = state(j, c, true) - state(i, c, true);
+    }
+    for (int c = 0; c < 3; ++c) {
+      const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+      du[c] = (state(j, c, false) - state(i, c, false)) - (a[c1] * n[c2] - a[c2] * n[c1]);
+    }
+    double product = 0;  // q_n K q_n+1
+    for (int c = 0; c < 3; ++c) product += e.force[c] * du[c] + e.moment[c] * dtheta[c];
+    double released = 0.5 * (e.damage_after - e.damage_before) * product;
+    if (e.broken && contacts_) released -= contacts_->handover(b, contact_state(), time_step_);
+    (e.cycle == report_cycle ? released_pending_ : released_) += released;
+    if (e.broken) log_break(b, e.mode, e.cycle, e.displacement);
+  }
+}
+
+ContactState ExplicitIntegrator::contact_state() const {
+  ContactState s;
+  const Particles& p = model_.particles;
+  for (int c = 0; c < 3; ++c) {
+    if (fused_) {
+      const FusedState& k = fused_->state;
+      s.displacement[c] = k.displacement[k.parity][c].data();
+      s.rotation[c] = k.rotation[k.parity][c].data();
+      s.velocity[c] = k.velocity[c].data();
+      s.angular_velocity[c] = k.angular_velocity[c].data();
+    } else {
+      s.displacement[c] = p.displacement.col(c).data();
+      s.rotation[c] = p.rotation.col(c).data();
+      s.velocity[c] = p.velocity.col(c).data();
+      s.angular_velocity[c] = p.angular_velocity.col(c).data();
+    }
+  }
+  return s;
 }
 
 void ExplicitIntegrator::store_bonds() {
@@ -855,11 +893,15 @@ void ExplicitIntegrator::store_bonds() {
         g.holds(first) == g.holds(second) && g.holds(first) == !bonds.is_broken(b) &&
         (!g.softening() || (g.slot_damage()[first] == g.slot_damage()[second] &&
                             g.slot_kappa()[first] == g.slot_kappa()[second]));
-    if (!agree)
+    if (!agree) {
+      const bool soft = g.softening();
       throw Error(fmt::format(
           "internal error: the two ends of bond {} disagree in the fused kernel (held {} and {}, "
-          "model state {})",
-          b, g.holds(first), g.holds(second), bonds.state(b)));
+          "damage {:.17g} and {:.17g}, kappa {:.17g} and {:.17g}, model state {})",
+          b, g.holds(first), g.holds(second), soft ? g.slot_damage()[first] : 0.0,
+          soft ? g.slot_damage()[second] : 0.0, soft ? g.slot_kappa()[first] : 1.0,
+          soft ? g.slot_kappa()[second] : 1.0, bonds.state(b)));
+    }
     if (!g.softening() || !g.holds(first)) continue;
     const double damage = g.slot_damage()[first];
     bonds.damage(b) = damage;
@@ -885,12 +927,11 @@ EnergyAccount ExplicitIntegrator::energy() const {
       work += k.work_sum[i];
       damping += k.damping_sum[i];
     }
-    for (double r : k.released) e.released += r;
   } else {
     work = work_sum_.sum();
     damping = damping_sum_.sum();
-    e.released = released_;
   }
+  e.released = released_;
   e.boundary_work = half_step * work - pending_work_;
   e.damping = half_step * damping - pending_damping_;
   if (contacts_) {
@@ -1108,23 +1149,26 @@ CycleReport ExplicitIntegrator::reference_cycle(bool last) {
     p.torque += contact_torque_;
   }
   // The failure law at this cycle's state; what it decides acts from the next cycle.
+  std::vector<SlotEvent> events;
   if (breaking_) {
     for (int b = 0; b < bonds.size(); ++b) {
       if (bonds.is_broken(b)) continue;
       const BondStrength strength = bond_strength(bonds, b);
       if (!std::isfinite(strength.tensile) && !std::isfinite(strength.cohesion)) continue;
-      const BondDamageUpdate u = update_bond_damage(
-          bond_deformation(p, bonds, b), {intact_[0](b), intact_[1](b), intact_[2](b), intact_[3](b)},
-          strength, bonds.damage(b), kappa_(b));
+      double du[3], dtheta[3];
+      const BondDeformation d = bond_deformation(p, bonds, b, du, dtheta);
+      const BondStiffness intact{intact_[0](b), intact_[1](b), intact_[2](b), intact_[3](b)};
+      const BondDamageUpdate u =
+          update_bond_damage(d, intact, strength, bonds.damage(b), kappa_(b));
       if (!u.changed) continue;
       kappa_(b) = u.kappa;
-      (last ? released_pending_ : released_) += u.released;
-      if (u.broken) {
-        const int i = bonds.first(b);
-        const double displacement[3] = {p.displacement(i, 0), p.displacement(i, 1),
-                                        p.displacement(i, 2)};
-        log_break(b, u.mode, cycles_, displacement);
-      } else {
+      const int i = bonds.first(b);
+      const double displacement[3] = {p.displacement(i, 0), p.displacement(i, 1),
+                                      p.displacement(i, 2)};
+      const double n[3] = {bonds.normal(b, 0), bonds.normal(b, 1), bonds.normal(b, 2)};
+      events.push_back(
+          damage_event(b, cycles_, u, bonds.damage(b), intact, du, dtheta, n, displacement));
+      if (!u.broken) {
         bonds.damage(b) = u.damage;
         bonds.normal_stiffness(b) = (1.0 - u.damage) * intact_[0](b);
         bonds.shear_stiffness(b) = (1.0 - u.damage) * intact_[1](b);
@@ -1180,6 +1224,7 @@ CycleReport ExplicitIntegrator::reference_cycle(bool last) {
     pending_work_ = 0.5 * dt * work_half;
     pending_damping_ = 0.5 * dt * damping_half;
   }
+  if (!events.empty()) resolve_events(events, last ? cycles_ : -1);
   time_ += dt;
   ++cycles_;
   return report;

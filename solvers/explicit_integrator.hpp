@@ -289,7 +289,11 @@ class ExplicitIntegrator {
   void start_breaking();
   void make_contacts();
   long fused_cycles(long cycles, bool report_last);
-  void merge_breaks();
+  // Resolves damage steps against the state after their cycle: the energy each released
+  // (SlotEvent), breaks logged; the steps of `report_cycle` are counted at the next step.
+  void resolve_events(std::vector<SlotEvent>& events, long report_cycle);
+  // The current state as the contacts read it (the kernel's or the model's arrays).
+  ContactState contact_state() const;
   // Writes the fused kernel's bond damage back to the model; throws if two ends disagree.
   void store_bonds();
   void log_break(int bond, BondState mode, long cycle, const double* first_displacement);
