@@ -6,7 +6,10 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <numbers>
 #include <numeric>
+#include <set>
 #include <unordered_map>
 
 #include "contacts/particle_ordering.hpp"
@@ -51,6 +54,7 @@ BondPass compute_bond_forces(Particles& particles, const Bonds& bonds) {
   particles.torque.setZero();
   BondPass pass;
   for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_broken(b)) continue;
     const BondResponse r = evaluate(particles, bonds, b);
     const int i = bonds.first(b);
     const int j = bonds.second(b);
@@ -66,8 +70,28 @@ BondPass compute_bond_forces(Particles& particles, const Bonds& bonds) {
 
 double bond_strain_energy(const Particles& particles, const Bonds& bonds) {
   double energy = 0;
-  for (int b = 0; b < bonds.size(); ++b) energy += evaluate(particles, bonds, b).energy;
+  for (int b = 0; b < bonds.size(); ++b)
+    if (!bonds.is_broken(b)) energy += evaluate(particles, bonds, b).energy;
   return energy;
+}
+
+BondDeformation bond_deformation(const Particles& p, const Bonds& bonds, int b, double* du_out,
+                                 double* dtheta_out) {
+  const int i = bonds.first(b), j = bonds.second(b);
+  const double n[3] = {bonds.normal(b, 0), bonds.normal(b, 1), bonds.normal(b, 2)};
+  const double sigma = 0.5 * (bonds.lever_first(b) + bonds.lever_second(b));
+  const double delta = 0.5 * (bonds.lever_second(b) - bonds.lever_first(b));
+  double dtheta[3], a[3], du[3];
+  for (int c = 0; c < 3; ++c) {
+    dtheta[c] = p.rotation(j, c) - p.rotation(i, c);
+    a[c] = sigma * (p.rotation(i, c) + p.rotation(j, c)) + delta * dtheta[c];
+  }
+  du[0] = (p.displacement(j, 0) - p.displacement(i, 0)) - (a[1] * n[2] - a[2] * n[1]);
+  du[1] = (p.displacement(j, 1) - p.displacement(i, 1)) - (a[2] * n[0] - a[0] * n[2]);
+  du[2] = (p.displacement(j, 2) - p.displacement(i, 2)) - (a[0] * n[1] - a[1] * n[0]);
+  for (int c = 0; c < 3 && du_out; ++c) du_out[c] = du[c];
+  for (int c = 0; c < 3 && dtheta_out; ++c) dtheta_out[c] = dtheta[c];
+  return deformation_of(du, dtheta, n);
 }
 
 namespace {
@@ -93,7 +117,9 @@ std::int64_t bits_of(double x) {
   return b;
 }
 
-using TypeKey = std::array<std::int64_t, 9>;
+// Elastic part (9) and, for breaking, strength radius, tensile strength, cohesion, friction and
+// ductility (exact bits: strengths are copied, not computed, so equal ones are equal to the bit).
+using TypeKey = std::array<std::int64_t, 14>;
 
 struct KeyHash {
   std::size_t operator()(const TypeKey& key) const {
@@ -105,17 +131,51 @@ struct KeyHash {
   }
 };
 
+// The screen's constants of a bond of intact stiffness `f` and strength `s` (HalfBondFailure):
+// alpha, beta and the thresholds T_t, T_c as forces, lowered by kScreenMargin. An unbreakable bond
+// (both strengths infinite) never passes the screen.
+struct ScreenConstants {
+  double displacement = 0;  // alpha
+  double rotation = 0;      // beta
+  double tension = std::numeric_limits<double>::infinity();
+  double shear = std::numeric_limits<double>::infinity();
+};
+
+bool breakable_strength(const BondStrength& s) {
+  return std::isfinite(s.tensile) || std::isfinite(s.cohesion);
+}
+
+ScreenConstants screen_constants(const HalfBondFailure& f, const BondStrength& s) {
+  ScreenConstants c;
+  if (!breakable_strength(s)) return c;
+  const double area = std::numbers::pi * s.radius * s.radius;
+  const double tension = area * s.tensile, shear = area * s.cohesion;  // +inf if never
+  const double bending = kMomentContribution * 4.0 * f.bending_stiffness / s.radius;
+  const double twisting = kMomentContribution * 2.0 * f.twisting_stiffness / s.radius;
+  auto square = [](double x) { return x * x; };
+  c.displacement = 2.0 * std::max(square(f.normal_stiffness / tension),
+                                  square((f.shear_stiffness + s.friction * f.normal_stiffness) /
+                                         shear));
+  c.rotation = 2.0 * std::max(square(bending / tension), square(twisting / shear));
+  c.tension = (1.0 - kScreenMargin) * tension;
+  c.shear = (1.0 - kScreenMargin) * shear;
+  return c;
+}
+
 }  // namespace
 
-GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
+GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
+                         const GatherBreaking& breaking) {
   const int n = static_cast<int>(order.size());
   check_permutation(order, n);
   particles_ = n;
   padded_ = (n + lanes::kCount - 1) / lanes::kCount * lanes::kCount;
   std::vector<int> kernel_index(n);
   for (int k = 0; k < n; ++k) kernel_index[order[k]] = k;
+  breaking_ = breaking.enabled;
+  softening_ = breaking.enabled && breaking.softening;
 
-  // Both ends of every bond, grouped by their own particle (CSR).
+  // Both ends of every intact bond, grouped by their own particle (CSR).
   const int m = bonds.size();
   std::vector<int> offset(n + 1, 0);
   for (int b = 0; b < m; ++b) {
@@ -126,13 +186,31 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
                       "the {} in the model",
                       b, i, j, n));
     }
+    if (bonds.is_broken(b)) continue;
     ++offset[kernel_index[i] + 1];
     ++offset[kernel_index[j] + 1];
   }
   std::partial_sum(offset.begin(), offset.end(), offset.begin());
   std::vector<int> fill(offset.begin(), offset.end() - 1);
-  std::vector<std::int32_t> entry_other(2 * static_cast<std::size_t>(m));
-  std::vector<std::int32_t> entry_type(2 * static_cast<std::size_t>(m));
+  const std::size_t entries_total = static_cast<std::size_t>(offset[n]);
+  std::vector<std::int32_t> entry_other(entries_total);
+  std::vector<std::int32_t> entry_type(entries_total);
+  std::vector<std::int32_t> entry_bond(entries_total);  // 2 b (first end) or 2 b + 1 (second)
+
+  // Strengths per slot when the bonds take too many distinct ones for the types.
+  if (breaking_) {
+    slot_strengths_ = breaking.storage == StrengthStorage::kSlots;
+    if (breaking.storage == StrengthStorage::kAutomatic) {
+      std::set<std::array<std::int64_t, 5>> distinct;
+      for (int b = 0; b < m && static_cast<int>(distinct.size()) <= kMaxTypeStrengths; ++b) {
+        if (bonds.is_broken(b)) continue;
+        distinct.insert({bits_of(bonds.strength_radius(b)), bits_of(bonds.tensile_strength(b)),
+                         bits_of(bonds.cohesion(b)), bits_of(bonds.friction_coefficient(b)),
+                         bits_of(bonds.ductility(b))});
+      }
+      slot_strengths_ = static_cast<int>(distinct.size()) > kMaxTypeStrengths;
+    }
+  }
 
   // The bonds' directions, both senses, if they are few.
   std::vector<Eigen::Vector3d> directions;
@@ -145,6 +223,7 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
   };
   bool few_directions = true;
   for (int b = 0; b < m && few_directions; ++b) {
+    if (bonds.is_broken(b)) continue;
     const Eigen::Vector3d normal = bonds.normal.row(b).matrix().transpose();
     for (const Eigen::Vector3d& sensed : {normal, Eigen::Vector3d(-normal)}) {
       if (find_direction(sensed) >= 0) continue;
@@ -157,45 +236,120 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
   }
   if (!few_directions) directions.clear();
 
+  // Half-bond types, created in mirror pairs: the type of a bond's second end is the exact mirror
+  // image of its first end's (normal negated, levers swapped, the same stiffnesses and strength),
+  // so that both ends compute the same numbers (gather_breaking_block).
   types_.assign(1, HalfBondType{});
+  failure_.assign(1, HalfBondFailure{});
+  std::vector<std::int32_t> mirror(1, 0);
   std::vector<int> type_direction(1, -1);
   std::unordered_map<TypeKey, std::int32_t, KeyHash> type_index;
-  auto type_of = [&](HalfBondType h) {
-    const Eigen::Vector3d normal(h.normal[0], h.normal[1], h.normal[2]);
-    const int d = few_directions ? find_direction(normal) : -1;
-    if (d >= 0) {
-      for (int c = 0; c < 3; ++c) h.normal[c] = directions[d](c);
+  auto direction_of = [&](const double* normal) {
+    return few_directions ? find_direction(Eigen::Vector3d(normal[0], normal[1], normal[2])) : -1;
+  };
+  auto key_of = [&](const HalfBondType& h, int d, const BondStrength& strength) {
+    TypeKey key{d >= 0 ? d : bits_of(h.normal[0]),   d >= 0 ? 0 : bits_of(h.normal[1]),
+                d >= 0 ? 0 : bits_of(h.normal[2]),   quantize_relative(h.lever_own),
+                quantize_relative(h.lever_other),    quantize_relative(h.shear_stiffness),
+                quantize_relative(h.normal_excess),  quantize_relative(h.bending_stiffness),
+                quantize_relative(h.twisting_excess), 0, 0, 0, 0, 0};
+    if (breaking_) {
+      key[9] = bits_of(strength.radius);
+      key[10] = slot_strengths_ ? 0 : bits_of(strength.tensile);
+      key[11] = slot_strengths_ ? 0 : bits_of(strength.cohesion);
+      key[12] = bits_of(strength.friction);
+      key[13] = bits_of(strength.ductility);
     }
+    return key;
+  };
+  auto add_type = [&](const HalfBondType& h, int d, const HalfBondFailure& f) {
+    types_.push_back(h);
+    failure_.push_back(f);
+    type_direction.push_back(d);
+    mirror.push_back(0);
+    return static_cast<std::int32_t>(types_.size() - 1);
+  };
+  auto failure_data = [&](const HalfBondType& h, const BondStiffness& k,
+                          const BondStrength& strength) {
+    HalfBondFailure f;
+    if (!breaking_) return f;
+    f.lever_mean = 0.5 * (h.lever_own + h.lever_other);
+    f.lever_half_difference = 0.5 * (h.lever_other - h.lever_own);
+    f.normal_stiffness = k.normal;
+    f.shear_stiffness = k.shear;
+    f.bending_stiffness = k.bending;
+    f.twisting_stiffness = k.twisting;
+    f.strength = strength;
+    f.shear_stiffness_squared = k.shear * k.shear;
+    f.tension_threshold = f.shear_threshold = std::numeric_limits<double>::infinity();
+    if (breakable_strength(strength)) {
+      const double bending = kMomentContribution * 4.0 * k.bending / strength.radius;
+      f.bending_factor = bending * bending;
+      f.twisting_factor = kMomentContribution * 2.0 * k.twisting / strength.radius;
+      f.shear_friction = (1.0 - kScreenMargin) * strength.friction;
+    }
+    if (!slot_strengths_) {
+      const ScreenConstants c = screen_constants(f, strength);
+      f.screen_displacement = c.displacement;
+      f.screen_rotation = c.rotation;
+      f.tension_threshold = c.tension;
+      f.shear_threshold = c.shear;
+    }
+    return f;
+  };
+  auto mirrored = [](HalfBondType h) {
+    for (double& x : h.normal) x = -x;
+    std::swap(h.lever_own, h.lever_other);
     h.lever_shear = h.lever_own * h.shear_stiffness;
-    const TypeKey key{d >= 0 ? d : bits_of(h.normal[0]),   d >= 0 ? 0 : bits_of(h.normal[1]),
-                      d >= 0 ? 0 : bits_of(h.normal[2]),   quantize_relative(h.lever_own),
-                      quantize_relative(h.lever_other),    quantize_relative(h.shear_stiffness),
-                      quantize_relative(h.normal_excess),  quantize_relative(h.bending_stiffness),
-                      quantize_relative(h.twisting_excess)};
-    const auto [it, inserted] =
-        type_index.try_emplace(key, static_cast<std::int32_t>(types_.size()));
-    if (inserted) {
-      types_.push_back(h);
-      type_direction.push_back(d);
-    }
-    return it->second;
+    return h;
   };
   for (int b = 0; b < m; ++b) {
+    if (bonds.is_broken(b)) continue;
     const int i = kernel_index[bonds.first(b)], j = kernel_index[bonds.second(b)];
+    // Intact stiffnesses for breaking (the arrays hold (1 - damage) times them).
+    const double scale = breaking_ ? 1.0 / (1.0 - bonds.damage(b)) : 1.0;
+    BondStiffness k;
+    k.normal = scale * bonds.normal_stiffness(b);
+    k.shear = scale * bonds.shear_stiffness(b);
+    k.bending = scale * bonds.bending_stiffness(b);
+    k.twisting = scale * bonds.twisting_stiffness(b);
     HalfBondType h;
-    h.shear_stiffness = bonds.shear_stiffness(b);
-    h.normal_excess = bonds.normal_stiffness(b) - bonds.shear_stiffness(b);
-    h.bending_stiffness = bonds.bending_stiffness(b);
-    h.twisting_excess = bonds.twisting_stiffness(b) - bonds.bending_stiffness(b);
+    h.shear_stiffness = k.shear;
+    h.normal_excess = k.normal - k.shear;
+    h.bending_stiffness = k.bending;
+    h.twisting_excess = k.twisting - k.bending;
     for (int c = 0; c < 3; ++c) h.normal[c] = bonds.normal(b, c);
     h.lever_own = bonds.lever_first(b);
     h.lever_other = bonds.lever_second(b);
+    const int d = direction_of(h.normal);
+    if (d >= 0)
+      for (int c = 0; c < 3; ++c) h.normal[c] = directions[d](c);
+    h.lever_shear = h.lever_own * h.shear_stiffness;
+    const HalfBondType h_mirror = mirrored(h);
+    const int d_mirror = direction_of(h_mirror.normal);
+    const BondStrength strength = breaking_ ? bond_strength(bonds, b) : BondStrength{};
+    const TypeKey key = key_of(h, d, strength), key_mirror = key_of(h_mirror, d_mirror, strength);
+    std::int32_t t_first = 0, t_second = 0;
+    if (const auto it = type_index.find(key); it != type_index.end()) {
+      t_first = it->second;
+      t_second = mirror[t_first];
+    } else if (const auto jt = type_index.find(key_mirror); jt != type_index.end()) {
+      t_second = jt->second;
+      t_first = mirror[t_second];
+    } else {
+      t_first = add_type(h, d, failure_data(h, k, strength));
+      t_second = add_type(h_mirror, d_mirror, failure_data(h_mirror, k, strength));
+      mirror[t_first] = t_second;
+      mirror[t_second] = t_first;
+    }
+    type_index.try_emplace(key, t_first);
+    type_index.try_emplace(key_mirror, t_second);
     entry_other[fill[i]] = j;
-    entry_type[fill[i]++] = type_of(h);
-    for (double& x : h.normal) x = -x;
-    std::swap(h.lever_own, h.lever_other);
+    entry_bond[fill[i]] = 2 * b;
+    entry_type[fill[i]++] = t_first;
     entry_other[fill[j]] = i;
-    entry_type[fill[j]++] = type_of(h);
+    entry_bond[fill[j]] = 2 * b + 1;
+    entry_type[fill[j]++] = t_second;
   }
 
   // Lattice slots: one slot per direction, numbered by angle (so that the slot order does not
@@ -230,6 +384,8 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
   const std::size_t cells = static_cast<std::size_t>(width_) * padded_;
   neighbour_.resize(cells);
   type_.assign(cells, 0);
+  slot_bond_.assign(cells, -1);
+  bond_cells_.assign(static_cast<std::size_t>(m), {-1, -1});
   for (int s = 0; s < width_; ++s)
     std::iota(neighbour_.begin() + static_cast<std::ptrdiff_t>(s) * padded_,
               neighbour_.begin() + static_cast<std::ptrdiff_t>(s + 1) * padded_, 0);
@@ -247,11 +403,14 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
       const std::size_t cell = static_cast<std::size_t>(slot) * padded_ + k;
       neighbour_[cell] = entry_other[e];
       type_[cell] = entry_type[e];
+      slot_bond_[cell] = entry_bond[e];
+      bond_cells_[entry_bond[e] >> 1][entry_bond[e] & 1] = static_cast<std::int64_t>(cell);
     }
   }
 
   // The types blocks share, repeated across the lanes.
   uniform_.assign(1, HalfBondLanes{});
+  failure_uniform_.assign(1, HalfBondFailureLanes{});
   std::vector<std::int32_t> uniform_index(types_.size(), 0);
   auto uniform_of = [&](std::int32_t t) {
     if (uniform_index[t] == 0) {
@@ -267,6 +426,20 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
       lanes::broadcast(h.twisting_excess, v.twisting_excess);
       uniform_index[t] = static_cast<std::int32_t>(uniform_.size());
       uniform_.push_back(v);
+      const HalfBondFailure& f = failure_[t];
+      HalfBondFailureLanes w;
+      lanes::broadcast(f.lever_mean, w.lever_mean);
+      lanes::broadcast(f.lever_half_difference, w.lever_half_difference);
+      lanes::broadcast(f.normal_stiffness, w.normal_stiffness);
+      lanes::broadcast(f.screen_displacement, w.screen_displacement);
+      lanes::broadcast(f.screen_rotation, w.screen_rotation);
+      lanes::broadcast(f.tension_threshold, w.tension_threshold);
+      lanes::broadcast(f.shear_threshold, w.shear_threshold);
+      lanes::broadcast(f.shear_friction, w.shear_friction);
+      lanes::broadcast(f.bending_factor, w.bending_factor);
+      lanes::broadcast(f.twisting_factor, w.twisting_factor);
+      lanes::broadcast(f.shear_stiffness_squared, w.shear_stiffness_squared);
+      failure_uniform_.push_back(w);
     }
     return uniform_index[t];
   };
@@ -283,6 +456,44 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order) {
       block_run_[cell] = block_run_of(b, s);
     }
   }
+  if (!breaking_) failure_.assign(1, HalfBondFailure{});  // the elastic kernel reads none
+  if (!breaking_) failure_uniform_.assign(1, HalfBondFailureLanes{});
+
+  // Per-slot strengths and softening state, both ends of a bond alike.
+  if (slot_strengths_) {
+    slot_alpha_ = lanes::Array(cells);
+    slot_beta_ = lanes::Array(cells);
+    slot_tension_ = lanes::Array(cells);
+    slot_shear_ = lanes::Array(cells);
+    slot_tensile_.assign(cells, 0.0);
+    slot_cohesion_.assign(cells, 0.0);
+  }
+  if (softening_) {
+    slot_damage_ = lanes::Array(cells);
+    slot_kappa_ = lanes::Array(cells);
+  }
+  for (int b = 0; b < m && (slot_strengths_ || softening_); ++b) {
+    if (bonds.is_broken(b)) continue;
+    const BondStrength strength = bond_strength(bonds, b);
+    const ScreenConstants screen = screen_constants(failure_[type_[bond_cells_[b][0]]], strength);
+    const double kappa =
+        bonds.damage(b) > 0 ? softening_ratio(bonds.damage(b), strength.ductility) : 1.0;
+    for (const std::int64_t c : bond_cells_[b]) {
+      const auto cell = static_cast<std::size_t>(c);
+      if (slot_strengths_) {
+        slot_alpha_[cell] = screen.displacement;
+        slot_beta_[cell] = screen.rotation;
+        slot_tension_[cell] = screen.tension;
+        slot_shear_[cell] = screen.shear;
+        slot_tensile_[cell] = strength.tensile;
+        slot_cohesion_[cell] = strength.cohesion;
+      }
+      if (softening_) {
+        slot_damage_[cell] = bonds.damage(b);
+        slot_kappa_[cell] = kappa;
+      }
+    }
+  }
 }
 
 std::int32_t GatherBonds::block_run_of(int block, int slot) const {
@@ -290,6 +501,51 @@ std::int32_t GatherBonds::block_run_of(int block, int slot) const {
   bool consecutive = other[0] + lanes::kCount <= padded_;
   for (int l = 1; l < lanes::kCount; ++l) consecutive &= other[l] == other[0] + l;
   return consecutive ? other[0] : -1;
+}
+
+void GatherBonds::clear_slot(int own, int s) {
+  const std::size_t c = cell(s, own);
+  type_[c] = 0;
+  neighbour_[c] = own;
+  if (softening_) slot_damage_[c] = 1.0;
+  // The block's slot was uniform or mixed; with one lane now empty it is mixed, or empty if no
+  // lane has a bond left (a uniform type needs every lane to hold it).
+  const int block = own / lanes::kCount;
+  const std::int32_t* type = types(s) + block * lanes::kCount;
+  bool empty = true;
+  for (int l = 0; l < lanes::kCount; ++l) empty &= type[l] == 0;
+  const std::size_t block_cell = static_cast<std::size_t>(block) * width_ + s;
+  block_type_[block_cell] = empty ? 0 : -1;
+  block_run_[block_cell] = block_run_of(block, s);
+}
+
+void assess_slot(GatherBonds& g, int k, int slot, const double du[3], const double dtheta[3],
+                 const double n[3], const double u_own[3], BreakingPass& pass) {
+  const std::size_t cell = g.cell(slot, k);
+  if (!g.holds(cell)) return;
+  const HalfBondFailure& f = g.failure(g.types(slot)[k]);
+  BondStrength strength = f.strength;
+  if (g.slot_strengths()) {
+    strength.tensile = g.slot_tensile_strength(cell);
+    strength.cohesion = g.slot_cohesion(cell);
+  }
+  const double damage = g.softening() ? g.slot_damage()[cell] : 0.0;
+  const double kappa = g.softening() ? g.slot_kappa()[cell] : 1.0;
+  const BondStiffness intact{f.normal_stiffness, f.shear_stiffness, f.bending_stiffness,
+                             f.twisting_stiffness};
+  const BondDamageUpdate u =
+      update_bond_damage(deformation_of(du, dtheta, n), intact, strength, damage, kappa);
+  if (!u.changed) return;
+  if (g.softening()) {
+    g.slot_damage()[cell] = u.damage;
+    g.slot_kappa()[cell] = u.kappa;
+  }
+  if (u.broken) g.clear_slot(k, slot);
+  pass.changed = true;
+  const std::int32_t bond = g.slot_bond(cell);
+  if ((bond & 1) == 0)
+    pass.events->push_back(
+        damage_event(bond >> 1, pass.cycle, u, damage, intact, du, dtheta, n, u_own));
 }
 
 void GatherBonds::drop_bond(int first, int second) {
@@ -306,28 +562,21 @@ void GatherBonds::drop_bond(int first, int second) {
     throw Error(fmt::format("kernel particles {} and {} have no bond to drop", first, second));
   };
   const int slots[2] = {slot_of(first, second), slot_of(second, first)};
-  const int ends[2] = {first, second};
-  for (int e = 0; e < 2; ++e) {
-    const int own = ends[e], s = slots[e];
-    const std::size_t cell = static_cast<std::size_t>(s) * padded_ + own;
-    type_[cell] = 0;
-    neighbour_[cell] = own;
-    // The block's slot was uniform or mixed; with one lane now empty it is mixed, or empty if no
-    // lane has a bond left (a uniform type needs every lane to hold it).
-    const int block = own / lanes::kCount;
-    const std::int32_t* type = types(s) + block * lanes::kCount;
-    bool empty = true;
-    for (int l = 0; l < lanes::kCount; ++l) empty &= type[l] == 0;
-    const std::size_t block_cell = static_cast<std::size_t>(block) * width_ + s;
-    block_type_[block_cell] = empty ? 0 : -1;
-    block_run_[block_cell] = block_run_of(block, s);
-  }
+  clear_slot(first, slots[0]);
+  clear_slot(second, slots[1]);
 }
 
 std::size_t GatherBonds::bytes() const {
-  return (neighbour_.size() + type_.size() + block_type_.size() + block_run_.size()) *
+  return (neighbour_.size() + type_.size() + block_type_.size() + block_run_.size() +
+          slot_bond_.size()) *
              sizeof(std::int32_t) +
-         types_.size() * sizeof(HalfBondType) + uniform_.size() * sizeof(HalfBondLanes);
+         types_.size() * sizeof(HalfBondType) + uniform_.size() * sizeof(HalfBondLanes) +
+         failure_.size() * sizeof(HalfBondFailure) +
+         failure_uniform_.size() * sizeof(HalfBondFailureLanes) +
+         bond_cells_.size() * sizeof(bond_cells_[0]) + slot_alpha_.bytes() + slot_beta_.bytes() +
+         slot_tension_.bytes() + slot_shear_.bytes() +
+         (slot_tensile_.size() + slot_cohesion_.size()) * sizeof(double) + slot_damage_.bytes() +
+         slot_kappa_.bytes();
 }
 
 }  // namespace plydem

@@ -16,15 +16,27 @@
 ///
 /// Free functions over arrays, no virtual call per bond, so that strategies and experiments never
 /// see how the kernel is laid out.
+///
+/// Breaking (core/bond_failure.hpp). A GatherBonds built with breaking on also keeps, per half-bond
+/// type, what the failure law needs (HalfBondFailure), and gather_breaking_block decides, at every
+/// cycle, whether each bond breaks or softens, from the deformation it has just computed for the
+/// force. Both ends of a bond decide alike because they compute the same numbers (see "Both ends
+/// alike" at gather_breaking_block), so each particle clears its own slot and no thread writes
+/// another's memory. The reference loop decides through the same scalar functions
+/// (bond_deformation, update_bond_damage).
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <new>
 #include <vector>
 
+#include "core/bond_failure.hpp"
 #include "core/model.hpp"
 #include "core/parallel_bond.hpp"
 
@@ -41,11 +53,110 @@ struct BondPass {
 
 /// Sets particles.force and particles.torque to the bond forces and moments at the current
 /// displacements and rotations (external loads are added by the caller afterwards). The reference
-/// implementation: one pass over the bonds, each adding to both of its particles.
+/// implementation: one pass over the bonds, each adding to both of its particles. A broken bond
+/// (Bonds::is_broken) carries nothing.
 BondPass compute_bond_forces(Particles& particles, const Bonds& bonds);
 
-/// The bonds' strain energy at the current state [J], without touching forces.
+/// The bonds' strain energy at the current state [J], without touching forces (broken bonds hold
+/// none).
 double bond_strain_energy(const Particles& particles, const Bonds& bonds);
+
+/// A bond's deformation as the failure law reads it: the four magnitudes the section stresses
+/// depend on (core/bond_failure.hpp), the same seen from either end.
+struct BondDeformation {
+  double normal = 0;  ///< du_n = n.du, extension positive [m]
+  double shear = 0;   ///< |du - du_n n| [m]
+  double twist = 0;   ///< dtheta_n [rad]
+  double bend = 0;    ///< |dtheta - dtheta_n n| [rad]
+};
+
+/// A bond's intact stiffnesses (its current ones are 1 - damage times these).
+struct BondStiffness {
+  double normal = 0;     ///< k_n [N/m]
+  double shear = 0;      ///< k_s [N/m]
+  double bending = 0;    ///< k_b [N m/rad]
+  double twisting = 0;   ///< k_t [N m/rad]
+};
+
+/// The deformation from the contact point's relative displacement `du`, the relative rotation
+/// `dtheta` and the unit normal `n`, as seen from one end. Seen from the other end all three are
+/// negated exactly, and the result is the same to the bit: every product keeps its value
+/// ((-a)(-b) = ab), every difference is negated (RN(-x) = -RN(x)), and du_n, the norms and the
+/// sums are computed in the same order, with or without fused multiply-adds.
+[[gnu::always_inline]] inline BondDeformation deformation_of(const double du[3],
+                                                             const double dtheta[3],
+                                                             const double n[3]) {
+  BondDeformation d;
+  d.normal = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
+  d.twist = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
+  double shear2 = 0, bend2 = 0;
+  for (int c = 0; c < 3; ++c) {
+    const double s = du[c] - d.normal * n[c];
+    const double b = dtheta[c] - d.twist * n[c];
+    shear2 += s * s;
+    bend2 += b * b;
+  }
+  d.shear = std::sqrt(shear2);
+  d.bend = std::sqrt(bend2);
+  return d;
+}
+
+/// Bond b's deformation at the particles' current state, for the reference loop. The lever term
+/// (s_i theta_i + s_j theta_j) x n is written as (sigma (theta_i + theta_j) + delta (theta_j -
+/// theta_i)) x n with sigma = (s_i + s_j) / 2 and delta = (s_j - s_i) / 2, the form the fused kernel
+/// computes from either end alike (gather_breaking_block). With `du_out` and `dtheta_out`, also
+/// writes du and dtheta there.
+BondDeformation bond_deformation(const Particles& particles, const Bonds& bonds, int b,
+                                 double* du_out = nullptr, double* dtheta_out = nullptr);
+
+/// What the failure law does to one bond at one cycle (update_bond_damage).
+struct BondDamageUpdate {
+  bool changed = false;  ///< damage or kappa moved
+  bool broken = false;   ///< the bond breaks: damage 1, state = mode, from the next cycle on
+  BondState mode = BondState::kIntact;
+  double damage = 0;       ///< after this cycle
+  double kappa = 1;        ///< largest utilisation so far (softening), after this cycle
+  double utilisation = 0;  ///< U at this cycle (intact-equivalent stresses)
+};
+
+/// The one failure law applied to a bond of intact stiffnesses `intact`, damage `damage` and
+/// softening history `kappa` (1 for a bond that never softened) at deformation `d`: the section
+/// stresses with the current stiffness (1 - damage) x intact (section_stresses), made
+/// intact-equivalent (intact_stresses), their utilisation() against `strength`. A brittle bond
+/// (ductility 1) breaks at U >= 1 in the mode utilisation() names; a softening one raises kappa
+/// to U when U > kappa, takes damage softening_damage(kappa, ductility), and breaks when it
+/// reaches 1. Both kernels decide through this function.
+inline BondDamageUpdate update_bond_damage(const BondDeformation& d, const BondStiffness& intact,
+                                           const BondStrength& strength, double damage,
+                                           double kappa) {
+  const double remaining = 1.0 - damage;
+  const BondStresses current = section_stresses(
+      (remaining * intact.normal) * d.normal, (remaining * intact.shear) * d.shear,
+      (remaining * intact.bending) * d.bend, (remaining * intact.twisting) * std::abs(d.twist),
+      strength.radius);
+  const BondUtilisation u = utilisation(intact_stresses(current, damage), strength);
+  BondDamageUpdate r;
+  r.damage = damage;
+  r.kappa = kappa;
+  r.utilisation = u.ratio;
+  if (!(strength.ductility > 1)) {
+    if (u.mode != BondState::kIntact) {
+      r.changed = r.broken = true;
+      r.mode = u.mode;
+      r.damage = 1;
+    }
+  } else if (u.ratio > kappa) {
+    r.changed = true;
+    r.kappa = u.ratio;
+    r.damage = softening_damage(u.ratio, strength.ductility);
+    if (r.damage >= 1) {
+      r.broken = true;
+      r.mode = u.mode;  // U >= ductility >= 1: tension or shear
+      r.damage = 1;
+    }
+  }
+  return r;
+}
 
 /// SIMD lanes: GCC vector extensions, which the compiler lowers to the instruction set of the
 /// function being compiled (one AVX-512 register, two AVX2 registers, four SSE2 registers). Values
@@ -85,6 +196,16 @@ using Mask = std::int64_t __attribute__((vector_size(kCount * sizeof(double))));
   double s = 0;
   for (int l = 0; l < kCount; ++l) s += v[l];
   return s;
+}
+/// Whether any lane of a comparison's result is set.
+[[gnu::always_inline]] inline bool any(const Mask& m) {
+  std::int64_t a = 0;
+  for (int l = 0; l < kCount; ++l) a |= m[l];
+  return a != 0;
+}
+/// |v|, lane by lane (the sign bit cleared).
+[[gnu::always_inline]] inline void abs(const Doubles& v, Doubles& out) {
+  out = (Doubles)((Mask)v & ~(Mask{} + std::numeric_limits<std::int64_t>::min()));
 }
 
 /// A 64-byte aligned, zero-initialized array of doubles whose size is a whole number of lanes.
@@ -141,6 +262,72 @@ struct alignas(64) HalfBondLanes {
       bending_stiffness, twisting_excess;
 };
 
+/// What breaking adds to a half-bond type (a GatherBonds built with breaking on). The lever term
+/// of du is computed as (sigma (theta_own + theta_other) + delta (theta_other - theta_own)) x n,
+/// which both ends of a bond evaluate to the same number (gather_breaking_block). The screen
+/// constants let the kernel skip the failure law for bonds far from their strength:
+///  - alpha |du|^2 + beta |dtheta|^2 >= 1 whenever U >= 1 (a bound: |du_n|, |du_s| <= |du|,
+///    (x + y)^2 <= 2 (x^2 + y^2)), with alpha = 2 max(k_n^2 / T_t^2, (k_s + tan(phi) k_n)^2 / T_c^2),
+///    beta = 2 max((4 k_b / R)^2 / T_t^2, (2 k_t / R)^2 / T_c^2), T_t = A sigma_c and T_c = A c
+///    the section's strengths as forces; it holds for U >= kappa >= 1 too;
+///  - then, lane by lane, the tension and shear tests of core/bond_failure.hpp without square
+///    roots (F_n + (4/R)|M_b| >= kappa T_t as (kappa T_t - F_n)^2 <= (4/R)^2 |M_b|^2, and so on),
+///    against thresholds lowered by kScreenMargin, and only where one holds the exact law
+///    (update_bond_damage).
+/// All stiffnesses here are intact ones (a softening bond's current ones are 1 - damage times).
+struct HalfBondFailure {
+  double lever_mean = 0;             ///< sigma = (s_own + s_other) / 2 [m]
+  double lever_half_difference = 0;  ///< delta = (s_other - s_own) / 2 [m]
+  double normal_stiffness = 0;       ///< intact k_n [N/m]
+  double shear_stiffness = 0;        ///< intact k_s [N/m]
+  double bending_stiffness = 0;      ///< intact k_b [N m/rad]
+  double twisting_stiffness = 0;     ///< intact k_t [N m/rad]
+  /// The bond's strength; with strengths kept per slot, tensile and cohesion are the slot's.
+  BondStrength strength;
+  double screen_displacement = 0;  ///< alpha [1/m^2] (strengths per type)
+  double screen_rotation = 0;      ///< beta [1/rad^2] (strengths per type)
+  double tension_threshold = 0;    ///< (1 - kScreenMargin) T_t [N] (strengths per type)
+  double shear_threshold = 0;      ///< (1 - kScreenMargin) T_c [N] (strengths per type)
+  double shear_friction = 0;       ///< (1 - kScreenMargin) tan(phi)
+  double bending_factor = 0;       ///< (4 k_b / R)^2 [N^2/rad^2]; 0 for an unbreakable bond
+  double twisting_factor = 0;      ///< 2 k_t / R [N/rad]; 0 for an unbreakable bond
+  double shear_stiffness_squared = 0;  ///< k_s^2
+};
+
+/// How far below its strength the kernel's screen starts asking the exact law (relative): it
+/// covers the rounding between the screen's vector arithmetic and the scalar law's.
+inline constexpr double kScreenMargin = 1e-9;
+/// The first screen's bound is compared with 1 - kScreenBound.
+inline constexpr double kScreenBound = 1e-6;
+
+/// HalfBondFailure's kernel fields repeated in all lanes (a block whose particles share a type).
+struct alignas(64) HalfBondFailureLanes {
+  lanes::Doubles lever_mean, lever_half_difference, normal_stiffness, screen_displacement,
+      screen_rotation, tension_threshold, shear_threshold, shear_friction, bending_factor,
+      twisting_factor, shear_stiffness_squared;
+};
+
+/// Where a breaking GatherBonds keeps the bonds' strengths.
+enum class StrengthStorage {
+  /// Per type where the bonds take at most kMaxTypeStrengths distinct strengths (bond families
+  /// with uniform strengths), else per slot.
+  kAutomatic,
+  kTypes,  ///< in the half-bond types: a bond of its own strength is a type of its own
+  kSlots,  ///< tensile strength and cohesion (and the screen's constants) in per-slot arrays
+};
+
+/// The most distinct bond strengths StrengthStorage::kAutomatic keeps in the types.
+inline constexpr int kMaxTypeStrengths = 64;
+
+/// What a GatherBonds keeps for breaking.
+struct GatherBreaking {
+  bool enabled = false;
+  /// Per-slot damage and kappa, scaling the slot's stiffness: needed when a bond may soften
+  /// (ductility > 1) or starts damaged.
+  bool softening = false;
+  StrengthStorage storage = StrengthStorage::kAutomatic;
+};
+
 /// The bonds in gather form for particles numbered in "kernel order" (see the constructor),
 /// padded to whole blocks of lanes::kCount particles. Slot s of kernel particle k holds the other
 /// end `neighbours(s)[k]` (a kernel index) and the half-bond type `types(s)[k]`; type 0 is the
@@ -155,8 +342,13 @@ class GatherBonds {
  public:
   GatherBonds() = default;
   /// `order[k]` = model index of kernel particle k; throws plydem::Error unless it is a
-  /// permutation of the particles, or if a bond refers to a missing particle.
-  GatherBonds(const Bonds& bonds, const std::vector<int>& order);
+  /// permutation of the particles, or if a bond refers to a missing particle. Broken bonds
+  /// (Bonds::is_broken) get no slot. The two half-bond types of a bond are exact mirror images
+  /// (normal negated, levers swapped, the same stiffnesses and strength), so that both ends
+  /// compute the same numbers. With `breaking.enabled` the types hold intact stiffnesses
+  /// (current / (1 - damage)) and the failure data (HalfBondFailure), and every slot knows its
+  /// bond (slot_bond).
+  GatherBonds(const Bonds& bonds, const std::vector<int>& order, const GatherBreaking& breaking = {});
 
   int particle_count() const { return particles_; }
   /// Particles rounded up to whole lane blocks; the padding particles have no bonds.
@@ -193,6 +385,42 @@ class GatherBonds {
   /// without the bond. Throws plydem::Error if the two particles have no bond.
   void drop_bond(int first, int second);
 
+  // --- breaking (a table built with GatherBreaking::enabled) ---
+  bool breaking() const { return breaking_; }
+  bool softening() const { return softening_; }
+  bool slot_strengths() const { return slot_strengths_; }
+  const HalfBondFailure& failure(int t) const { return failure_[t]; }
+  HalfBondFailure& failure(int t) { return failure_[t]; }
+  /// The failure lanes of uniform type u (the same index as uniform_lanes).
+  const HalfBondFailureLanes& failure_lanes(int u) const { return failure_uniform_[u]; }
+  /// The cell of slot s of kernel particle k in the per-slot arrays: s * padded_count() + k.
+  std::size_t cell(int slot, int k) const { return static_cast<std::size_t>(slot) * padded_ + k; }
+  /// The model bond of a cell, 2 b for the bond's first end and 2 b + 1 for its second; -1 for a
+  /// cell that never held a bond.
+  std::int32_t slot_bond(std::size_t cell) const { return slot_bond_[cell]; }
+  /// The cells of bond b's first and second ends (-1 if the bond has no slot: it was broken when
+  /// the table was built).
+  std::array<std::int64_t, 2> bond_cells(int b) const { return bond_cells_[b]; }
+  /// Whether a cell still holds its bond.
+  bool holds(std::size_t cell) const { return type_[cell] != 0; }
+  /// Strengths per slot (slot_strengths()): the screen's alpha, beta and thresholds, and the
+  /// tensile strength and cohesion the exact law reads, per cell.
+  const double* slot_screen_displacement() const { return slot_alpha_.data(); }
+  const double* slot_screen_rotation() const { return slot_beta_.data(); }
+  const double* slot_tension_threshold() const { return slot_tension_.data(); }
+  const double* slot_shear_threshold() const { return slot_shear_.data(); }
+  double slot_tensile_strength(std::size_t cell) const { return slot_tensile_[cell]; }
+  double slot_cohesion(std::size_t cell) const { return slot_cohesion_[cell]; }
+  /// Softening (softening()): per cell, the bond's damage and kappa as this end holds them.
+  double* slot_damage() { return slot_damage_.data(); }
+  const double* slot_damage() const { return slot_damage_.data(); }
+  double* slot_kappa() { return slot_kappa_.data(); }
+  const double* slot_kappa() const { return slot_kappa_.data(); }
+  /// Empties slot `slot` of kernel particle `own` (type 0, neighbour = own, damage 1) and updates
+  /// its block's block_types() and block_runs() for that slot. Touches only `own`'s block, so the
+  /// thread that owns the block may call it while others run theirs.
+  void clear_slot(int own, int slot);
+
  private:
   // block_runs() of one block and slot, from the neighbours.
   std::int32_t block_run_of(int block, int slot) const;
@@ -207,6 +435,15 @@ class GatherBonds {
   std::vector<std::int32_t> block_type_;  // [block * width + slot]
   std::vector<HalfBondLanes> uniform_;    // [0] unused
   std::vector<std::int32_t> block_run_;   // [block * width + slot]
+  // Breaking.
+  bool breaking_ = false, softening_ = false, slot_strengths_ = false;
+  std::vector<HalfBondFailure> failure_;                // [type]
+  std::vector<HalfBondFailureLanes> failure_uniform_;  // [uniform type]
+  std::vector<std::int32_t> slot_bond_;                 // [cell]
+  std::vector<std::array<std::int64_t, 2>> bond_cells_;  // [model bond]
+  lanes::Array slot_alpha_, slot_beta_, slot_tension_, slot_shear_;  // [cell], strengths per slot
+  std::vector<double> slot_tensile_, slot_cohesion_;                 // [cell], strengths per slot
+  lanes::Array slot_damage_, slot_kappa_;                            // [cell], softening
 };
 
 /// Displacements and rotations in kernel order: component c of particle k is `displacement[c][k]`.
@@ -313,6 +550,271 @@ template <bool kEnergy>
       // instructions as the others (cycle() and advance(n) agree to the bit).
       const Doubles f2 = k_s * k_s * du2 + normal_part * (2.0 * k_s * du_n + normal_part);
       for (int l = 0; l < kLanes; ++l) force_norm[l] += 0.5 * __builtin_sqrt(f2[l]);
+    }
+  }
+}
+
+/// A damage step (a break, or a softening step) that a bond's first end decided. The energy the
+/// step releases needs the bond's deformation at the next state: with q the deformation and K the
+/// intact stiffness, a step from damage d to d' decided at q_n (acting from n + 1) takes
+/// 1/2 (d' - d) q_n.K q_n+1 out of the leapfrog account exactly (the trapezoidal work of the bond
+/// over the step, less its change of energy). The event keeps K q_n for that.
+struct SlotEvent {
+  int bond = 0;    ///< model bond
+  long cycle = 0;  ///< BreakingPass::cycle of the pass
+  bool broken = false;
+  BondState mode = BondState::kIntact;  ///< how it broke
+  double damage_before = 0, damage_after = 0;
+  double force[3] = {0, 0, 0};   ///< intact force k_n du_n n + k_s du_s on the first end at q_n
+  double moment[3] = {0, 0, 0};  ///< intact moment k_t dtheta_n n + k_b dtheta_s at q_n
+  double displacement[3] = {0, 0, 0};  ///< of the bond's first particle, at q_n's state
+};
+
+/// The event of a bond whose first end saw `update` at deformation (du, dtheta) along n with
+/// intact stiffnesses `k` (both kernels build them alike).
+inline SlotEvent damage_event(int bond, long cycle, const BondDamageUpdate& update,
+                              double damage_before, const BondStiffness& k, const double du[3],
+                              const double dtheta[3], const double n[3],
+                              const double displacement[3]) {
+  SlotEvent e;
+  e.bond = bond;
+  e.cycle = cycle;
+  e.broken = update.broken;
+  e.mode = update.mode;
+  e.damage_before = damage_before;
+  e.damage_after = update.damage;
+  const double du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
+  const double dt_n = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
+  for (int c = 0; c < 3; ++c) {
+    e.force[c] = k.normal * du_n * n[c] + k.shear * (du[c] - du_n * n[c]);
+    e.moment[c] = k.twisting * dt_n * n[c] + k.bending * (dtheta[c] - dt_n * n[c]);
+    e.displacement[c] = displacement[c];
+  }
+  return e;
+}
+
+/// What one thread's breaking pass writes besides forces.
+struct BreakingPass {
+  std::vector<SlotEvent>* events = nullptr;  ///< this thread's damage steps (first ends only)
+  long cycle = 0;
+  bool changed = false;  ///< a slot of this pass broke or softened (either end)
+};
+
+/// The exact failure law (update_bond_damage) for slot `slot` of kernel particle `k`, at the
+/// deformation the kernel computed (du, dtheta and n of that end, as gather_breaking_block has
+/// them): updates the slot's damage and kappa (softening), clears the slot if the bond breaks
+/// (GatherBonds::clear_slot), and, at the bond's first end, logs the step in `pass`. `u_own` is
+/// k's displacement.
+void assess_slot(GatherBonds& g, int k, int slot, const double du[3], const double dtheta[3],
+                 const double n[3], const double u_own[3], BreakingPass& pass);
+
+/// The second screen of gather_breaking_block (see HalfBondFailure), for the lanes `near` of one
+/// slot, and the exact law where it holds.
+template <bool kSoften, bool kSlotStrength>
+[[gnu::always_inline]] inline void screen_slot(
+    GatherBonds& g, int first, int slot, std::int32_t uniform_type, const lanes::Doubles (&n)[3],
+    const lanes::Doubles (&du)[3], const lanes::Doubles (&dt)[3], const lanes::Doubles& du_n,
+    const lanes::Doubles& dt_n, const lanes::Doubles (&n_cross_du)[3], const lanes::Doubles& du2,
+    const lanes::Doubles& dt2, const lanes::Mask& near, const lanes::Doubles (&u_i)[3],
+    BreakingPass& pass) {
+  using lanes::Doubles;
+  using lanes::Mask;
+  constexpr int kLanes = lanes::kCount;
+  Doubles k_n{}, tension{}, shear{}, friction{}, bending{}, twisting{}, shear_stiffness2{};
+  if (uniform_type > 0) {
+    const HalfBondFailureLanes& f = g.failure_lanes(uniform_type);
+    k_n = f.normal_stiffness;
+    tension = f.tension_threshold;
+    shear = f.shear_threshold;
+    friction = f.shear_friction;
+    bending = f.bending_factor;
+    twisting = f.twisting_factor;
+    shear_stiffness2 = f.shear_stiffness_squared;
+  } else {
+    const std::int32_t* type = g.types(slot) + first;
+    for (int l = 0; l < kLanes; ++l) {
+      const HalfBondFailure& f = g.failure(type[l]);
+      k_n[l] = f.normal_stiffness;
+      tension[l] = f.tension_threshold;
+      shear[l] = f.shear_threshold;
+      friction[l] = f.shear_friction;
+      bending[l] = f.bending_factor;
+      twisting[l] = f.twisting_factor;
+      shear_stiffness2[l] = f.shear_stiffness_squared;
+    }
+  }
+  const std::size_t cell = g.cell(slot, first);
+  if constexpr (kSlotStrength) {
+    lanes::load(g.slot_tension_threshold() + cell, tension);
+    lanes::load(g.slot_shear_threshold() + cell, shear);
+  }
+  Doubles kappa = Doubles{} + 1.0;
+  if constexpr (kSoften) lanes::load(g.slot_kappa() + cell, kappa);
+  // The squared norms of du_s = n x du (no cancellation) and dtheta_s, each raised by a slack of
+  // 1e-12 |.|^2 that covers the rounding of the scalar law's own du - du_n n.
+  constexpr double kSlack = 1e-12;
+  const Doubles zero{};
+  const Doubles f_n = k_n * du_n;
+  const Doubles shear2 = n_cross_du[0] * n_cross_du[0] + n_cross_du[1] * n_cross_du[1] +
+                         n_cross_du[2] * n_cross_du[2] + kSlack * du2;
+  const Doubles bend2 = (1.0 + kSlack) * dt2 - dt_n * dt_n;
+  // Tension: F_n + (4/R) |M_b| >= kappa T_t. Shear: |F_s| + (2/R) |M_t| >= kappa (T_c - tan(phi)
+  // F_n).
+  const Doubles x = kappa * tension - f_n;
+  const Mask tension_near = (x <= zero) | (bending * bend2 >= x * x);
+  Doubles twist;
+  lanes::abs(dt_n, twist);
+  const Doubles y = kappa * (shear - friction * f_n) - twisting * twist;
+  const Mask shear_near = (y <= zero) | (shear_stiffness2 * shear2 >= y * y);
+  const Mask check = near & (tension_near | shear_near);
+  if (!lanes::any(check)) return;
+  for (int l = 0; l < kLanes; ++l) {
+    if (!check[l]) continue;
+    const double du_l[3] = {du[0][l], du[1][l], du[2][l]};
+    const double dt_l[3] = {dt[0][l], dt[1][l], dt[2][l]};
+    const double n_l[3] = {n[0][l], n[1][l], n[2][l]};
+    const double u_l[3] = {u_i[0][l], u_i[1][l], u_i[2][l]};
+    assess_slot(g, first + l, slot, du_l, dt_l, n_l, u_l, pass);
+  }
+}
+
+/// gather_bond_block with breaking: the same forces (from 1 - damage times the intact stiffnesses
+/// where bonds soften, kSoften), then the screens of HalfBondFailure and, where they hold, the
+/// exact law (assess_slot), which may clear a slot of this block: the break acts from the next
+/// cycle. kSlotStrength: strengths per slot (StrengthStorage::kSlots).
+///
+/// Both ends alike. Seen from the other end, a bond's type is the exact mirror image (n -> -n,
+/// s_own <-> s_other; GatherBonds) and its state arrives swapped (u_i <-> u_j, theta_i <->
+/// theta_j). The kernel computes dtheta = theta_j - theta_i (negated exactly: RN(b - a) =
+/// -RN(a - b)), a = sigma (theta_i + theta_j) + delta dtheta with sigma = (s_own + s_other) / 2
+/// (unchanged: addition commutes) and delta = (s_other - s_own) / 2 (negated), so both products
+/// keep their values and a is the same number from either end, however the compiler fuses the
+/// multiply-adds (the written form s_own theta_i + s_other theta_j would not be: a fused
+/// multiply-add rounds one product and not the other). Then a x n and u_j - u_i are negated
+/// exactly, so du is, and du_n = n.du, dtheta_n, |du|^2, |dtheta|^2 are sums of the same products
+/// in the same order: the screens see the same numbers and deformation_of() returns the same
+/// deformation at both ends. The exact law then gets the same inputs (the mirror types hold the
+/// same stiffnesses and strength, both slots the same damage and kappa, updated alike every
+/// cycle), so both ends decide alike, cycle by cycle, with no communication between them; the
+/// integrator checks it when it writes the table back (and tests compare the ends bit for bit).
+template <bool kEnergy, bool kSoften, bool kSlotStrength>
+[[gnu::always_inline]] inline void gather_breaking_block(
+    GatherBonds& g, int first, const GatherState& s, lanes::Doubles (&force)[3],
+    lanes::Doubles (&torque)[3], lanes::Doubles& energy, lanes::Doubles& force_norm,
+    BreakingPass& pass) {
+  using lanes::Doubles;
+  using lanes::Mask;
+  constexpr int kLanes = lanes::kCount;
+  Doubles u_i[3], t_i[3];
+  for (int c = 0; c < 3; ++c) {
+    lanes::load(s.displacement[c] + first, u_i[c]);
+    lanes::load(s.rotation[c] + first, t_i[c]);
+  }
+  const int block = first / kLanes;
+  const std::int32_t* block_type = g.block_types(block);
+  const std::int32_t* block_run = g.block_runs(block);
+  const Doubles screen_bound = Doubles{} + (1.0 - kScreenBound);
+  for (int slot = 0; slot < g.width(); ++slot) {
+    const std::int32_t uniform_type = block_type[slot];
+    if (uniform_type == 0) continue;
+
+    Doubles u_j[3], t_j[3];
+    const std::int32_t run = block_run[slot];
+    if (run >= 0) {
+      for (int c = 0; c < 3; ++c) {
+        lanes::load_unaligned(s.displacement[c] + run, u_j[c]);
+        lanes::load_unaligned(s.rotation[c] + run, t_j[c]);
+      }
+    } else {
+      const std::int32_t* other = g.neighbours(slot) + first;
+      for (int c = 0; c < 3; ++c) {
+        lanes::gather(s.displacement[c], other, u_j[c]);
+        lanes::gather(s.rotation[c], other, t_j[c]);
+      }
+    }
+    Doubles n[3] = {}, sigma{}, delta{}, k_s{}, s_k_s{}, k_n_excess{}, k_b{}, k_t_excess{},
+            alpha{}, beta{};
+    if (uniform_type > 0) {
+      const HalfBondLanes& h = g.uniform_lanes(uniform_type);
+      const HalfBondFailureLanes& f = g.failure_lanes(uniform_type);
+      for (int c = 0; c < 3; ++c) n[c] = h.normal[c];
+      sigma = f.lever_mean;
+      delta = f.lever_half_difference;
+      k_s = h.shear_stiffness;
+      s_k_s = h.lever_shear;
+      k_n_excess = h.normal_excess;
+      k_b = h.bending_stiffness;
+      k_t_excess = h.twisting_excess;
+      if constexpr (!kSlotStrength) {
+        alpha = f.screen_displacement;
+        beta = f.screen_rotation;
+      }
+    } else {
+      const std::int32_t* type = g.types(slot) + first;
+      for (int l = 0; l < kLanes; ++l) {
+        const HalfBondType& h = g.type(type[l]);
+        const HalfBondFailure& f = g.failure(type[l]);
+        for (int c = 0; c < 3; ++c) n[c][l] = h.normal[c];
+        sigma[l] = f.lever_mean;
+        delta[l] = f.lever_half_difference;
+        k_s[l] = h.shear_stiffness;
+        s_k_s[l] = h.lever_shear;
+        k_n_excess[l] = h.normal_excess;
+        k_b[l] = h.bending_stiffness;
+        k_t_excess[l] = h.twisting_excess;
+        if constexpr (!kSlotStrength) {
+          alpha[l] = f.screen_displacement;
+          beta[l] = f.screen_rotation;
+        }
+      }
+    }
+    if constexpr (kSlotStrength) {
+      lanes::load(g.slot_screen_displacement() + g.cell(slot, first), alpha);
+      lanes::load(g.slot_screen_rotation() + g.cell(slot, first), beta);
+    }
+    if constexpr (kSoften) {
+      Doubles damage;
+      lanes::load(g.slot_damage() + g.cell(slot, first), damage);
+      const Doubles remaining = 1.0 - damage;
+      k_s = remaining * k_s;
+      s_k_s = remaining * s_k_s;
+      k_n_excess = remaining * k_n_excess;
+      k_b = remaining * k_b;
+      k_t_excess = remaining * k_t_excess;
+    }
+    // du = (u_j - u_i) - a x n with a = sigma (theta_i + theta_j) + delta dtheta (see above).
+    Doubles dt[3], a[3], du[3];
+    for (int c = 0; c < 3; ++c) dt[c] = t_j[c] - t_i[c];
+    for (int c = 0; c < 3; ++c) a[c] = sigma * (t_i[c] + t_j[c]) + delta * dt[c];
+    du[0] = (u_j[0] - u_i[0]) - (a[1] * n[2] - a[2] * n[1]);
+    du[1] = (u_j[1] - u_i[1]) - (a[2] * n[0] - a[0] * n[2]);
+    du[2] = (u_j[2] - u_i[2]) - (a[0] * n[1] - a[1] * n[0]);
+    const Doubles du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
+    const Doubles normal_part = k_n_excess * du_n;
+    for (int c = 0; c < 3; ++c) {
+      force[c] += k_s * du[c];
+      force[c] += normal_part * n[c];
+    }
+    const Doubles n_cross_du[3] = {n[1] * du[2] - n[2] * du[1], n[2] * du[0] - n[0] * du[2],
+                                   n[0] * du[1] - n[1] * du[0]};
+    const Doubles dt_n = n[0] * dt[0] + n[1] * dt[1] + n[2] * dt[2];
+    const Doubles twist_part = k_t_excess * dt_n;
+    for (int c = 0; c < 3; ++c) {
+      torque[c] += s_k_s * n_cross_du[c];
+      torque[c] += k_b * dt[c];
+      torque[c] += twist_part * n[c];
+    }
+    const Doubles du2 = du[0] * du[0] + du[1] * du[1] + du[2] * du[2];
+    const Doubles dt2 = dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2];
+    if constexpr (kEnergy) {
+      energy += 0.25 * (k_s * du2 + normal_part * du_n + k_b * dt2 + twist_part * dt_n);
+      const Doubles f2 = k_s * k_s * du2 + normal_part * (2.0 * k_s * du_n + normal_part);
+      for (int l = 0; l < kLanes; ++l) force_norm[l] += 0.5 * __builtin_sqrt(f2[l]);
+    }
+    const Mask near = alpha * du2 + beta * dt2 >= screen_bound;
+    if (__builtin_expect(lanes::any(near), 0)) {
+      screen_slot<kSoften, kSlotStrength>(g, first, slot, uniform_type, n, du, dt, du_n, dt_n,
+                                          n_cross_du, du2, dt2, near, u_i, pass);
     }
   }
 }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <numeric>
 
 #include "contacts/bond_kernel.hpp"
 #include "contacts/particle_ordering.hpp"
@@ -61,20 +62,14 @@ void validate(const ExplicitSettings& settings) {
       fmt::format("time-step safety factor must lie in (0, 1], got {}", settings.safety_factor));
   require(std::isfinite(settings.time_step) && settings.time_step >= 0,
           fmt::format("time step must be >= 0 (0 = automatic), got {}", settings.time_step));
+  settings.contact.validate();
+  require(settings.strength_storage == StrengthStorage::kAutomatic ||
+              settings.strength_storage == StrengthStorage::kTypes ||
+              settings.strength_storage == StrengthStorage::kSlots,
+          "the strength storage is no StrengthStorage");
 }
 
 namespace {
-
-// Central-difference update of one degree of freedom with PFC local damping; returns the
-// leapfrog kinetic-energy product m v_old v_new.
-inline double advance_dof(double& u, double& v, double force, double inertia, double dt,
-                          double alpha) {
-  const double damped = force - alpha * std::abs(force) * (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0));
-  const double v_old = v;
-  v += dt * damped / inertia;
-  u += dt * v;
-  return inertia * v_old * v;
-}
 
 // What a prescribed motion does to a particle of its group: per component, a mask (-1 fixed,
 // 0 free) and the imposed value.
@@ -99,24 +94,50 @@ struct FusedState {
   lanes::Array inverse_mass, inverse_inertia;  // padding particles: 1, and they never move
   std::vector<std::uint8_t> motion;            // class per particle; 0 = free
   std::vector<MotionClass> classes;
-  std::vector<double> partial;  // per block: energy, bond force norm, 2 x kinetic, unbalanced
-  int parity = 0;               // the buffer holding the current displacements and rotations
+  // Per block: energy, bond force norm, 2 x kinetic, unbalanced, and the account's second halves
+  // of the report cycle: - F . v(n+1/2) (prescribed), damping . v(n+1/2) (free).
+  std::vector<double> partial;
+  int parity = 0;  // the buffer holding the current displacements and rotations
+  // Breaking: the contacts' forces and which blocks have any; the account's per-particle sums of
+  // - F (v_old + v_new) (prescribed) and damping (v_old + v_new) (free); per thread, its damage
+  // steps and a flag.
+  lanes::Array contact_force[3], contact_torque[3];
+  std::vector<std::uint8_t> contact_block;
+  lanes::Array work_sum, damping_sum;
+  std::vector<std::vector<SlotEvent>> thread_events;
+  std::vector<int> changed_flags;
 
   std::size_t bytes() const {
     std::size_t arrays = 0;
     for (int b = 0; b < 2; ++b)
       for (int c = 0; c < 3; ++c) arrays += displacement[b][c].bytes() + rotation[b][c].bytes();
-    for (int c = 0; c < 3; ++c) arrays += velocity[c].bytes() + angular_velocity[c].bytes();
-    arrays += inverse_mass.bytes() + inverse_inertia.bytes();
+    for (int c = 0; c < 3; ++c)
+      arrays += velocity[c].bytes() + angular_velocity[c].bytes() + contact_force[c].bytes() +
+                contact_torque[c].bytes();
+    arrays += inverse_mass.bytes() + inverse_inertia.bytes() + work_sum.bytes() +
+              damping_sum.bytes();
     return arrays + bonds.bytes() + (order.size() + position.size()) * sizeof(int) + motion.size() +
-           classes.size() * sizeof(MotionClass) + partial.size() * sizeof(double);
+           classes.size() * sizeof(MotionClass) + partial.size() * sizeof(double) +
+           contact_block.size();
   }
 };
 
-constexpr int kPartials = 4;
+constexpr int kPartials = 6;
+
+// The fused step's variants: elastic, or breaking with strengths per type or per slot, brittle or
+// softening.
+enum KernelMode : int {
+  kElasticMode = 0,
+  kBrittleTypes = 1,
+  kBrittleSlots = 2,
+  kSofteningTypes = 3,
+  kSofteningSlots = 4
+};
 
 struct StepArgs {
   FusedState* state = nullptr;
+  int mode = kElasticMode;
+  BreakingPass* pass = nullptr;
   int parity = 0;
   double dt = 0;
   double alpha = 0;
@@ -134,25 +155,51 @@ struct StepArgs {
                                                  const lanes::Mask& fixed,
                                                  const lanes::Doubles& imposed, double dt,
                                                  double alpha, lanes::Doubles& u, lanes::Doubles& v,
-                                                 lanes::Doubles& v_old) {
+                                                 lanes::Doubles& v_old, lanes::Doubles& damping) {
   using lanes::Doubles;
   using lanes::Mask;
   const Mask sign_bit = Mask{} + std::numeric_limits<std::int64_t>::min();
   const Doubles magnitude = (Doubles)((Mask)force & ~sign_bit);
   const Doubles push = alpha * magnitude;
   const Doubles signed_push = (Doubles)((Mask)push | ((Mask)v & sign_bit));
-  const Doubles damping = v == Doubles{} ? Doubles{} : signed_push;
+  damping = v == Doubles{} ? Doubles{} : signed_push;
   v_old = v;
   const Doubles free = v + dt_over_inertia * (force - damping);
   v = (Doubles)(((Mask)imposed & fixed) | ((Mask)free & ~fixed));  // bitwise select: no branches
   u += dt * v;
 }
 
+// One component's share of the energy account: damping (v_old + v_new) where it is free, and
+// - F (v_old + v_new) where it is prescribed (blocks with prescribed particles only), and the
+// second halves (v_new alone) on the report cycle.
 template <bool kReport>
+[[gnu::always_inline]] inline void account_lanes(const lanes::Doubles& f,
+                                                 const lanes::Doubles& damping,
+                                                 const lanes::Doubles& v_old,
+                                                 const lanes::Doubles& v, const lanes::Mask& fixed,
+                                                 bool prescribed, lanes::Doubles& damping_sum,
+                                                 lanes::Doubles& work_sum,
+                                                 lanes::Doubles& damping_half,
+                                                 lanes::Doubles& work_half) {
+  using lanes::Doubles;
+  using lanes::Mask;
+  const Doubles both = v_old + v;
+  damping_sum += (Doubles)((Mask)(damping * both) & ~fixed);
+  if (prescribed) work_sum -= (Doubles)((Mask)(f * both) & fixed);
+  if constexpr (kReport) {
+    damping_half += (Doubles)((Mask)(damping * v) & ~fixed);
+    if (prescribed) work_half -= (Doubles)((Mask)(f * v) & fixed);
+  }
+}
+
+template <bool kReport, int kMode>
 [[gnu::always_inline]] inline void step_range(const StepArgs& a, int begin_block, int end_block) {
   using lanes::Doubles;
   using lanes::Mask;
   constexpr int kLanes = lanes::kCount;
+  constexpr bool kBreaking = kMode != kElasticMode;
+  constexpr bool kSoften = kMode == kSofteningTypes || kMode == kSofteningSlots;
+  constexpr bool kSlotStrength = kMode == kBrittleSlots || kMode == kSofteningSlots;
   FusedState& k = *a.state;
   const int in = a.parity, out = 1 - a.parity;
   const GatherState state{
@@ -170,7 +217,21 @@ template <bool kReport>
     const int first = block * kLanes;
     Doubles force[3] = {}, torque[3] = {};
     Doubles energy{}, bond_force{};
-    gather_bond_block<kReport>(k.bonds, first, state, force, torque, energy, bond_force);
+    if constexpr (kBreaking) {
+      gather_breaking_block<kReport, kSoften, kSlotStrength>(k.bonds, first, state, force, torque,
+                                                             energy, bond_force, *a.pass);
+      if (k.contact_block[block]) {
+        for (int c = 0; c < 3; ++c) {
+          Doubles f, m;
+          lanes::load(k.contact_force[c].data() + first, f);
+          lanes::load(k.contact_torque[c].data() + first, m);
+          force[c] += f;
+          torque[c] += m;
+        }
+      }
+    } else {
+      gather_bond_block<kReport>(k.bonds, first, state, force, torque, energy, bond_force);
+    }
 
     // Prescribed motions of the block's particles (most blocks hold free particles only).
     Mask fix_v[3] = {}, fix_w[3] = {};
@@ -196,21 +257,43 @@ template <bool kReport>
     const Doubles dt_over_mass = a.dt * inverse_mass;
     const Doubles dt_over_inertia = a.dt * inverse_inertia;
     Doubles kinetic{};
+    // The account (breaking kernel): sums of damping (v_old + v_new) over free components and of
+    // - F (v_old + v_new) over prescribed ones, and the report cycle's second halves.
+    Doubles damping_sum{}, work_sum{}, damping_half{}, work_half{};
     for (int c = 0; c < 3; ++c) {
-      Doubles u, v, v_old;
+      Doubles u, v, v_old, damping;
       lanes::load(state.displacement[c] + first, u);
       lanes::load(vel[c] + first, v);
-      advance_lanes(force[c], dt_over_mass, fix_v[c], imposed_v[c], a.dt, a.alpha, u, v, v_old);
+      advance_lanes(force[c], dt_over_mass, fix_v[c], imposed_v[c], a.dt, a.alpha, u, v, v_old,
+                    damping);
       lanes::store(next_u[c] + first, u);
       lanes::store(vel[c] + first, v);
       if constexpr (kReport) kinetic += (Doubles)((Mask)(v_old / inverse_mass * v) & ~fix_v[c]);
+      if constexpr (kBreaking)
+        account_lanes<kReport>(force[c], damping, v_old, v, fix_v[c], classes != 0, damping_sum,
+                               work_sum, damping_half, work_half);
 
       lanes::load(state.rotation[c] + first, u);
       lanes::load(ang[c] + first, v);
-      advance_lanes(torque[c], dt_over_inertia, fix_w[c], imposed_w[c], a.dt, a.alpha, u, v, v_old);
+      advance_lanes(torque[c], dt_over_inertia, fix_w[c], imposed_w[c], a.dt, a.alpha, u, v, v_old,
+                    damping);
       lanes::store(next_t[c] + first, u);
       lanes::store(ang[c] + first, v);
       if constexpr (kReport) kinetic += (Doubles)((Mask)(v_old / inverse_inertia * v) & ~fix_w[c]);
+      if constexpr (kBreaking)
+        account_lanes<kReport>(torque[c], damping, v_old, v, fix_w[c], classes != 0, damping_sum,
+                               work_sum, damping_half, work_half);
+    }
+    if constexpr (kBreaking) {
+      Doubles sum;
+      lanes::load(k.damping_sum.data() + first, sum);
+      sum += damping_sum;
+      lanes::store(k.damping_sum.data() + first, sum);
+      if (classes != 0) {
+        lanes::load(k.work_sum.data() + first, sum);
+        sum += work_sum;
+        lanes::store(k.work_sum.data() + first, sum);
+      }
     }
     if constexpr (kReport) {
       const Doubles f2 = force[0] * force[0] + force[1] * force[1] + force[2] * force[2];
@@ -230,16 +313,38 @@ template <bool kReport>
       partial[1] = lanes::sum(bond_force);
       partial[2] = lanes::sum(kinetic);
       partial[3] = unbalanced;
+      partial[4] = lanes::sum(work_half);
+      partial[5] = lanes::sum(damping_half);
     }
+  }
+}
+
+template <bool kReport>
+[[gnu::always_inline]] inline void step_mode(const StepArgs& a, int begin_block, int end_block) {
+  switch (a.mode) {
+    case kBrittleTypes:
+      step_range<kReport, kBrittleTypes>(a, begin_block, end_block);
+      break;
+    case kBrittleSlots:
+      step_range<kReport, kBrittleSlots>(a, begin_block, end_block);
+      break;
+    case kSofteningTypes:
+      step_range<kReport, kSofteningTypes>(a, begin_block, end_block);
+      break;
+    case kSofteningSlots:
+      step_range<kReport, kSofteningSlots>(a, begin_block, end_block);
+      break;
+    default:
+      step_range<kReport, kElasticMode>(a, begin_block, end_block);
   }
 }
 
 PLYDEM_TARGET_CLONES void step_blocks(const StepArgs& a, bool report, int begin_block,
                                       int end_block) {
   if (report) {
-    step_range<true>(a, begin_block, end_block);
+    step_mode<true>(a, begin_block, end_block);
   } else {
-    step_range<false>(a, begin_block, end_block);
+    step_mode<false>(a, begin_block, end_block);
   }
 }
 
@@ -256,7 +361,41 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     : model_(model), settings_(settings) {
   validate(settings);
   model.check_consistency();
-  const double critical = critical_time_step(model);
+  // The bonds' intact stiffnesses (the arrays hold 1 - damage times them; unknown, 0, for a bond
+  // that came broken), and what the model asks of the kernel.
+  const Bonds& bonds = model.bonds;
+  for (Eigen::ArrayXd& k : intact_) k.setZero(bonds.size());
+  kappa_.setOnes(bonds.size());
+  bool broken = false, damaged = false, softening = false;
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_broken(b)) {
+      broken = true;
+      continue;
+    }
+    const double scale = 1.0 / (1.0 - bonds.damage(b));
+    intact_[0](b) = scale * bonds.normal_stiffness(b);
+    intact_[1](b) = scale * bonds.shear_stiffness(b);
+    intact_[2](b) = scale * bonds.bending_stiffness(b);
+    intact_[3](b) = scale * bonds.twisting_stiffness(b);
+    damaged |= bonds.damage(b) > 0;
+    const bool breakable = std::isfinite(bonds.tensile_strength(b)) || std::isfinite(bonds.cohesion(b));
+    softening |= breakable && bonds.ductility(b) > 1;
+    if (bonds.damage(b) > 0) kappa_(b) = softening_ratio(bonds.damage(b), bonds.ductility(b));
+  }
+  breaking_ = bonds.breakable() || broken || settings.energy_account;
+  softening_ = breaking_ && (softening || damaged);
+  // A damaged or broken bond's contact is as stiff as the intact bond: the time step is theirs.
+  double critical = 0;
+  if (broken || damaged) {
+    Model intact = model;
+    intact.bonds.normal_stiffness = intact_[0];
+    intact.bonds.shear_stiffness = intact_[1];
+    intact.bonds.bending_stiffness = intact_[2];
+    intact.bonds.twisting_stiffness = intact_[3];
+    critical = critical_time_step(intact);
+  } else {
+    critical = critical_time_step(model);
+  }
   if (settings.time_step > 0) {
     require(settings.time_step <= critical,
             fmt::format("time step {:.3e} s exceeds the critical time step {:.3e} s: the explicit "
@@ -273,7 +412,8 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     k.order = kernel_order(model, settings.particle_order);
     k.position.assign(k.order.size(), 0);
     for (std::size_t i = 0; i < k.order.size(); ++i) k.position[k.order[i]] = static_cast<int>(i);
-    k.bonds = GatherBonds(model.bonds, k.order);
+    k.bonds =
+        GatherBonds(model.bonds, k.order, {breaking_, softening_, settings.strength_storage});
     k.particles = p.size();
     const int padded = k.bonds.padded_count();
     k.blocks = padded / lanes::kCount;
@@ -298,6 +438,61 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     k.partial.assign(static_cast<std::size_t>(k.blocks) * kPartials, 0.0);
   }
   set_prescribed_motions({});
+  if (breaking_) start_breaking();
+}
+
+void ExplicitIntegrator::start_breaking() {
+  breaking_ = true;
+  const int n = model_.particles.size();
+  if (fused_) {
+    FusedState& k = fused_->state;
+    if (!k.bonds.breaking())
+      k.bonds = GatherBonds(model_.bonds, k.order, {true, softening_, settings_.strength_storage});
+    const int padded = k.bonds.padded_count();
+    for (int c = 0; c < 3; ++c) {
+      k.contact_force[c] = lanes::Array(padded);
+      k.contact_torque[c] = lanes::Array(padded);
+    }
+    k.contact_block.assign(static_cast<std::size_t>(k.blocks), 0);
+    k.work_sum = lanes::Array(padded);
+    k.damping_sum = lanes::Array(padded);
+  } else {
+    work_sum_.setZero(n);
+    damping_sum_.setZero(n);
+    contact_force_.setZero(n, 3);
+    contact_torque_.setZero(n, 3);
+  }
+  initial_set_ = false;
+  make_contacts();
+}
+
+void ExplicitIntegrator::make_contacts() {
+  if (!settings_.contacts) return;
+  const Particles& p = model_.particles;
+  std::vector<int> index(static_cast<std::size_t>(p.size()));
+  ContactState s;
+  if (fused_) {
+    if (!running_) load_kernel();
+    FusedState& k = fused_->state;
+    index = k.position;
+    for (int c = 0; c < 3; ++c) {
+      s.displacement[c] = k.displacement[k.parity][c].data();
+      s.rotation[c] = k.rotation[k.parity][c].data();
+      s.velocity[c] = k.velocity[c].data();
+      s.angular_velocity[c] = k.angular_velocity[c].data();
+    }
+  } else {
+    std::iota(index.begin(), index.end(), 0);
+    for (int c = 0; c < 3; ++c) {
+      s.displacement[c] = p.displacement.col(c).data();
+      s.rotation[c] = p.rotation.col(c).data();
+      s.velocity[c] = p.velocity.col(c).data();
+      s.angular_velocity[c] = p.angular_velocity.col(c).data();
+    }
+  }
+  contacts_ = std::make_unique<UnbondedContacts>(model_, intact_[0], intact_[1], std::move(index),
+                                                 settings_.contact, s);
+  contact_countdown_ = 0;
 }
 
 ExplicitIntegrator::~ExplicitIntegrator() = default;
@@ -432,47 +627,82 @@ void ExplicitIntegrator::store_kernel() {
 }
 
 CycleReport ExplicitIntegrator::step(long cycles) {
+  const double dt = time_step_;
+  if (breaking_ && !initial_set_) {
+    // The account starts from the energy the state holds before its first cycle.
+    Particles now = model_.particles;
+    std::vector<int> all(static_cast<std::size_t>(now.size()));
+    std::iota(all.begin(), all.end(), 0);
+    gather(all, now);
+    double kinetic = 0;
+    for (int i = 0; i < now.size(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        if (!fixed_velocity_(i, c)) kinetic += now.mass(i) * now.velocity(i, c) * now.velocity(i, c);
+        if (!fixed_angular_velocity_(i, c))
+          kinetic += now.moment_of_inertia(i) * now.angular_velocity(i, c) *
+                     now.angular_velocity(i, c);
+      }
+    initial_energy_ = bond_strain_energy(now, model_.bonds) + 0.5 * kinetic;
+    initial_set_ = true;
+  }
+  released_ += released_pending_;
+  released_pending_ = 0;
   if (!fused_) {
     CycleReport report;
     for (long c = 0; c < cycles; ++c) {
-      if (c + 1 == cycles) {
+      if (contacts_ && contact_countdown_ <= 0) {
+        const Particles& p = model_.particles;
+        ContactState s;
+        for (int q = 0; q < 3; ++q) {
+          s.displacement[q] = p.displacement.col(q).data();
+          s.rotation[q] = p.rotation.col(q).data();
+          s.velocity[q] = p.velocity.col(q).data();
+          s.angular_velocity[q] = p.angular_velocity.col(q).data();
+        }
+        contact_countdown_ = contacts_->check(s, dt);
+      }
+      const bool last = c + 1 == cycles;
+      if (last) {
         previous_displacement_ = model_.particles.displacement;
         previous_rotation_ = model_.particles.rotation;
       }
-      report = reference_cycle();
+      if (contacts_) --contact_countdown_;
+      report = reference_cycle(last);
     }
+    if (breaking_) last_report_ = report;
     return report;
   }
   FusedState& k = fused_->state;
-  Particles& p = model_.particles;
-  StepArgs args;
-  args.state = &k;
-  args.dt = time_step_;
-  args.alpha = settings_.local_damping;
-  for (int c = 0; c < 3; ++c) {
-    args.force_out[c] = p.force.col(c).data();
-    args.torque_out[c] = p.torque.col(c).data();
-  }
-  args.partial = k.partial.data();
-  const int blocks = k.blocks;
-  const int first_parity = k.parity;
-#pragma omp parallel if (blocks >= 2 * kMinBlocksPerThread)
-  {
-    const long threads = omp_get_num_threads();
-    const long thread = omp_get_thread_num();
-    const int begin = static_cast<int>(blocks * thread / threads);
-    const int end = static_cast<int>(blocks * (thread + 1) / threads);
-    StepArgs mine = args;
-    for (long s = 0; s < cycles; ++s) {
-      mine.parity = static_cast<int>((first_parity + s) & 1);
-      step_blocks(mine, s + 1 == cycles, begin, end);
-#pragma omp barrier
+  long remaining = cycles;
+  while (remaining > 0) {
+    if (contacts_ && contact_countdown_ <= 0) {
+      ContactState s;
+      for (int c = 0; c < 3; ++c) {
+        s.displacement[c] = k.displacement[k.parity][c].data();
+        s.rotation[c] = k.rotation[k.parity][c].data();
+        s.velocity[c] = k.velocity[c].data();
+        s.angular_velocity[c] = k.angular_velocity[c].data();
+      }
+      contact_countdown_ = contacts_->check(s, dt);
+    }
+    const long chunk = contacts_ ? std::min(remaining, contact_countdown_) : remaining;
+    const long ran = fused_cycles(chunk, chunk == remaining);
+    remaining -= ran;
+    if (contacts_) contact_countdown_ -= ran;
+    for (long c = 0; c < ran; ++c) time_ += dt;
+    cycles_ += ran;
+    if (breaking_) {
+      std::vector<SlotEvent> events;
+      for (auto& thread : k.thread_events) {
+        events.insert(events.end(), thread.begin(), thread.end());
+        thread.clear();
+      }
+      resolve_events(events, remaining == 0 ? cycles_ - 1 : -1);
     }
   }
-  k.parity = static_cast<int>((first_parity + cycles) & 1);
   // Block sums in block order: the report does not depend on the number of threads.
-  double sums[kPartials] = {0, 0, 0, 0};
-  for (int b = 0; b < blocks; ++b)
+  double sums[kPartials] = {0, 0, 0, 0, 0, 0};
+  for (int b = 0; b < k.blocks; ++b)
     for (int q = 0; q < kPartials; ++q)
       sums[q] += k.partial[static_cast<std::size_t>(b) * kPartials + q];
   CycleReport report;
@@ -481,9 +711,258 @@ CycleReport ExplicitIntegrator::step(long cycles) {
   const double mean_bond_force = sums[1] / std::max(1, model_.bonds.size());
   report.unbalanced_force_ratio =
       mean_bond_force > 0 ? sums[3] / std::max(1, free_particles_) / mean_bond_force : 0.0;
-  for (long c = 0; c < cycles; ++c) time_ += time_step_;
-  cycles_ += cycles;
+  if (breaking_) {
+    last_report_ = report;
+    pending_work_ = 0.5 * dt * sums[4];
+    pending_damping_ = 0.5 * dt * sums[5];
+  }
   return report;
+}
+
+long ExplicitIntegrator::fused_cycles(long cycles, bool report_last) {
+  FusedState& k = fused_->state;
+  Particles& p = model_.particles;
+  StepArgs args;
+  args.state = &k;
+  args.dt = time_step_;
+  args.alpha = settings_.local_damping;
+  if (breaking_)
+    args.mode = (softening_ ? kSofteningTypes : kBrittleTypes) + (k.bonds.slot_strengths() ? 1 : 0);
+  for (int c = 0; c < 3; ++c) {
+    args.force_out[c] = p.force.col(c).data();
+    args.torque_out[c] = p.torque.col(c).data();
+  }
+  args.partial = k.partial.data();
+  const int blocks = k.blocks;
+  const int first_parity = k.parity;
+  const bool breaking = breaking_;
+  const bool contacts = contacts_ && !contacts_->contacts().empty();
+  // Each thread raises its flag for the cycle's parity when a slot of its blocks broke or softened;
+  // after the cycle's barrier every thread reads all flags alike, so all stop after the same cycle
+  // (its steps are resolved against the next state, and the contacts of its breaks added, before
+  // the next cycle). A flag of parity q is written
+  // again two cycles later, after every thread has passed the barrier that follows its reads.
+  constexpr int kFlagStride = 16;  // one cache line per flag
+  const int max_threads = omp_get_max_threads();
+  if (breaking) {
+    k.thread_events.resize(static_cast<std::size_t>(max_threads));
+    for (auto& e : k.thread_events) e.clear();
+    k.changed_flags.assign(static_cast<std::size_t>(2 * max_threads * kFlagStride), 0);
+  }
+  const long start_cycle = cycles_;
+  long ran = cycles;
+#pragma omp parallel if (blocks >= 2 * kMinBlocksPerThread)
+  {
+    const long threads = omp_get_num_threads();
+    const long thread = omp_get_thread_num();
+    const int begin = static_cast<int>(blocks * thread / threads);
+    const int end = static_cast<int>(blocks * (thread + 1) / threads);
+    StepArgs mine = args;
+    BreakingPass pass;
+    if (breaking) pass.events = &k.thread_events[static_cast<std::size_t>(thread)];
+    mine.pass = &pass;
+    for (long s = 0; s < cycles; ++s) {
+      mine.parity = static_cast<int>((first_parity + s) & 1);
+      const bool report = report_last && s + 1 == cycles;
+      if (contacts) {
+#pragma omp single
+        {
+          ContactState state;
+          ContactForces out;
+          for (int c = 0; c < 3; ++c) {
+            state.displacement[c] = k.displacement[mine.parity][c].data();
+            state.rotation[c] = k.rotation[mine.parity][c].data();
+            state.velocity[c] = k.velocity[c].data();
+            state.angular_velocity[c] = k.angular_velocity[c].data();
+            out.force[c] = k.contact_force[c].data();
+            out.torque[c] = k.contact_torque[c].data();
+          }
+          for (int i : contacts_->touched()) k.contact_block[i / lanes::kCount] = 0;
+          contacts_->apply(state, args.dt, out);
+          for (int i : contacts_->touched()) k.contact_block[i / lanes::kCount] = 1;
+        }
+      }
+      pass.cycle = start_cycle + s;
+      pass.changed = false;
+      step_blocks(mine, report, begin, end);
+      const std::size_t flags = static_cast<std::size_t>(s & 1) * max_threads;
+      if (breaking) k.changed_flags[(flags + thread) * kFlagStride] = pass.changed ? 1 : 0;
+#pragma omp barrier
+      if (breaking) {
+        bool any = false;
+        for (long t = 0; t < threads; ++t) any |= k.changed_flags[(flags + t) * kFlagStride] != 0;
+        if (any) {
+          if (thread == 0) ran = s + 1;
+          break;
+        }
+      }
+    }
+  }
+  k.parity = static_cast<int>((first_parity + ran) & 1);
+  return ran;
+}
+
+void ExplicitIntegrator::log_break(int bond, BondState mode, long cycle,
+                                   const double* first_displacement) {
+  Bonds& bonds = model_.bonds;
+  bonds.state(bond) = static_cast<int>(mode);
+  bonds.damage(bond) = 1;
+  bonds.normal_stiffness(bond) = 0;
+  bonds.shear_stiffness(bond) = 0;
+  bonds.bending_stiffness(bond) = 0;
+  bonds.twisting_stiffness(bond) = 0;
+  BondBreak record;
+  record.bond = bond;
+  record.mode = mode;
+  record.at = static_cast<double>(cycle) * time_step_;
+  const int i = bonds.first(bond);
+  for (int c = 0; c < 3; ++c)
+    record.position(c) = model_.particles.reference_position(i, c) +
+                         bonds.lever_first(bond) * bonds.normal(bond, c) + first_displacement[c];
+  breaks_.push_back(record);
+  if (contacts_) {
+    contacts_->add_broken_bond(bond);
+    contact_countdown_ = 0;  // a break sets particles moving: check the skin at the next cycle
+  }
+}
+
+void ExplicitIntegrator::resolve_events(std::vector<SlotEvent>& events, long report_cycle) {
+  std::sort(events.begin(), events.end(), [](const SlotEvent& a, const SlotEvent& b) {
+    return a.cycle != b.cycle ? a.cycle < b.cycle : a.bond < b.bond;
+  });
+  // The state now is the one after each event's cycle (runs stop after a cycle with steps).
+  const Particles& p = model_.particles;
+  const Bonds& bonds = model_.bonds;
+  auto state = [&](int i, int c, bool rotation) {
+    if (!fused_) return rotation ? p.rotation(i, c) : p.displacement(i, c);
+    const FusedState& k = fused_->state;
+    const int j = k.position[i];
+    return rotation ? k.rotation[k.parity][c][j] : k.displacement[k.parity][c][j];
+  };
+  for (const SlotEvent& e : events) {
+    const int b = e.bond, i = bonds.first(b), j = bonds.second(b);
+    double n[3], a[3], dtheta[3], du[3];
+    for (int c = 0; c < 3; ++c) {
+      n[c] = bonds.normal(b, c);
+      a[c] = bonds.lever_first(b) * state(i, c, true) + bonds.lever_second(b) * state(j, c, true);
+      dtheta[c] = state(j, c, true) - state(i, c, true);
+    }
+    for (int c = 0; c < 3; ++c) {
+      const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+      du[c] = (state(j, c, false) - state(i, c, false)) - (a[c1] * n[c2] - a[c2] * n[c1]);
+    }
+    double product = 0;  // q_n K q_n+1
+    for (int c = 0; c < 3; ++c) product += e.force[c] * du[c] + e.moment[c] * dtheta[c];
+    double released = 0.5 * (e.damage_after - e.damage_before) * product;
+    if (e.broken && contacts_) released -= contacts_->handover(b, contact_state(), time_step_);
+    (e.cycle == report_cycle ? released_pending_ : released_) += released;
+    if (e.broken) log_break(b, e.mode, e.cycle, e.displacement);
+  }
+}
+
+ContactState ExplicitIntegrator::contact_state() const {
+  ContactState s;
+  const Particles& p = model_.particles;
+  for (int c = 0; c < 3; ++c) {
+    if (fused_) {
+      const FusedState& k = fused_->state;
+      s.displacement[c] = k.displacement[k.parity][c].data();
+      s.rotation[c] = k.rotation[k.parity][c].data();
+      s.velocity[c] = k.velocity[c].data();
+      s.angular_velocity[c] = k.angular_velocity[c].data();
+    } else {
+      s.displacement[c] = p.displacement.col(c).data();
+      s.rotation[c] = p.rotation.col(c).data();
+      s.velocity[c] = p.velocity.col(c).data();
+      s.angular_velocity[c] = p.angular_velocity.col(c).data();
+    }
+  }
+  return s;
+}
+
+void ExplicitIntegrator::store_bonds() {
+  if (!fused_ || !breaking_) return;
+  const GatherBonds& g = fused_->state.bonds;
+  Bonds& bonds = model_.bonds;
+  for (int b = 0; b < bonds.size(); ++b) {
+    const std::array<std::int64_t, 2> cells = g.bond_cells(b);
+    if (cells[0] < 0) continue;  // broken before the table was built
+    const auto first = static_cast<std::size_t>(cells[0]);
+    const auto second = static_cast<std::size_t>(cells[1]);
+    const bool agree =
+        g.holds(first) == g.holds(second) && g.holds(first) == !bonds.is_broken(b) &&
+        (!g.softening() || (g.slot_damage()[first] == g.slot_damage()[second] &&
+                            g.slot_kappa()[first] == g.slot_kappa()[second]));
+    if (!agree) {
+      const bool soft = g.softening();
+      throw Error(fmt::format(
+          "internal error: the two ends of bond {} disagree in the fused kernel (held {} and {}, "
+          "damage {:.17g} and {:.17g}, kappa {:.17g} and {:.17g}, model state {})",
+          b, g.holds(first), g.holds(second), soft ? g.slot_damage()[first] : 0.0,
+          soft ? g.slot_damage()[second] : 0.0, soft ? g.slot_kappa()[first] : 1.0,
+          soft ? g.slot_kappa()[second] : 1.0, bonds.state(b)));
+    }
+    if (!g.softening() || !g.holds(first)) continue;
+    const double damage = g.slot_damage()[first];
+    bonds.damage(b) = damage;
+    kappa_(b) = g.slot_kappa()[first];
+    bonds.normal_stiffness(b) = (1.0 - damage) * intact_[0](b);
+    bonds.shear_stiffness(b) = (1.0 - damage) * intact_[1](b);
+    bonds.bending_stiffness(b) = (1.0 - damage) * intact_[2](b);
+    bonds.twisting_stiffness(b) = (1.0 - damage) * intact_[3](b);
+  }
+}
+
+EnergyAccount ExplicitIntegrator::energy() const {
+  EnergyAccount e;
+  if (!breaking_) return e;
+  e.initial = initial_energy_;
+  e.strain_energy = last_report_.strain_energy;
+  e.kinetic_energy = last_report_.kinetic_energy;
+  const double half_step = 0.5 * time_step_;
+  double work = 0, damping = 0;
+  if (fused_) {
+    const FusedState& k = fused_->state;
+    for (int i = 0; i < k.particles; ++i) {
+      work += k.work_sum[i];
+      damping += k.damping_sum[i];
+    }
+  } else {
+    work = work_sum_.sum();
+    damping = damping_sum_.sum();
+  }
+  e.released = released_;
+  e.boundary_work = half_step * work - pending_work_;
+  e.damping = half_step * damping - pending_damping_;
+  if (contacts_) {
+    e.contact_energy = contacts_->stored_energy();
+    e.friction = contacts_->friction_dissipation();
+  }
+  return e;
+}
+
+std::array<BondEnd, 2> ExplicitIntegrator::bond_ends(int bond) const {
+  const Bonds& bonds = model_.bonds;
+  require(bond >= 0 && bond < bonds.size(),
+          fmt::format("no bond {}: the model has {} bonds", bond, bonds.size()));
+  if (!fused_ || !breaking_) {
+    const BondEnd end{!bonds.is_broken(bond), bonds.damage(bond), kappa_(bond)};
+    return {end, end};
+  }
+  const GatherBonds& g = fused_->state.bonds;
+  std::array<BondEnd, 2> ends;
+  const std::array<std::int64_t, 2> cells = g.bond_cells(bond);
+  for (int e = 0; e < 2; ++e) {
+    if (cells[e] < 0) {
+      ends[e] = {false, 1.0, kappa_(bond)};
+      continue;
+    }
+    const auto cell = static_cast<std::size_t>(cells[e]);
+    ends[e].holds = g.holds(cell);
+    ends[e].damage = g.softening() ? g.slot_damage()[cell] : (ends[e].holds ? 0.0 : 1.0);
+    ends[e].kappa = g.softening() ? g.slot_kappa()[cell] : 1.0;
+  }
+  return ends;
 }
 
 RunReport ExplicitIntegrator::run(const RunControl& control) {
@@ -575,6 +1054,7 @@ RunReport ExplicitIntegrator::run(const RunControl& control) {
       break;
     }
   }
+  store_bonds();
   return report;
 }
 
@@ -615,51 +1095,122 @@ void ExplicitIntegrator::gather(std::span<const int> particles, Particles& into,
   }
 }
 
-void ExplicitIntegrator::drop_bond(int bond) {
+void ExplicitIntegrator::break_bond(int bond, BondState mode) {
   Bonds& bonds = model_.bonds;
   require(bond >= 0 && bond < bonds.size(),
-          fmt::format("cannot drop bond {}: the model has {} bonds", bond, bonds.size()));
+          fmt::format("cannot break bond {}: the model has {} bonds", bond, bonds.size()));
+  require(mode == BondState::kBrokenTension || mode == BondState::kBrokenShear,
+          "a bond breaks in tension or in shear");
+  require(!bonds.is_broken(bond), fmt::format("bond {} is broken already", bond));
+  if (!breaking_) start_breaking();
   if (fused_) {
-    const std::vector<int>& position = fused_->state.position;
-    fused_->state.bonds.drop_bond(position[bonds.first(bond)], position[bonds.second(bond)]);
+    GatherBonds& g = fused_->state.bonds;
+    const int padded = g.padded_count();
+    for (const std::int64_t cell : g.bond_cells(bond)) {
+      if (cell < 0 || !g.holds(static_cast<std::size_t>(cell))) continue;
+      g.clear_slot(static_cast<int>(cell % padded), static_cast<int>(cell / padded));
+    }
   }
-  std::vector<int> kept;
-  kept.reserve(static_cast<std::size_t>(bonds.size()));
-  for (int b = 0; b < bonds.size(); ++b)
-    if (b != bond) kept.push_back(b);
-  bonds = bonds.select(kept);
+  bonds.state(bond) = static_cast<int>(mode);
+  bonds.damage(bond) = 1;
+  bonds.normal_stiffness(bond) = 0;
+  bonds.shear_stiffness(bond) = 0;
+  bonds.bending_stiffness(bond) = 0;
+  bonds.twisting_stiffness(bond) = 0;
+  if (contacts_) {
+    contacts_->add_broken_bond(bond);
+    contact_countdown_ = 0;
+  }
 }
 
 std::size_t ExplicitIntegrator::kernel_bytes() const {
   return fused_ ? fused_->state.bytes() : 0;
 }
 
-CycleReport ExplicitIntegrator::reference_cycle() {
+CycleReport ExplicitIntegrator::reference_cycle(bool last) {
   Particles& p = model_.particles;
-  const BondPass pass = compute_bond_forces(p, model_.bonds);
+  Bonds& bonds = model_.bonds;
+  const BondPass pass = compute_bond_forces(p, bonds);
   const double dt = time_step_;
   const double alpha = settings_.local_damping;
+  if (contacts_ && !contacts_->contacts().empty()) {
+    ContactState s;
+    ContactForces out;
+    for (int c = 0; c < 3; ++c) {
+      s.displacement[c] = p.displacement.col(c).data();
+      s.rotation[c] = p.rotation.col(c).data();
+      s.velocity[c] = p.velocity.col(c).data();
+      s.angular_velocity[c] = p.angular_velocity.col(c).data();
+      out.force[c] = contact_force_.col(c).data();
+      out.torque[c] = contact_torque_.col(c).data();
+    }
+    contacts_->apply(s, dt, out);
+    p.force += contact_force_;
+    p.torque += contact_torque_;
+  }
+  // The failure law at this cycle's state; what it decides acts from the next cycle.
+  std::vector<SlotEvent> events;
+  if (breaking_) {
+    for (int b = 0; b < bonds.size(); ++b) {
+      if (bonds.is_broken(b)) continue;
+      const BondStrength strength = bond_strength(bonds, b);
+      if (!std::isfinite(strength.tensile) && !std::isfinite(strength.cohesion)) continue;
+      double du[3], dtheta[3];
+      const BondDeformation d = bond_deformation(p, bonds, b, du, dtheta);
+      const BondStiffness intact{intact_[0](b), intact_[1](b), intact_[2](b), intact_[3](b)};
+      const BondDamageUpdate u =
+          update_bond_damage(d, intact, strength, bonds.damage(b), kappa_(b));
+      if (!u.changed) continue;
+      kappa_(b) = u.kappa;
+      const int i = bonds.first(b);
+      const double displacement[3] = {p.displacement(i, 0), p.displacement(i, 1),
+                                      p.displacement(i, 2)};
+      const double n[3] = {bonds.normal(b, 0), bonds.normal(b, 1), bonds.normal(b, 2)};
+      events.push_back(
+          damage_event(b, cycles_, u, bonds.damage(b), intact, du, dtheta, n, displacement));
+      if (!u.broken) {
+        bonds.damage(b) = u.damage;
+        bonds.normal_stiffness(b) = (1.0 - u.damage) * intact_[0](b);
+        bonds.shear_stiffness(b) = (1.0 - u.damage) * intact_[1](b);
+        bonds.bending_stiffness(b) = (1.0 - u.damage) * intact_[2](b);
+        bonds.twisting_stiffness(b) = (1.0 - u.damage) * intact_[3](b);
+      }
+    }
+  }
   CycleReport report;
   report.strain_energy = pass.strain_energy;
-  double kinetic2 = 0;
-  double unbalanced = 0;
+  double kinetic2 = 0, unbalanced = 0, work_half = 0, damping_half = 0;
   const int n = p.size();
+  // One component: the imposed velocity, or the damped central difference; with the account's
+  // sums (EnergyAccount).
+  auto advance = [&](double& u, double& v, double force, double inertia, bool fixed,
+                     double imposed, int i) {
+    const double v_old = v;
+    if (fixed) {
+      v = imposed;
+      u += dt * v;
+      if (breaking_) {
+        work_sum_(i) -= force * (v_old + v);
+        if (last) work_half -= force * v;
+      }
+      return;
+    }
+    const double damping =
+        alpha * std::abs(force) * (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0));
+    v += dt * (force - damping) / inertia;
+    u += dt * v;
+    kinetic2 += inertia * v_old * v;
+    if (breaking_) {
+      damping_sum_(i) += damping * (v_old + v);
+      if (last) damping_half += damping * v;
+    }
+  };
   for (int c = 0; c < 3; ++c) {
     for (int i = 0; i < n; ++i) {
-      if (fixed_velocity_(i, c)) {
-        p.velocity(i, c) = prescribed_velocity_(i, c);
-        p.displacement(i, c) += dt * p.velocity(i, c);
-      } else {
-        kinetic2 += advance_dof(p.displacement(i, c), p.velocity(i, c), p.force(i, c), p.mass(i),
-                                dt, alpha);
-      }
-      if (fixed_angular_velocity_(i, c)) {
-        p.angular_velocity(i, c) = prescribed_angular_velocity_(i, c);
-        p.rotation(i, c) += dt * p.angular_velocity(i, c);
-      } else {
-        kinetic2 += advance_dof(p.rotation(i, c), p.angular_velocity(i, c), p.torque(i, c),
-                                p.moment_of_inertia(i), dt, alpha);
-      }
+      advance(p.displacement(i, c), p.velocity(i, c), p.force(i, c), p.mass(i),
+              fixed_velocity_(i, c), prescribed_velocity_(i, c), i);
+      advance(p.rotation(i, c), p.angular_velocity(i, c), p.torque(i, c), p.moment_of_inertia(i),
+              fixed_angular_velocity_(i, c), prescribed_angular_velocity_(i, c), i);
     }
   }
   for (int i = 0; i < n; ++i) {
@@ -669,6 +1220,11 @@ CycleReport ExplicitIntegrator::reference_cycle() {
   const double mean_bond_force = pass.sum_force_norm / std::max(1, model_.bonds.size());
   report.unbalanced_force_ratio =
       mean_bond_force > 0 ? unbalanced / std::max(1, free_particles_) / mean_bond_force : 0.0;
+  if (last && breaking_) {
+    pending_work_ = 0.5 * dt * work_half;
+    pending_damping_ = 0.5 * dt * damping_half;
+  }
+  if (!events.empty()) resolve_events(events, last ? cycles_ : -1);
   time_ += dt;
   ++cycles_;
   return report;

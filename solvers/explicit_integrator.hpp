@@ -19,6 +19,17 @@
 /// (the last cycle of a chunk computes the unbalanced-force ratio and the energies) tests the stop
 /// conditions and calls the hooks; a hook reads the state it needs through gather(). At the end
 /// the whole state goes back into the model. cycle() and advance() are one-chunk runs.
+///
+/// Breaking. When the model's bonds can break (Bonds::breakable) or some are broken, both kernels
+/// decide every bond at every cycle through the one failure law (core/bond_failure.hpp, applied by
+/// update_bond_damage in contacts/bond_kernel.hpp) from the deformation they computed its force
+/// from: a brittle bond breaks at utilisation 1, a softening one loses stiffness along its
+/// softening line and breaks when its damage reaches 1. A break or a damage step decided at cycle
+/// n acts from cycle n + 1 on. The fused kernel decides at both ends of a bond alike, each
+/// particle clearing its own slot (no rebuild of the table, no atomics), and logs at the first
+/// end. Particles no intact bond joins interact by contacts (contacts/unbonded_contacts.hpp), and
+/// the run keeps an energy account (energy()). The model's bonds get their new state, damage and
+/// stiffness as breaks happen and at the end of each run; the broken bonds keep their rows.
 
 #include <Eigen/Dense>
 #include <array>
@@ -29,7 +40,10 @@
 #include <string_view>
 #include <vector>
 
+#include "contacts/bond_kernel.hpp"
 #include "contacts/particle_ordering.hpp"
+#include "contacts/unbonded_contacts.hpp"
+#include "core/bond_failure.hpp"
 #include "core/model.hpp"
 
 namespace plydem {
@@ -48,6 +62,14 @@ struct ExplicitSettings {
   ExplicitKernel kernel = ExplicitKernel::kFused;
   /// How the fused kernel numbers the particles internally (results do not depend on it).
   ParticleOrder particle_order = ParticleOrder::kAutomatic;
+  /// Keep the energy account (energy()) in a model that cannot break too (a model that can, or has
+  /// broken bonds, always keeps it). Off, an elastic model runs the elastic kernel unchanged.
+  bool energy_account = false;
+  /// Contacts between particles that no intact bond joins, in runs that keep the account.
+  bool contacts = true;
+  ContactSettings contact;
+  /// Where the fused kernel keeps breakable bonds' strengths (contacts/bond_kernel.hpp).
+  StrengthStorage strength_storage = StrengthStorage::kAutomatic;
 };
 
 /// Throws plydem::Error naming the first setting out of range.
@@ -71,6 +93,43 @@ struct CycleReport {
   double kinetic_energy = 0;
   /// Mean unbalanced force on the free particles over the mean bond force (PFC's ratio).
   double unbalanced_force_ratio = 0;
+};
+
+/// The energy account of an explicit run, consistent with leapfrog: a cycle n with forces F_n at
+/// u_n and velocities v(n -+ 1/2) adds F_n . (v(n-1/2) + v(n+1/2)) dt / 2 per degree of freedom,
+/// which sums, over cycles, to the trapezoidal work 1/2 (F_n + F_n+1) . (u_n+1 - u_n) that makes
+/// strain + leapfrog kinetic energy change exactly by the work of the other forces (for linear
+/// bonds). The account runs from the integrator's first cycle to the state of the last one (its
+/// second half step not yet counted), so that
+///   initial + boundary_work = strain + kinetic + damping + released + contact + friction
+/// up to rounding for an elastic model; a break, decided at u_n and acting from n + 1, is off by
+/// the bond's energy change over that one cycle, and contacts (not linear in u) by their own.
+struct EnergyAccount {
+  double initial = 0;  ///< strain + kinetic energy (free dofs) before the first cycle [J]
+  /// Work of the prescribed motions on the particles: - F . v over the prescribed components,
+  /// F the bond and contact forces on them [J].
+  double boundary_work = 0;
+  double strain_energy = 0;   ///< in the bonds, at the last cycle's state [J]
+  double kinetic_energy = 0;  ///< leapfrog, free components, at the last cycle [J]
+  double damping = 0;         ///< dissipated by local damping [J]
+  /// Released by breaking and softening: what a bond gives up at each damage step (all its
+  /// strain energy, for a brittle break), from the breaks decided before the last cycle [J].
+  double released = 0;
+  double contact_energy = 0;  ///< held by touching contacts, at the last cycle [J]
+  double friction = 0;        ///< dissipated by contact slip [J]
+
+  /// initial + boundary_work - (strain + kinetic + damping + released + contact + friction).
+  double balance() const {
+    return initial + boundary_work -
+           (strain_energy + kinetic_energy + damping + released + contact_energy + friction);
+  }
+};
+
+/// One end of a bond as the active kernel holds it (ExplicitIntegrator::bond_ends).
+struct BondEnd {
+  bool holds = false;  ///< the bond is intact at this end
+  double damage = 0;
+  double kappa = 1;  ///< largest utilisation so far (softening; 1 otherwise)
 };
 
 /// Why run() stopped.
@@ -185,12 +244,35 @@ class ExplicitIntegrator {
   void gather(std::span<const int> particles, Particles& into,
               StateAt at = StateAt::kCurrent) const;
 
-  /// Removes bond `bond` (an index into the model's bonds) for the rest of the run: the model's
-  /// bonds lose it (the later ones move down by one; the reference kernel reads them), and the
-  /// fused kernel empties its slots without rebuilding its table (GatherBonds::drop_bond). The
-  /// time step is kept: a bond fewer leaves the model no stiffer. Throws plydem::Error for a bond
-  /// that does not exist.
-  void drop_bond(int bond);
+  /// Breaks bond `bond` (an index into the model's bonds) by hand, from the next cycle on: its row
+  /// stays (state `mode`, damage 1, zero stiffness), the fused kernel empties its two slots
+  /// without rebuilding its table, and its particles interact by contact (if settings.contacts).
+  /// The first break of an integrator that ran the elastic kernel switches it to the breaking one
+  /// (its table is built once more, and the energy account starts at the next cycle). The time
+  /// step is kept: a broken bond leaves the model no stiffer. Not logged in breaks(). Throws
+  /// plydem::Error for a bond that does not exist or is broken already, or a mode that is no
+  /// break.
+  void break_bond(int bond, BondState mode = BondState::kBrokenTension);
+
+  /// The bonds the failure law broke, in the order they broke (then by bond): at = the cycle's
+  /// state time (cycle number x time step) [s], load = 0 (the integrator knows no load; the
+  /// caller does: the grips' travel at that time), position = the contact point X_first +
+  /// lever_first n + u_first.
+  const std::vector<BondBreak>& breaks() const { return breaks_; }
+
+  /// The energy account (EnergyAccount) at the last cycle; zeros where the integrator keeps none
+  /// (an elastic model without ExplicitSettings::energy_account).
+  EnergyAccount energy() const;
+
+  /// Whether the integrator runs the breaking kernel (and keeps the account and the contacts).
+  bool breaking() const { return breaking_; }
+
+  /// Bond `bond` as each of its two ends holds it in the active kernel: the fused kernel keeps
+  /// both ends apart and they must agree to the bit (the reference kernel keeps one bond).
+  std::array<BondEnd, 2> bond_ends(int bond) const;
+
+  /// The contacts (null unless the run has them).
+  const UnbondedContacts* contacts() const { return contacts_.get(); }
 
   /// Bytes the fused kernel holds for the run (its state, the gather lists, the bond types, the
   /// renumbering), or 0 for the reference kernel. The model's own arrays are not counted.
@@ -198,11 +280,23 @@ class ExplicitIntegrator {
 
  private:
   struct Fused;
-  CycleReport reference_cycle();
+  CycleReport reference_cycle(bool last);
   // `cycles` cycles of the active kernel on its own state; the last one computes the report.
   CycleReport step(long cycles);
   void load_kernel();
   void store_kernel();
+  // Breaking: set up the breaking kernel, its account and its contacts.
+  void start_breaking();
+  void make_contacts();
+  long fused_cycles(long cycles, bool report_last);
+  // Resolves damage steps against the state after their cycle: the energy each released
+  // (SlotEvent), breaks logged; the steps of `report_cycle` are counted at the next step.
+  void resolve_events(std::vector<SlotEvent>& events, long report_cycle);
+  // The current state as the contacts read it (the kernel's or the model's arrays).
+  ContactState contact_state() const;
+  // Writes the fused kernel's bond damage back to the model; throws if two ends disagree.
+  void store_bonds();
+  void log_break(int bond, BondState mode, long cycle, const double* first_displacement);
 
   Model& model_;
   ExplicitSettings settings_;
@@ -219,6 +313,23 @@ class ExplicitIntegrator {
   // Reference kernel: displacements and rotations before the last cycle of a chunk.
   Vector3Array previous_displacement_, previous_rotation_;
   std::unique_ptr<Fused> fused_;
+
+  // Breaking, account and contacts.
+  bool breaking_ = false, softening_ = false;
+  // The bonds' intact stiffnesses (0 for a bond that came broken), their softening history.
+  Eigen::ArrayXd intact_[4];  // normal, shear, bending, twisting
+  Eigen::ArrayXd kappa_;      // reference kernel
+  std::vector<BondBreak> breaks_;
+  std::unique_ptr<UnbondedContacts> contacts_;
+  long contact_countdown_ = 0;
+  bool initial_set_ = false;
+  double initial_energy_ = 0;
+  CycleReport last_report_;
+  double pending_work_ = 0, pending_damping_ = 0;  // the last cycle's second halves (x dt / 2)
+  // Reference kernel: per-particle sums of F (v_old + v_new), released energy.
+  Eigen::ArrayXd work_sum_, damping_sum_;
+  Vector3Array contact_force_, contact_torque_;
+  double released_ = 0, released_pending_ = 0;
 };
 
 }  // namespace plydem

@@ -370,7 +370,7 @@ TEST_CASE("dropping bonds from an irregular packing's gather table") {
   CHECK(relative_difference(torque, reduced.particles.torque) < 1e-14);
 }
 
-TEST_CASE("the integrator drops a bond in both kernels alike") {
+TEST_CASE("the integrator breaks bonds by hand in both kernels alike") {
   Model base = cubic_lattice(16, 3, 2);
   disturb(base.particles, 8);
   ExplicitSettings settings;
@@ -381,17 +381,29 @@ TEST_CASE("the integrator drops a bond in both kernels alike") {
   ExplicitIntegrator fused(fused_model, settings);
   settings.kernel = ExplicitKernel::kReference;
   ExplicitIntegrator reference(reference_model, settings);
+  CHECK(!fused.breaking());
   fused.advance(20);
   reference.advance(20);
-  const std::vector<int> dropped = {5, 40, 41, base.bonds.size() - 1};
-  // Indices shift down after each drop: drop from the last one.
-  for (auto it = dropped.rbegin(); it != dropped.rend(); ++it) {
-    fused.drop_bond(*it);
-    reference.drop_bond(*it);
+  const std::vector<int> broken = {5, 40, 41, base.bonds.size() - 1};
+  for (int b : broken) {
+    fused.break_bond(b);
+    reference.break_bond(b, BondState::kBrokenShear);
   }
-  CHECK(fused_model.bonds.size() == base.bonds.size() - 4);
-  CHECK(reference_model.bonds.size() == fused_model.bonds.size());
-  CHECK_THROWS_AS(fused.drop_bond(fused_model.bonds.size()), Error);
+  CHECK(fused.breaking());  // the first break switched it to the breaking kernel
+  // The rows stay, broken, with no stiffness; the table kept no slot for them.
+  CHECK(fused_model.bonds.size() == base.bonds.size());
+  for (int b : broken) {
+    CHECK(fused_model.bonds.state(b) == static_cast<int>(BondState::kBrokenTension));
+    CHECK(reference_model.bonds.state(b) == static_cast<int>(BondState::kBrokenShear));
+    CHECK(fused_model.bonds.normal_stiffness(b) == 0);
+    CHECK(!fused.bond_ends(b)[0].holds);
+    CHECK(!fused.bond_ends(b)[1].holds);
+  }
+  CHECK(fused.bond_ends(6)[0].holds);
+  CHECK(fused.breaks().empty());  // a hand break is not the failure law's
+  CHECK_THROWS_AS(fused.break_bond(fused_model.bonds.size()), Error);
+  CHECK_THROWS_AS(fused.break_bond(5), Error);  // broken already
+  CHECK_THROWS_AS(fused.break_bond(6, BondState::kIntact), Error);
   fused.advance(30);
   reference.advance(30);
   const Particles& a = fused_model.particles;
@@ -399,17 +411,23 @@ TEST_CASE("the integrator drops a bond in both kernels alike") {
   CHECK(relative_difference(a.displacement, b.displacement) < 1e-12);
   CHECK(relative_difference(a.rotation, b.rotation) < 1e-12);
   CHECK(relative_difference(a.force, b.force) < 1e-12);
-  // Dropped before the first cycle: the run of a model that never had the bonds.
-  Model dropping = base;
+  // Broken before the first cycle: the run of a model built with the bonds broken.
+  Model breaking = base;
   settings.kernel = ExplicitKernel::kFused;
-  ExplicitIntegrator early(dropping, settings);
-  for (auto it = dropped.rbegin(); it != dropped.rend(); ++it) early.drop_bond(*it);
-  reduced.bonds = without(base.bonds, dropped);
+  ExplicitIntegrator early(breaking, settings);
+  for (int k : broken) early.break_bond(k);
+  for (int k : broken) {
+    reduced.bonds.state(k) = static_cast<int>(BondState::kBrokenTension);
+    reduced.bonds.damage(k) = 1;
+    reduced.bonds.normal_stiffness(k) = reduced.bonds.shear_stiffness(k) = 0;
+    reduced.bonds.bending_stiffness(k) = reduced.bonds.twisting_stiffness(k) = 0;
+  }
   settings.kernel = ExplicitKernel::kReference;
+  settings.time_step = early.time_step();  // the built-broken model's own bound is the intact one
   ExplicitIntegrator never(reduced, settings);
   early.advance(30);
   never.advance(30);
-  CHECK(relative_difference(dropping.particles.displacement, reduced.particles.displacement) <
+  CHECK(relative_difference(breaking.particles.displacement, reduced.particles.displacement) <
         1e-12);
-  CHECK(relative_difference(dropping.particles.force, reduced.particles.force) < 1e-12);
+  CHECK(relative_difference(breaking.particles.force, reduced.particles.force) < 1e-12);
 }
