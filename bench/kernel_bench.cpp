@@ -228,9 +228,18 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
 }
 
 int run_coupon(long cycles, int threads, const std::string& order, const std::string& api,
-               long report_every) {
+               long report_every, bool breakable) {
   require(cycles >= 1 && report_every >= 1, "--cycles and --report-every must be at least 1");
   Model model = table2_coupon();
+  if (breakable) {
+    // Strengths far above anything the pull reaches (no bond breaks): the breaking kernel decides
+    // every bond at every cycle, the elastic one's work plus the failure law's.
+    for (int b = 0; b < model.bonds.size(); ++b) {
+      model.bonds.strength_radius(b) = model.particles.radius(model.bonds.first(b));
+      model.bonds.tensile_strength(b) = 1e15;
+      model.bonds.cohesion(b) = 1e15;
+    }
+  }
   omp_set_num_threads(threads);
   ExplicitSettings settings;
   settings.particle_order = order_named(order);
@@ -247,7 +256,8 @@ int run_coupon(long cycles, int threads, const std::string& order, const std::st
       "plydem", model.particles.size(), model.bonds.size(), threads, cycles, seconds,
       process_cpu_seconds() - cpu,
       static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(model.particles.size()));
-  r["case"] = "table2-hex2d-coupon";
+  r["case"] = breakable ? "table2-hex2d-coupon-breakable" : "table2-hex2d-coupon";
+  r["broken_bonds"] = static_cast<long>(integrator.breaks().size());
   r["order"] = order;
   r["api"] = api;
   r["report_every"] = report_every;
@@ -389,6 +399,9 @@ int main(int argc, char** argv) {
   coupon->add_option("--api", api, "run: ExplicitIntegrator::run(); advance: advance(N) calls")
       ->check(apis)
       ->capture_default_str();
+  bool breakable = false;
+  coupon->add_flag("--breakable", breakable,
+                   "give every bond a strength it never reaches: times the breaking kernel");
   CLI::App* tension =
       app.add_subcommand("tension", "the same coupon through the tension test's explicit path");
   tension->add_option("--cycles", cycles, "fixed explicit cycles")->capture_default_str();
@@ -403,7 +416,7 @@ int main(int argc, char** argv) {
     require(threads >= 1, "--threads must be at least 1");
     if (*layer)
       return run_layer(particles, steps, threads, order, api, lammps_data, yade_layer, describe);
-    if (*coupon) return run_coupon(cycles, threads, order, api, report_every);
+    if (*coupon) return run_coupon(cycles, threads, order, api, report_every, breakable);
     if (*tension) return run_tension(cycles, threads);
     if (*table) return print_table();
   } catch (const std::exception& e) {
