@@ -292,8 +292,8 @@ TEST_CASE("one bond breaks at the cycle its hand-computed utilisation reaches 1"
     const double vn = 0.3 * v, vt = v;
     s.cohesion = X * (s.k_s * vt + s.friction * s.k_n * vn) * dt / area;
     s.tensile = 1e3 * s.cohesion;
-    cases.push_back(
-        {"shear with friction", BondState::kBrokenShear, s, drive(zero, zero, vn * n + vt * t, zero)});
+    cases.push_back({"shear with friction", BondState::kBrokenShear, s,
+                     drive(zero, zero, vn * n + vt * t, zero)});
   }
   {
     // Bending: the two particles turn oppositely about z (equal levers: du = 0),
@@ -472,7 +472,8 @@ TEST_CASE("the fused kernel breaks the bonds the reference loop breaks, at the s
   const CouponRun fast = run_coupon(m, settings, speed, 12000);
   REQUIRE(slow.breaks.size() > 5);
   CHECK(same_breaks(fast.breaks, slow.breaks));
-  for (int b = 0; b < m.bonds.size(); ++b) CHECK(fast.model.bonds.state(b) == slow.model.bonds.state(b));
+  for (int b = 0; b < m.bonds.size(); ++b)
+    CHECK(fast.model.bonds.state(b) == slow.model.bonds.state(b));
   // Strengths per slot decide exactly as strengths in the types.
   settings.strength_storage = StrengthStorage::kSlots;
   const CouponRun slots = run_coupon(m, settings, speed, 12000);
@@ -480,9 +481,10 @@ TEST_CASE("the fused kernel breaks the bonds the reference loop breaks, at the s
   CHECK(bitwise_equal(slots.model.particles, fast.model.particles));
 }
 
-TEST_CASE("breaking runs do not depend on the thread count or the particle order") {
-  // 3 x 1 mm at 0.05 mm: about 1400 particles, enough blocks for two threads.
-  Model m = small_coupon(3e-3, 1e-3, 0.05e-3);
+// A coupon of `length` x `width` at 0.05 mm particles pulled to its first breaks, with one
+// thread, two threads, and two threads in Hilbert order: the same breaks and the same state.
+void check_thread_and_order_independence(double length, double width) {
+  Model m = small_coupon(length, width, 0.05e-3);
   ExplicitSettings settings;
   settings.time_step = 0.8 * critical_time_step(m);
   const double speed = 0.02;
@@ -506,6 +508,16 @@ TEST_CASE("breaking runs do not depend on the thread count or the particle order
   CHECK(one.energy.released == two.energy.released);
   CHECK(same_breaks(one.breaks, hilbert.breaks));
   CHECK(bitwise_equal(one.model.particles, hilbert.model.particles));
+}
+
+TEST_CASE("breaking runs do not depend on the thread count or the particle order") {
+  // 1.5 x 0.5 mm: about 300 particles, 40 blocks of eight for two threads.
+  check_thread_and_order_independence(1.5e-3, 0.5e-3);
+}
+
+TEST_CASE("larger coupon: breaking runs do not depend on the thread count or the particle order") {
+  // 3 x 1 mm: about 1400 particles.
+  check_thread_and_order_independence(3e-3, 1e-3);
 }
 
 TEST_CASE("the energy account closes within 1% on a coupon pulled to failure") {
