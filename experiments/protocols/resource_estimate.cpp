@@ -77,15 +77,18 @@ ResourceEstimate estimate_resources(const Strategy& strategy, const CouponSpec& 
   e.matrix_bytes = blocks + lower_entries * (sizeof(double) + sizeof(int));
   const double layers = static_cast<double>(ply->layers) * e.plies;
   const double columns = std::max(2.0, e.particles / layers);
+  const double coordination = e.particles > 0 ? 2 * e.bonds / e.particles : 0.0;
   e.factor_entries =
-      std::min(kFactorFillCoefficient * unknowns * kDofsPerParticle * layers * std::log2(columns),
+      std::min(kFactorFillCoefficient * unknowns * coordination * layers * std::log2(columns),
                0.5 * unknowns * (unknowns + 1));
-  const double factor = e.factor_entries * sizeof(double);
+  // The factor and the multifrontal method's fronts and update stack beside it.
+  const double factor = (1 + kFactorWorkspace) * e.factor_entries * sizeof(double);
   switch (solver) {
     case SolverUse::kStatic:
       e.solver_bytes = e.matrix_bytes + factor;
-      e.solver = fmt::format("stiffness matrix {}, sparse Cholesky factor {} (bound)",
-                             bytes_text(e.matrix_bytes), bytes_text(factor));
+      e.solver =
+          fmt::format("stiffness matrix {}, sparse Cholesky factor {} (bound, workspace included)",
+                      bytes_text(e.matrix_bytes), bytes_text(factor));
       break;
     case SolverUse::kExplicit:
       // The integrator's copy, and the static solves of the specimen stiffness after it.

@@ -13,11 +13,15 @@
 ///  - the build: the packing's positions and bond pairs, once;
 ///  - a static solve: K as the assembly's 6 x 6 blocks (one per particle and per bond) and as its
 ///    lower triangle in compressed columns (21 entries per particle, 36 per bond), and the sparse
-///    Cholesky factor L, 8 bytes per entry. L is a stated bound, not a symbolic analysis (that needs the built coupon): the
-///    nested-dissection growth of a planar graph, entries = c n w log2(m) with n unknowns, m
-///    particle columns (particles over the layers through the thickness), w = 6 times those
-///    layers, and c = kFactorFillCoefficient, the upper envelope of the factors measured (README,
-///    Benchmarks: single plies 0.9-1.1, the [0/45/-45/90]s laminate 1.5);
+///    Cholesky factor L, 8 bytes per entry. L is a stated bound, not a symbolic analysis (that
+///    needs the built coupon): the nested-dissection growth of a planar graph, entries =
+///    c n z l log2(m) with n unknowns, z the mean coordination (2 bonds / particles), l the
+///    particle layers through the thickness (all plies), m = particles / l, and c =
+///    kFactorFillCoefficient, above every factor measured: hex2d plies 0.94 (the paper's coupon)
+///    and 1.41 (20 x 5 mm), [0/90/0] 1.35, [0/45/-45/90]s 0.98, hcp 1.79; and kFactorWorkspace of
+///    it again for the fronts and the update stack. Against the peak RSS of `plydem tension`: the
+///    paper's coupon 56 / 38 MB, 20 x 5 mm 855 / 524 MB, [0/90/0] 3 x 1 mm 181 / 129 MB, hcp 5 x 2
+///    mm 808 / 687 MB, [0/45/-45/90]s 4 x 1.5 mm 2.84 / 2.12 GB (estimate / measured);
 ///  - explicit dynamics: the integrator's own copy of the particles and bonds (kernel order);
 ///  - the events solver: the factor plus its Woodbury update, two n x max_update_rank blocks.
 
@@ -30,7 +34,9 @@
 namespace plydem {
 
 /// The coefficient c of the factor bound above.
-inline constexpr double kFactorFillCoefficient = 1.6;
+inline constexpr double kFactorFillCoefficient = 2.0;
+/// The multifrontal workspace beside the factor, as a fraction of it (hcp: about 0.4 measured).
+inline constexpr double kFactorWorkspace = 0.5;
 
 /// What a test does with its coupon after building it.
 enum class SolverUse {
