@@ -25,6 +25,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "experiments/cli/python_plugin.hpp"
 #include "experiments/output/report.hpp"
 #include "experiments/output/strength_report.hpp"
 #include "experiments/protocols/strength_test.hpp"
@@ -414,6 +415,9 @@ int main(int argc, char** argv) {
       "With no command it runs the paper's 0 deg E-glass/MY750 lamina with the Hex2D strategy\n"
       "and prints E1, E2, nu12, nu21 beside classical lamination theory."};
   app.require_subcommand(0, 1);
+  // Options of the program itself (--plugin) may also stand after the command: the commands
+  // (which inherit this) pass them up.
+  app.fallthrough();
   // Progress and warnings go to stderr: stdout carries only the table or the JSON object.
   spdlog::set_default_logger(spdlog::stderr_color_mt("plydem"));
   spdlog::set_pattern("[%H:%M:%S] %v");
@@ -457,12 +461,18 @@ int main(int argc, char** argv) {
                 "list the configs in ./experiments (else the source tree's) with their "
                 "descriptions");
 
+  std::vector<std::string> plugins;
+  app.add_option("--plugin", plugins,
+                 "a Python file run before the command, whose plydem.register_strategy calls add "
+                 "strategies for --strategy (repeatable; see README, Python)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-  try {
+  // The command, run after the plug-ins (if any) have registered their strategies.
+  const auto command = [&]() -> int {
     if (*strategies) {
       const plydem::Registry& registry = plydem::default_registry();
       for (const std::string& name : registry.names()) {
@@ -513,6 +523,10 @@ int main(int argc, char** argv) {
       return 0;
     }
     return run_tension(*tension ? tension_options : defaults);
+  };
+  try {
+    plydem::cli::load_plugins(plugins);
+    return plydem::cli::run_with_plugins(command);
   } catch (const plydem::Error& e) {
     std::cerr << "plydem: error: " << e.what() << "\n";
     return 2;
