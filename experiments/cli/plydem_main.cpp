@@ -28,6 +28,7 @@
 #include "experiments/cli/python_plugin.hpp"
 #include "experiments/output/report.hpp"
 #include "experiments/output/strength_report.hpp"
+#include "experiments/protocols/coupon.hpp"
 #include "experiments/protocols/strength_test.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "experiments/runner/coupon_config.hpp"
@@ -318,6 +319,9 @@ void log_build_statistics() {
 
 int run_tension(const TensionOptions& o) {
   const plydem::TensionSettings settings = to_settings(o);
+  const std::string narrow = plydem::narrow_laminate_warning(
+      settings.coupon.width, settings.coupon.thickness, settings.layup);
+  if (!narrow.empty()) spdlog::warn("warning: {}", narrow);
   plydem::TensionTest test(settings);
   test.on_progress([](const plydem::TensionProgress& p) {
     const std::string left =
@@ -328,9 +332,10 @@ int run_tension(const TensionOptions& o) {
   const plydem::TensionResult result = test.run();
   log_build_statistics();
   if (o.json) {
-    std::cout << plydem::tension_json(result, settings).dump(2) << "\n";
+    std::cout << plydem::tension_json(result, settings).dump(2) << "\n";  // with "warnings"
   } else {
     std::cout << plydem::format_tension_table(result, settings);
+    if (!narrow.empty()) std::cout << "\nwarning: " << narrow << "\n";
   }
   return 0;
 }

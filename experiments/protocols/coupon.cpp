@@ -124,4 +124,18 @@ double grip_stress(const Particles& p, double cross_section) {
   return 0.5 * (left_force - right_force) / cross_section;
 }
 
+std::string narrow_laminate_warning(double width, double thickness,
+                                    const std::vector<double>& layup) {
+  const double laminate = thickness * static_cast<double>(layup.size());
+  if (layup.size() < 2 || !(width < kFreeEdgeWidths * laminate)) return "";
+  return fmt::format(
+      "the coupon is {:g} mm wide, narrower than {:g} laminate thicknesses ({:g} x {:g} mm = {:g} "
+      "mm): the free-edge zones of its plies (each about one laminate thickness wide) take up "
+      "much of its width, so its moduli differ from CLT's (an infinitely wide plate) by physics, "
+      "not by discretization; compare it with FEM of the same coupon, or make it at least {:g} "
+      "mm wide (--width-mm) to compare with CLT",
+      width * 1e3, kFreeEdgeWidths, kFreeEdgeWidths, laminate * 1e3,
+      kFreeEdgeWidths * laminate * 1e3, kFreeEdgeWidths * laminate * 1e3);
+}
+
 }  // namespace plydem

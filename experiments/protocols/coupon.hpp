@@ -10,6 +10,7 @@
 /// over the cross-section of the gauge section; strain is the least-squares fit of the gauge
 /// particles' displacements (core/measurements.hpp), away from the grips and from the free edges.
 
+#include <string>
 #include <vector>
 
 #include "core/model.hpp"
@@ -74,5 +75,16 @@ GaugeSection gauge_section(const Particles& particles, const CouponGrips& grips,
 /// The grip stress at the current state: the mean of the bonds' pull on the two grips
 /// (Particles::force along x, as the kernel or a solver left it) over `cross_section` [Pa].
 double grip_stress(const Particles& particles, double cross_section);
+
+/// A laminate coupon narrower than this many laminate thicknesses is dominated by its free-edge
+/// zones (each about one laminate thickness wide; Pipes & Pagano 1970), so its moduli differ from
+/// CLT's, which hold for an infinitely wide plate, by physics, not by discretization.
+inline constexpr double kFreeEdgeWidths = 5.0;
+
+/// Why `width` is too narrow for CLT to describe a coupon of the plies `layup` (each `thickness`
+/// thick), in words, or "" when it is not (a single ply, or width >= kFreeEdgeWidths laminate
+/// thicknesses).
+std::string narrow_laminate_warning(double width, double thickness,
+                                    const std::vector<double>& layup);
 
 }  // namespace plydem
