@@ -12,6 +12,7 @@
 
 #include <vector>
 
+#include "core/checkpoint.hpp"
 #include "core/model.hpp"
 #include "solvers/linear_solver.hpp"
 #include "solvers/static_solver.hpp"
@@ -74,5 +75,14 @@ GaugeSection gauge_section(const Particles& particles, const CouponGrips& grips,
 /// The grip stress at the current state: the mean of the bonds' pull on the two grips
 /// (Particles::force along x, as the kernel or a solver left it) over `cross_section` [Pa].
 double grip_stress(const Particles& particles, double cross_section);
+
+/// The coupon's part of a checkpoint's settings (core/checkpoint.hpp): the strategy and its
+/// options, the material (name, constants and strengths), the ply angle, the coupon's size and
+/// edges, the layup and interface stiffness, the grip length and gauge fraction.
+void add_coupon_settings(CheckpointHeader& header, const std::string& strategy,
+                         const std::vector<std::pair<std::string, double>>& strategy_options,
+                         const CouponSpec& coupon, const std::vector<double>& layup,
+                         const InterfaceStiffness& interface, double grip_length,
+                         double gauge_fraction);
 
 }  // namespace plydem
