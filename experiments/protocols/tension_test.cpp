@@ -416,6 +416,14 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle,
     in.finish();
     checkpointing->resume.reset();
     resuming = true;
+    spdlog::info("continuing the pull along {} at cycle {}: {}", checkpointing->pull == 0 ? "x" : "y",
+                 integrator->cycles(),
+                 s.fixed_cycles > 0 ? fmt::format("{} of {} fixed cycles", resumed_cycles,
+                                                  s.fixed_cycles)
+                                    : fmt::format("stage {} of {}, {}", resumed.stage,
+                                                  s.load_stages,
+                                                  resumed.phase == 0 ? "moving the grips"
+                                                                     : "relaxing"));
     if (every > 0) checkpointing->next = next_due();
   }
   if (s.solver == TensionSolver::kStatic) {
