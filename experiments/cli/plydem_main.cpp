@@ -55,6 +55,33 @@ struct CouponOptions {
   bool raw_edges = false;
 };
 
+// Checkpoint and restart (README, "Checkpoint and restart"): the flags of `tension --solver
+// explicit` and `strength`.
+struct CheckpointFlags {
+  long every = 0;
+  std::string file, restart;
+};
+
+void add_checkpoint_options(CLI::App& app, CheckpointFlags& o, const std::string& unit) {
+  app.add_option("--checkpoint-every", o.every,
+                 "write the run's state to --checkpoint FILE every N " + unit + " (0 = never)")
+      ->capture_default_str();
+  app.add_option("--checkpoint", o.file,
+                 "the checkpoint file --checkpoint-every writes (replaced whole each time)");
+  app.add_option("--restart", o.restart,
+                 "continue the run from this checkpoint file (same settings) to the result of a "
+                 "run that was not stopped");
+}
+
+plydem::CheckpointOptions to_checkpoint(const CheckpointFlags& o) {
+  plydem::CheckpointOptions c;
+  c.every = o.every;
+  c.file = o.file;
+  c.restart = o.restart;
+  c.validate();
+  return c;
+}
+
 struct TensionOptions : CouponOptions {
   double target_strain = 1e-3;
   int stages = 2;
@@ -66,6 +93,7 @@ struct TensionOptions : CouponOptions {
   double safety = 0.8;
   double grip_velocity_mm_s = 0;
   std::string solver = "static";
+  CheckpointFlags checkpoint;
 };
 
 struct StrengthCommandOptions : CouponOptions {
@@ -87,6 +115,7 @@ struct StrengthCommandOptions : CouponOptions {
   double stop_fraction = plydem::StrengthSettings{}.events.stop_fraction;
   double tooth_stiffness_ratio = plydem::StrengthSettings{}.events.tooth_stiffness_ratio;
   std::string out;
+  CheckpointFlags checkpoint;
 };
 
 // Options every command that builds a ply takes: strategy, its options, material, angle.
@@ -168,6 +197,7 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
                  "static (one sparse linear solve) or explicit (damped dynamics to quasi-static)")
       ->check(CLI::IsMember({"explicit", "static"}))
       ->capture_default_str();
+  add_checkpoint_options(app, o.checkpoint, "cycles (--solver explicit)");
 }
 
 void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
@@ -224,6 +254,7 @@ void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
   app.add_option("--out", o.out,
                  "also write report.md, results.csv, the stress-strain and crack-pattern PNGs and "
                  "a VTU series into this folder");
+  add_checkpoint_options(app, o.checkpoint, "events");
 }
 
 // The strategy named by the options, with its options set (unknown names fail here).
@@ -278,6 +309,8 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
       o.solver == "static" ? plydem::TensionSolver::kStatic : plydem::TensionSolver::kExplicit;
   s.explicit_settings.local_damping = o.damping;
   s.explicit_settings.safety_factor = o.safety;
+  s.checkpoint = to_checkpoint(o.checkpoint);
+  s.validate();  // checkpoints with the static solver fail here, before any work
   return s;
 }
 
@@ -299,6 +332,7 @@ plydem::StrengthSettings to_settings(const StrengthCommandOptions& o) {
   s.events.tooth_stiffness_ratio = o.tooth_stiffness_ratio;
   s.record_snapshots = !o.out.empty();
   s.consistent_edges = o.edge_strengths == "bulk";
+  s.checkpoint = to_checkpoint(o.checkpoint);
   s.validate();  // NaN and negative values fail here, before any work
   if (o.seed_option->count() > 0 && !(s.effective_weibull_modulus() > 0)) {
     throw plydem::Error(fmt::format(

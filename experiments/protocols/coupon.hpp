@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/checkpoint.hpp"
 #include "core/model.hpp"
 #include "solvers/linear_solver.hpp"
 #include "solvers/static_solver.hpp"
@@ -86,5 +87,14 @@ inline constexpr double kFreeEdgeWidths = 5.0;
 /// thicknesses).
 std::string narrow_laminate_warning(double width, double thickness,
                                     const std::vector<double>& layup);
+
+/// The coupon's part of a checkpoint's settings (core/checkpoint.hpp): the strategy and its
+/// options, the material (name, constants and strengths), the ply angle, the coupon's size and
+/// edges, the layup and interface stiffness, the grip length and gauge fraction.
+void add_coupon_settings(CheckpointHeader& header, const std::string& strategy,
+                         const std::vector<std::pair<std::string, double>>& strategy_options,
+                         const CouponSpec& coupon, const std::vector<double>& layup,
+                         const InterfaceStiffness& interface, double grip_length,
+                         double gauge_fraction);
 
 }  // namespace plydem
