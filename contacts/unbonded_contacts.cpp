@@ -313,4 +313,65 @@ int UnbondedContacts::touching() const {
   return count;
 }
 
+void UnbondedContacts::save(CheckpointWriter& out) const {
+  out.section("contacts");
+  out.u64(contacts_.size());
+  for (const UnbondedContact& c : contacts_) {
+    out.i64(c.first);
+    out.i64(c.second);
+    out.i64(c.bond);
+    for (int k = 0; k < 3; ++k) out.f64(c.branch[k]);
+    out.f64(c.distance);
+    out.f64(c.lever_first);
+    out.f64(c.lever_second);
+    out.f64(c.normal_stiffness);
+    out.f64(c.shear_stiffness);
+    for (int k = 0; k < 3; ++k) out.f64(c.spring[k]);
+    out.f64(c.overlap);
+  }
+  out.ints(touched_);
+  out.array(searched_at_);
+  out.f64(friction_dissipation_);
+  out.i64(searches_);
+}
+
+void UnbondedContacts::restore(CheckpointReader& in) {
+  in.section("contacts");
+  const std::uint64_t n = in.u64();
+  std::vector<UnbondedContact> contacts;
+  for (std::uint64_t k = 0; k < n; ++k) {
+    UnbondedContact c;
+    c.first = static_cast<int>(in.i64());
+    c.second = static_cast<int>(in.i64());
+    c.bond = static_cast<int>(in.i64());
+    if (c.first < 0 || c.first >= particles_ || c.second < 0 || c.second >= particles_ ||
+        c.bond < -1 || c.bond >= bond_first_.size())
+      in.corrupt(fmt::format("contact {} joins particles {} and {} (bond {})", k, c.first, c.second,
+                             c.bond));
+    for (double& v : c.branch) v = in.f64();
+    c.distance = in.f64();
+    c.lever_first = in.f64();
+    c.lever_second = in.f64();
+    c.normal_stiffness = in.f64();
+    c.shear_stiffness = in.f64();
+    for (double& v : c.spring) v = in.f64();
+    c.overlap = in.f64();
+    contacts.push_back(c);
+  }
+  std::vector<int> touched = in.ints();
+  for (int i : touched)
+    if (i < 0 || i >= static_cast<int>(index_.size()) + 64)
+      in.corrupt(fmt::format("a touched contact index {} is out of range", i));
+  Vector3Array searched_at;
+  in.array(searched_at);
+  if (searched_at.rows() != particles_)
+    throw Error(fmt::format("checkpoint {}: its contacts are for {} particles, the model has {}",
+                            in.file(), searched_at.rows(), particles_));
+  contacts_ = std::move(contacts);
+  touched_ = std::move(touched);
+  searched_at_ = std::move(searched_at);
+  friction_dissipation_ = in.f64();
+  searches_ = in.i64();
+}
+
 }  // namespace plydem

@@ -39,6 +39,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/checkpoint.hpp"
 #include "core/model.hpp"
 
 namespace plydem {
@@ -125,6 +126,13 @@ class UnbondedContacts {
   long searches() const { return searches_; }
   /// Contacts touching at the last pass.
   int touching() const;
+
+  /// Writes what changes during a run (the candidates and their history, the last pass's touched
+  /// indices, the last search's displacements, the dissipation and search count).
+  void save(CheckpointWriter& out) const;
+  /// Restores what save() wrote into contacts constructed as the saved ones were (the same model
+  /// and numbering). Throws plydem::Error for a checkpoint of another model.
+  void restore(CheckpointReader& in);
 
  private:
   void search(const ContactState& s);

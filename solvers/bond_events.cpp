@@ -32,6 +32,8 @@ void EventSettings::validate() const {
                       last_tooth_stiffness, tooth_stiffness_ratio));
   require(max_update_rank >= 0,
           fmt::format("events: max_update_rank is {}, must be >= 0", max_update_rank));
+  require(checkpoint_every >= 0,
+          fmt::format("events: checkpoint_every is {}, must be >= 0", checkpoint_every));
   require(progress_seconds > 0,
           fmt::format("events: progress_seconds is {}, must be positive", progress_seconds));
   plydem::validate(static_settings);
@@ -196,8 +198,90 @@ class UnitLoadSolver {
 
   /// Bond b's stiffness lost `removed` (its BondParameters with the stiffness taken away);
   /// model.bonds holds the new stiffness already.
-  void change(const Model& model, int b, const BondParameters& removed) {
+  void change(const Model& model, int b, const BondParameters& removed, const EventChange& record) {
     if (stale_) return;
+    history_.push_back(record);
+    change_terms(model, b, removed);
+    if (stale_) history_.clear();  // the next solve factors the current stiffness
+  }
+
+  bool stale() const { return stale_; }
+
+  /// The solver's part of a checkpoint.
+  void save(EventsState& s) const {
+    s.constraints = constraints_;
+    s.factored_from = factored_from_;
+    s.stale = stale_;
+    s.active_stale = active_stale_;
+    s.active_dofs = active_stale_ ? std::vector<int>{} : active_dofs_;
+    s.capacity = stale_ ? static_cast<long>(z_.cols()) : capacity_at_factor_;
+    s.changes = stale_ ? std::vector<EventChange>{} : history_;
+    s.result.factorizations = factorizations_;
+  }
+
+  /// A fresh solver continues a saved one: the model's bonds are the saved run's at its
+  /// checkpoint. Undoes the changes since the last factorization, factors as it did, and applies
+  /// the changes again (what the saved solver did, in the same order: the same factor and terms).
+  void restore(Model& model, const EventsState& s) {
+    const int dofs = kDofsPerParticle * model.particles.size();
+    active_stale_ = s.active_stale;
+    if (!active_stale_) {
+      active_dofs_ = s.active_dofs;
+      active_of_dof_.assign(dofs, -1);
+      for (std::size_t k = 0; k < active_dofs_.size(); ++k) {
+        const int dof = active_dofs_[k];
+        require(dof >= 0 && dof < dofs, "checkpoint: an active dof is out of range");
+        active_of_dof_[dof] = static_cast<int>(k);
+      }
+    }
+    stale_ = true;
+    if (s.stale) {
+      constraints_ = s.constraints;
+      allocate(s.capacity);
+      factorizations_ = s.result.factorizations;
+      return;
+    }
+    Bonds& bonds = model.bonds;
+    auto set = [&](int b, const double* v) {
+      bonds.normal_stiffness(b) = v[0];
+      bonds.shear_stiffness(b) = v[1];
+      bonds.bending_stiffness(b) = v[2];
+      bonds.twisting_stiffness(b) = v[3];
+      bonds.damage(b) = v[4];
+      bonds.state(b) = static_cast<int>(v[5]);
+    };
+    for (const EventChange& c : s.changes)
+      require(c.bond >= 0 && c.bond < bonds.size(), "checkpoint: a change names no bond");
+    for (auto c = s.changes.rbegin(); c != s.changes.rend(); ++c) set(c->bond, c->before);
+    constraints_ = s.factored_from;
+    factor(model);
+    allocate(s.capacity);
+    capacity_at_factor_ = s.capacity;
+    for (const EventChange& c : s.changes) {
+      BondParameters removed = bond_parameters(bonds, c.bond);
+      removed.normal_stiffness = c.removed[0];
+      removed.shear_stiffness = c.removed[1];
+      removed.bending_stiffness = c.removed[2];
+      removed.twisting_stiffness = c.removed[3];
+      set(c.bond, c.after);
+      change(model, c.bond, removed, c);
+    }
+    factorizations_ = s.result.factorizations;
+  }
+
+ private:
+  // The update's arrays at `capacity` columns (what reserve() leaves after growing to it).
+  void allocate(long capacity) {
+    if (capacity <= 0 || active_stale_) return;
+    const auto c = static_cast<Eigen::Index>(capacity);
+    z_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(active_dofs_.size()), c);
+    g_ = Eigen::MatrixXd::Zero(c, c);
+    l_ = Eigen::MatrixXd::Zero(c, c);
+    a_ = Eigen::VectorXd::Zero(c);
+    y0_ = Eigen::VectorXd::Zero(c);
+  }
+
+  void change_terms(const Model& model, int b, const BondParameters& removed) {
     if (refactor_every_change_) {
       stale_ = true;
       return;
@@ -306,7 +390,6 @@ class UnitLoadSolver {
     rank_ = r0 + q;
   }
 
- private:
   struct Term {
     int column = 0;         // first column of its block
     Eigen::MatrixXd v;      // its columns of V on its active dofs
@@ -328,6 +411,8 @@ class UnitLoadSolver {
   }
 
   void factor(Model& model) {
+    factored_from_ = constraints_;
+    history_.clear();
     system_ = std::make_unique<StaticSystem>(model, constraints_, settings_);
     ++factorizations_;
     constraints_ = system_->constraints();  // with the pins of the first factorization
@@ -351,6 +436,7 @@ class UnitLoadSolver {
     rank_ = 0;
     terms_.clear();
     stale_ = false;
+    capacity_at_factor_ = static_cast<long>(z_.cols());
   }
 
   // The free dofs connected, through the bonds' stiffness pattern, to a prescribed dof with a
@@ -415,6 +501,11 @@ class UnitLoadSolver {
   std::vector<Term> terms_;
   Eigen::MatrixXd z_, g_, l_;  // Z (active dofs x capacity), G and L (capacity x capacity)
   Eigen::VectorXd a_, y0_;
+  // For checkpoints: the constraints the last factorization was given, the columns its arrays
+  // had then, and the changes since.
+  DofConstraints factored_from_;
+  long capacity_at_factor_ = 0;
+  std::vector<EventChange> history_;
 };
 
 // What one equilibrium at unit load gives.
@@ -549,7 +640,7 @@ bool fix_loose_pieces(const Model& model, const Eigen::VectorXd& u, int& cluster
 }  // namespace
 
 EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
-                        const EventSettings& settings) {
+                        const EventSettings& settings, const EventsState* resume) {
   const auto start = Clock::now();
   settings.validate();
   check_inputs(model, unit, reaction_dofs);
@@ -570,6 +661,31 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
   std::string pending_stop;
   double last_progress = 0;
   long events = 0;
+  if (resume) {
+    const EventsState& r = *resume;
+    const int n = model.particles.size();
+    require(
+        r.critical_u.size() == kDofsPerParticle * n && r.critical_force.rows() == n &&
+            r.constraints.fixed.rows() == n && r.constraints.value.rows() == n &&
+            (r.stale || (r.factored_from.fixed.rows() == n && r.factored_from.value.rows() == n)),
+        fmt::format("events: the state to resume is for another model ({} particles here)", n));
+    result.path = r.result.path;
+    result.breaks = r.result.breaks;
+    result.peak = r.result.peak;
+    result.solves = r.result.solves;
+    result.dissipated_energy = r.result.dissipated_energy;
+    clusters = r.clusters;
+    broken = r.broken;
+    critical_u = r.critical_u;
+    critical_force = r.critical_force;
+    critical_lambda = r.critical_lambda;
+    first_energy = r.first_energy;
+    previous_energy = r.previous_energy;
+    peak_reaction = r.peak_reaction;
+    pending_stop = r.pending_stop;
+    events = r.events;
+    solver.restore(model, r);
+  }
 
   while (true) {
     if (events == 0) {
@@ -620,6 +736,17 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
 
     // The bond fails: a tooth of stiffness, or all of it.
     const BondParameters before = bond_parameters(bonds, b);
+    EventChange change;
+    change.bond = b;
+    auto fields = [&](double* v) {
+      v[0] = bonds.normal_stiffness(b);
+      v[1] = bonds.shear_stiffness(b);
+      v[2] = bonds.bending_stiffness(b);
+      v[3] = bonds.twisting_stiffness(b);
+      v[4] = bonds.damage(b);
+      v[5] = bonds.state(b);
+    };
+    fields(change.before);
     const bool breaks = !softening(bonds, b) || last_tooth(bonds, b, settings);
     const double keep = breaks ? 0.0 : r;
     BondParameters removed = before;
@@ -665,7 +792,12 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
       bonds.twisting_stiffness(b) *= r;
       bonds.damage(b) = 1.0 - (1.0 - bonds.damage(b)) * r;
     }
-    solver.change(model, b, removed);
+    fields(change.after);
+    change.removed[0] = removed.normal_stiffness;
+    change.removed[1] = removed.shear_stiffness;
+    change.removed[2] = removed.bending_stiffness;
+    change.removed[3] = removed.twisting_stiffness;
+    solver.change(model, b, removed, change);
 
     const double elapsed = seconds_since(start);
     if (settings.on_progress && elapsed - last_progress >= settings.progress_seconds) {
@@ -676,6 +808,27 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
       pending_stop = "failed";
     else if (events >= settings.max_events)
       pending_stop = "event limit";
+    if (settings.checkpoint_every > 0 && settings.on_checkpoint &&
+        events % settings.checkpoint_every == 0) {
+      EventsState s;
+      s.events = events;
+      s.broken = broken;
+      s.clusters = clusters;
+      s.critical_u = critical_u;
+      s.critical_force = critical_force;
+      s.critical_lambda = critical_lambda;
+      s.first_energy = first_energy;
+      s.previous_energy = previous_energy;
+      s.peak_reaction = peak_reaction;
+      s.pending_stop = pending_stop;
+      s.result.path = result.path;
+      s.result.breaks = result.breaks;
+      s.result.peak = result.peak;
+      s.result.solves = result.solves;
+      s.result.dissipated_energy = result.dissipated_energy;
+      solver.save(s);
+      settings.on_checkpoint(model, s);
+    }
   }
 
   if (events > 0)
@@ -687,6 +840,126 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
   if (settings.on_progress)
     settings.on_progress({events, broken, critical_lambda, peak_reaction, result.wall_seconds});
   return result;
+}
+
+namespace {
+
+void write_constraints(CheckpointWriter& out, const DofConstraints& c) {
+  out.u64(static_cast<std::uint64_t>(c.fixed.rows()));
+  for (Eigen::Index i = 0; i < c.fixed.size(); ++i) out.boolean(c.fixed.data()[i]);
+  out.doubles({c.value.data(), static_cast<std::size_t>(c.value.size())});
+}
+
+DofConstraints read_constraints(CheckpointReader& in) {
+  const std::uint64_t rows = in.u64();
+  if (rows > (1ull << 31)) in.corrupt(fmt::format("constraints for {} particles", rows));
+  DofConstraints c(static_cast<int>(rows));
+  for (Eigen::Index i = 0; i < c.fixed.size(); ++i) c.fixed.data()[i] = in.boolean();
+  const std::vector<double> value = in.doubles();
+  if (value.size() != static_cast<std::size_t>(c.value.size()))
+    in.corrupt("the constraints' values have the wrong size");
+  std::copy(value.begin(), value.end(), c.value.data());
+  return c;
+}
+
+}  // namespace
+
+void write_events_state(CheckpointWriter& out, const EventsState& s) {
+  out.section("events");
+  out.i64(s.events);
+  out.i64(s.broken);
+  out.i64(s.clusters);
+  out.doubles({s.critical_u.data(), static_cast<std::size_t>(s.critical_u.size())});
+  out.u64(static_cast<std::uint64_t>(s.critical_force.rows()));
+  out.doubles({s.critical_force.data(), static_cast<std::size_t>(s.critical_force.size())});
+  out.f64(s.critical_lambda);
+  out.f64(s.first_energy);
+  out.f64(s.previous_energy);
+  out.f64(s.peak_reaction);
+  out.str(s.pending_stop);
+  out.u64(s.result.path.size());
+  for (const EventPoint& p : s.result.path) {
+    out.i64(p.event);
+    out.f64(p.load_factor);
+    out.f64(p.reaction);
+    out.i64(p.bond);
+    out.i64(p.broken);
+    out.f64(p.strain_energy);
+  }
+  write_breaks(out, s.result.breaks);
+  out.i64(s.result.peak);
+  out.i64(s.result.solves);
+  out.i64(s.result.factorizations);
+  out.f64(s.result.dissipated_energy);
+  write_constraints(out, s.constraints);
+  out.boolean(s.stale);
+  if (!s.stale) write_constraints(out, s.factored_from);
+  out.boolean(s.active_stale);
+  out.ints(s.active_dofs);
+  out.i64(s.capacity);
+  out.u64(s.changes.size());
+  for (const EventChange& c : s.changes) {
+    out.i64(c.bond);
+    for (double v : c.before) out.f64(v);
+    for (double v : c.after) out.f64(v);
+    for (double v : c.removed) out.f64(v);
+  }
+}
+
+EventsState read_events_state(CheckpointReader& in) {
+  in.section("events");
+  EventsState s;
+  s.events = in.i64();
+  s.broken = static_cast<int>(in.i64());
+  s.clusters = static_cast<int>(in.i64());
+  const std::vector<double> u = in.doubles();
+  s.critical_u = Eigen::Map<const Eigen::VectorXd>(u.data(), static_cast<Eigen::Index>(u.size()));
+  const std::uint64_t rows = in.u64();
+  const std::vector<double> force = in.doubles();
+  if (force.size() != rows * kDofsPerParticle)
+    in.corrupt("the critical forces have the wrong size");
+  s.critical_force.resize(static_cast<Eigen::Index>(rows), kDofsPerParticle);
+  std::copy(force.begin(), force.end(), s.critical_force.data());
+  s.critical_lambda = in.f64();
+  s.first_energy = in.f64();
+  s.previous_energy = in.f64();
+  s.peak_reaction = in.f64();
+  s.pending_stop = in.str();
+  const std::uint64_t points = in.u64();
+  for (std::uint64_t k = 0; k < points; ++k) {
+    EventPoint p;
+    p.event = in.i64();
+    p.load_factor = in.f64();
+    p.reaction = in.f64();
+    p.bond = static_cast<int>(in.i64());
+    p.broken = static_cast<int>(in.i64());
+    p.strain_energy = in.f64();
+    s.result.path.push_back(p);
+  }
+  s.result.breaks = read_breaks(in);
+  s.result.peak = static_cast<int>(in.i64());
+  s.result.solves = in.i64();
+  s.result.factorizations = static_cast<int>(in.i64());
+  s.result.dissipated_energy = in.f64();
+  s.constraints = read_constraints(in);
+  s.stale = in.boolean();
+  if (!s.stale) s.factored_from = read_constraints(in);
+  s.active_stale = in.boolean();
+  s.active_dofs = in.ints();
+  s.capacity = in.i64();
+  const std::uint64_t changes = in.u64();
+  for (std::uint64_t k = 0; k < changes; ++k) {
+    EventChange c;
+    c.bond = static_cast<int>(in.i64());
+    for (double& v : c.before) v = in.f64();
+    for (double& v : c.after) v = in.f64();
+    for (double& v : c.removed) v = in.f64();
+    s.changes.push_back(c);
+  }
+  if (s.events < 0 || s.capacity < 0 || s.result.path.size() != static_cast<std::size_t>(s.events))
+    in.corrupt(
+        fmt::format("an events state of {} events with {} points", s.events, s.result.path.size()));
+  return s;
 }
 
 }  // namespace plydem

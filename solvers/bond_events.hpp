@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "core/bond_failure.hpp"
+#include "core/checkpoint.hpp"
 #include "core/model.hpp"
 #include "solvers/static_solver.hpp"
 
@@ -64,6 +65,8 @@ struct EventProgress {
   double peak_reaction = 0;
   double elapsed_seconds = 0;
 };
+
+struct EventsState;
 
 struct EventSettings {
   long max_events = 200000;
@@ -91,6 +94,11 @@ struct EventSettings {
   double progress_seconds = 2.0;
   /// Called at every critical state, the model holding that state (before the bond fails).
   std::function<void(const Model&, const EventPoint&)> on_event;
+  /// Checkpoints: after every `checkpoint_every` events (0 = never), on_checkpoint gets the model
+  /// (its bonds after the event's bond failed) and the run's state, from which run_events
+  /// continues (EventsState). Neither changes the run.
+  long checkpoint_every = 0;
+  std::function<void(const Model&, const EventsState&)> on_checkpoint;
   /// Throws plydem::Error naming the first bad setting.
   void validate() const;
 };
@@ -113,6 +121,43 @@ struct EventsResult {
   double wall_seconds = 0;
 };
 
+/// A bond's stiffness change since the last factorization, for the replay of a restart.
+struct EventChange {
+  int bond = 0;
+  double before[6] = {0, 0, 0, 0, 0, 0};  ///< k_n, k_s, k_b, k_t, damage, state before
+  double after[6] = {0, 0, 0, 0, 0, 0};   ///< and after the change
+  double removed[4] = {0, 0, 0, 0};       ///< the stiffness taken away (k_n, k_s, k_b, k_t)
+};
+
+/// An events run between two events (EventSettings::on_checkpoint): with the model's bonds as
+/// they were then, run_events(..., &state) continues to the events, bit for bit, that the run
+/// would have given. The factor is rebuilt, not stored: the stiffness of the last factorization
+/// (the bonds with the changes since undone) is factored again and the changes since are applied
+/// again as the same low-rank updates, in the same order.
+struct EventsState {
+  long events = 0;
+  int broken = 0;
+  int clusters = 0;
+  Eigen::VectorXd critical_u;
+  DofArray critical_force;
+  double critical_lambda = 1, first_energy = -1, previous_energy = 0, peak_reaction = 0;
+  std::string pending_stop;
+  /// The path, breaks, peak, solves, factorizations and dissipated energy so far.
+  EventsResult result;
+  // The unit-load solver.
+  DofConstraints constraints;    ///< the current constraints
+  DofConstraints factored_from;  ///< those given to the last factorization
+  bool stale = true;             ///< the next solve factors afresh
+  bool active_stale = true;      ///< and finds the active dofs again
+  std::vector<int> active_dofs;
+  long capacity = 0;  ///< columns of the update's arrays after the last factorization
+  std::vector<EventChange> changes;  ///< since the last factorization (none when stale)
+};
+
+void write_events_state(CheckpointWriter& out, const EventsState& state);
+/// Throws plydem::Error for a corrupt state.
+EventsState read_events_state(CheckpointReader& in);
+
 /// Runs events on `model` (its bonds must be breakable: Bonds::breakable) with the prescribed dofs
 /// of `unit` (their values at load factor 1), the reaction summed over the dofs flagged in
 /// `reaction_dofs` (one row per particle, Dof columns). Changes model.bonds (damage, state and
@@ -120,7 +165,9 @@ struct EventsResult {
 /// state (at the unit-load solution if no bond was loaded). Throws plydem::Error for bad settings,
 /// unbreakable bonds, bad strength fields (Model::check_consistency), a reaction dof that is not
 /// prescribed, or constraints the static solver refuses.
+/// With `resume` (a state of EventSettings::on_checkpoint of a run with the same model, unit
+/// load, reaction dofs and settings; the model's bonds as they were then), continues that run.
 EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
-                        const EventSettings& settings = {});
+                        const EventSettings& settings = {}, const EventsState* resume = nullptr);
 
 }  // namespace plydem

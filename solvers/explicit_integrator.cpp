@@ -7,9 +7,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <numeric>
+#include <string_view>
 
 #include "contacts/bond_kernel.hpp"
 #include "contacts/particle_ordering.hpp"
@@ -1228,6 +1230,214 @@ CycleReport ExplicitIntegrator::reference_cycle(bool last) {
   time_ += dt;
   ++cycles_;
   return report;
+}
+
+namespace {
+
+// The fields a run changes; every other field of a restored model must equal the integrator's.
+constexpr std::string_view kRunFields[] = {
+    "displacement",       "velocity",        "rotation",
+    "angular_velocity",   "force",           "torque",
+    "normal_stiffness",   "shear_stiffness", "bending_stiffness",
+    "twisting_stiffness", "damage",          "state"};
+
+}  // namespace
+
+void ExplicitIntegrator::save(CheckpointWriter& out) const {
+  out.section("explicit");
+  out.boolean(fused_ != nullptr);
+  out.f64(time_step_);
+  out.f64(time_);
+  out.i64(cycles_);
+  out.boolean(breaking_);
+  out.boolean(softening_);
+  Model state = model_;
+  std::vector<int> all(static_cast<std::size_t>(state.particles.size()));
+  std::iota(all.begin(), all.end(), 0);
+  gather(all, state.particles);
+  Eigen::ArrayXd kappa = kappa_;
+  if (fused_ && breaking_ && fused_->state.bonds.softening()) {
+    // What store_bonds() would write back at this point of the run.
+    const GatherBonds& g = fused_->state.bonds;
+    Bonds& bonds = state.bonds;
+    for (int b = 0; b < bonds.size(); ++b) {
+      const std::int64_t cell = g.bond_cells(b)[0];
+      if (cell < 0 || !g.holds(static_cast<std::size_t>(cell))) continue;
+      const double damage = g.slot_damage()[cell];
+      bonds.damage(b) = damage;
+      kappa(b) = g.slot_kappa()[cell];
+      bonds.normal_stiffness(b) = (1.0 - damage) * intact_[0](b);
+      bonds.shear_stiffness(b) = (1.0 - damage) * intact_[1](b);
+      bonds.bending_stiffness(b) = (1.0 - damage) * intact_[2](b);
+      bonds.twisting_stiffness(b) = (1.0 - damage) * intact_[3](b);
+    }
+  }
+  write_model(out, state);
+  out.array(kappa);
+  write_breaks(out, breaks_);
+  out.boolean(initial_set_);
+  out.f64(initial_energy_);
+  out.f64(last_report_.strain_energy);
+  out.f64(last_report_.kinetic_energy);
+  out.f64(last_report_.unbalanced_force_ratio);
+  out.f64(pending_work_);
+  out.f64(pending_damping_);
+  out.f64(released_);
+  out.f64(released_pending_);
+  if (breaking_) {
+    // The account's per-particle sums and the last contact forces, in model order.
+    const int n = state.particles.size();
+    Eigen::ArrayXd work(n), damping(n);
+    Vector3Array force(n, 3), torque(n, 3);
+    for (int i = 0; i < n; ++i) {
+      if (fused_) {
+        const FusedState& k = fused_->state;
+        const int j = k.position[i];
+        work(i) = k.work_sum[j];
+        damping(i) = k.damping_sum[j];
+        for (int c = 0; c < 3; ++c) {
+          force(i, c) = k.contact_force[c][j];
+          torque(i, c) = k.contact_torque[c][j];
+        }
+      } else {
+        work(i) = work_sum_(i);
+        damping(i) = damping_sum_(i);
+        force.row(i) = contact_force_.row(i);
+        torque.row(i) = contact_torque_.row(i);
+      }
+    }
+    out.array(work);
+    out.array(damping);
+    out.array(force);
+    out.array(torque);
+  }
+  out.boolean(contacts_ != nullptr);
+  if (contacts_) contacts_->save(out);
+  out.i64(contact_countdown_);
+}
+
+void ExplicitIntegrator::restore(CheckpointReader& in) {
+  require(!running_, "restore() was called during a run");
+  const std::string& file = in.file();
+  in.section("explicit");
+  const bool fused = in.boolean();
+  if (fused != (fused_ != nullptr))
+    throw Error(fmt::format("checkpoint {} is for another run: kernel is {} there, {} here", file,
+                            fused ? "fused" : "reference", fused_ ? "fused" : "reference"));
+  const double dt = in.f64();
+  if (std::memcmp(&dt, &time_step_, sizeof dt) != 0)
+    throw Error(
+        fmt::format("checkpoint {} is for another run: time step is {:.17g} s there, "
+                    "{:.17g} s here",
+                    file, dt, time_step_));
+  const double time = in.f64();
+  const long cycles = in.i64();
+  if (cycles < 0) in.corrupt(fmt::format("{} cycles", cycles));
+  const bool breaking = in.boolean();
+  const bool softening = in.boolean();
+  Model state;
+  read_model(in, state);
+  check_same_model(model_, state, kRunFields, file);
+  Eigen::ArrayXd kappa;
+  in.array(kappa);
+  if (kappa.size() != state.bonds.size()) in.corrupt("the softening history has the wrong size");
+  std::vector<BondBreak> breaks = read_breaks(in);
+  for (const BondBreak& b : breaks)
+    if (b.bond < 0 || b.bond >= state.bonds.size())
+      in.corrupt(fmt::format("the break log names bond {}", b.bond));
+  if (breaking && !breaking_) start_breaking();  // the saved run broke a bond by hand
+  if (breaking != breaking_ || softening != softening_)
+    throw Error(
+        fmt::format("checkpoint {} is for another run: its integrator {} and {}, this one "
+                    "{} and {}",
+                    file, breaking ? "breaks bonds" : "does not break bonds",
+                    softening ? "softens" : "does not soften",
+                    breaking_ ? "breaks bonds" : "does not break bonds",
+                    softening_ ? "softens" : "does not soften"));
+  for (int b = 0; b < state.bonds.size(); ++b)
+    if (model_.bonds.is_broken(b) && !state.bonds.is_broken(b))
+      throw Error(
+          fmt::format("checkpoint {} is for another model: bond {} is intact there and "
+                      "broken here",
+                      file, b));
+  initial_set_ = in.boolean();
+  initial_energy_ = in.f64();
+  last_report_.strain_energy = in.f64();
+  last_report_.kinetic_energy = in.f64();
+  last_report_.unbalanced_force_ratio = in.f64();
+  pending_work_ = in.f64();
+  pending_damping_ = in.f64();
+  released_ = in.f64();
+  released_pending_ = in.f64();
+  const int n = state.particles.size();
+  if (breaking_) {
+    Eigen::ArrayXd work, damping;
+    Vector3Array force, torque;
+    in.array(work);
+    in.array(damping);
+    in.array(force);
+    in.array(torque);
+    if (work.size() != n || damping.size() != n || force.rows() != n || torque.rows() != n)
+      in.corrupt("the energy account has the wrong size");
+    if (fused_) {
+      FusedState& k = fused_->state;
+      for (int i = 0; i < n; ++i) {
+        const int j = k.position[i];
+        k.work_sum[j] = work(i);
+        k.damping_sum[j] = damping(i);
+        for (int c = 0; c < 3; ++c) {
+          k.contact_force[c][j] = force(i, c);
+          k.contact_torque[c][j] = torque(i, c);
+        }
+      }
+    } else {
+      work_sum_ = work;
+      damping_sum_ = damping;
+      contact_force_ = force;
+      contact_torque_ = torque;
+    }
+  }
+  const bool contacts = in.boolean();
+  if (contacts != (contacts_ != nullptr))
+    throw Error(fmt::format("checkpoint {} is for another run: contacts are {} there, {} here",
+                            file, contacts ? "on" : "off", contacts_ ? "on" : "off"));
+  if (contacts_) {
+    contacts_->restore(in);
+    if (fused_) {
+      FusedState& k = fused_->state;
+      std::fill(k.contact_block.begin(), k.contact_block.end(), 0);
+      for (int i : contacts_->touched()) {
+        if (i / lanes::kCount >= k.blocks) in.corrupt("a touched contact is out of range");
+        k.contact_block[i / lanes::kCount] = 1;
+      }
+    }
+  }
+  contact_countdown_ = in.i64();
+
+  // The fused kernel's slots: the bonds broken since, the softening histories.
+  if (fused_ && breaking_) {
+    GatherBonds& g = fused_->state.bonds;
+    const int padded = g.padded_count();
+    for (int b = 0; b < state.bonds.size(); ++b) {
+      for (const std::int64_t cell : g.bond_cells(b)) {
+        if (cell < 0) continue;
+        const auto c = static_cast<std::size_t>(cell);
+        if (state.bonds.is_broken(b)) {
+          if (g.holds(c))
+            g.clear_slot(static_cast<int>(cell % padded), static_cast<int>(cell / padded));
+        } else if (g.softening()) {
+          g.slot_damage()[c] = state.bonds.damage(b);
+          g.slot_kappa()[c] = kappa(b);
+        }
+      }
+    }
+  }
+  model_.particles = std::move(state.particles);
+  model_.bonds = std::move(state.bonds);
+  kappa_ = std::move(kappa);
+  breaks_ = std::move(breaks);
+  time_ = time;
+  cycles_ = cycles;
 }
 
 }  // namespace plydem

@@ -44,6 +44,7 @@
 #include "contacts/particle_ordering.hpp"
 #include "contacts/unbonded_contacts.hpp"
 #include "core/bond_failure.hpp"
+#include "core/checkpoint.hpp"
 #include "core/model.hpp"
 
 namespace plydem {
@@ -273,6 +274,18 @@ class ExplicitIntegrator {
 
   /// The contacts (null unless the run has them).
   const UnbondedContacts* contacts() const { return contacts_.get(); }
+
+  /// Checkpoint (core/checkpoint.hpp): writes the model as the integrator holds it (between runs,
+  /// or from a run's hook: the state is then read from the kernel) and everything the next cycles
+  /// depend on: the time and cycle count, softening histories, the break log, the energy account,
+  /// the contacts and their history. The prescribed motions are the caller's to restore.
+  void save(CheckpointWriter& out) const;
+  /// Between runs, on an integrator constructed with the same settings on the model as it was when
+  /// the saved integrator was constructed: restores what save() wrote (into the model and the
+  /// kernel), so that the cycles that follow are, bit for bit, those the saved integrator would
+  /// have run (after the caller sets the same prescribed motions). Throws plydem::Error for a
+  /// checkpoint of another model or other settings (naming the field or setting that differs).
+  void restore(CheckpointReader& in);
 
   /// Bytes the fused kernel holds for the run (its state, the gather lists, the bond types, the
   /// renumbering), or 0 for the reference kernel. The model's own arrays are not counted.

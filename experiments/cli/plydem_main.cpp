@@ -27,8 +27,10 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/progress.hpp"
+#include "experiments/cli/python_plugin.hpp"
 #include "experiments/output/report.hpp"
 #include "experiments/output/strength_report.hpp"
+#include "experiments/protocols/coupon.hpp"
 #include "experiments/protocols/strength_test.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "experiments/runner/coupon_config.hpp"
@@ -56,6 +58,33 @@ struct CouponOptions {
   bool force = false;
 };
 
+// Checkpoint and restart (README, "Checkpoint and restart"): the flags of `tension --solver
+// explicit` and `strength`.
+struct CheckpointFlags {
+  long every = 0;
+  std::string file, restart;
+};
+
+void add_checkpoint_options(CLI::App& app, CheckpointFlags& o, const std::string& unit) {
+  app.add_option("--checkpoint-every", o.every,
+                 "write the run's state to --checkpoint FILE every N " + unit + " (0 = never)")
+      ->capture_default_str();
+  app.add_option("--checkpoint", o.file,
+                 "the checkpoint file --checkpoint-every writes (replaced whole each time)");
+  app.add_option("--restart", o.restart,
+                 "continue the run from this checkpoint file (same settings) to the result of a "
+                 "run that was not stopped");
+}
+
+plydem::CheckpointOptions to_checkpoint(const CheckpointFlags& o) {
+  plydem::CheckpointOptions c;
+  c.every = o.every;
+  c.file = o.file;
+  c.restart = o.restart;
+  c.validate();
+  return c;
+}
+
 struct TensionOptions : CouponOptions {
   double target_strain = 1e-3;
   int stages = 2;
@@ -67,6 +96,7 @@ struct TensionOptions : CouponOptions {
   double safety = 0.8;
   double grip_velocity_mm_s = 0;
   std::string solver = "static";
+  CheckpointFlags checkpoint;
 };
 
 struct StrengthCommandOptions : CouponOptions {
@@ -88,6 +118,7 @@ struct StrengthCommandOptions : CouponOptions {
   double stop_fraction = plydem::StrengthSettings{}.events.stop_fraction;
   double tooth_stiffness_ratio = plydem::StrengthSettings{}.events.tooth_stiffness_ratio;
   std::string out;
+  CheckpointFlags checkpoint;
 };
 
 // Options every command that builds a ply takes: strategy, its options, material, angle.
@@ -244,6 +275,7 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
                  "static (one sparse linear solve) or explicit (damped dynamics to quasi-static)")
       ->check(CLI::IsMember({"explicit", "static"}))
       ->capture_default_str();
+  add_checkpoint_options(app, o.checkpoint, "cycles (--solver explicit)");
 }
 
 void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
@@ -300,6 +332,7 @@ void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
   app.add_option("--out", o.out,
                  "also write report.md, results.csv, the stress-strain and crack-pattern PNGs and "
                  "a VTU series into this folder");
+  add_checkpoint_options(app, o.checkpoint, "events");
 }
 
 // The strategy named by the options, with its options set (unknown names fail here).
@@ -355,6 +388,8 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
       o.solver == "static" ? plydem::TensionSolver::kStatic : plydem::TensionSolver::kExplicit;
   s.explicit_settings.local_damping = o.damping;
   s.explicit_settings.safety_factor = o.safety;
+  s.checkpoint = to_checkpoint(o.checkpoint);
+  s.validate();  // checkpoints with the static solver fail here, before any work
   return s;
 }
 
@@ -377,6 +412,7 @@ plydem::StrengthSettings to_settings(const StrengthCommandOptions& o) {
   s.events.progress_seconds = std::max(1e-9, plydem::progress_interval());
   s.record_snapshots = !o.out.empty();
   s.consistent_edges = o.edge_strengths == "bulk";
+  s.checkpoint = to_checkpoint(o.checkpoint);
   s.validate();  // NaN and negative values fail here, before any work
   if (o.seed_option->count() > 0 && !(s.effective_weibull_modulus() > 0)) {
     throw plydem::Error(fmt::format(
@@ -397,6 +433,9 @@ void log_build_statistics() {
 
 int run_tension(const TensionOptions& o) {
   const plydem::TensionSettings settings = to_settings(o);
+  const std::string narrow = plydem::narrow_laminate_warning(
+      settings.coupon.width, settings.coupon.thickness, settings.layup);
+  if (!narrow.empty()) spdlog::warn("warning: {}", narrow);
   plydem::TensionTest test(settings);
   test.on_progress([](const plydem::TensionProgress& p) {
     const std::string left =
@@ -407,9 +446,10 @@ int run_tension(const TensionOptions& o) {
   const plydem::TensionResult result = test.run();
   log_build_statistics();
   if (o.json) {
-    std::cout << plydem::tension_json(result, settings).dump(2) << "\n";
+    std::cout << plydem::tension_json(result, settings).dump(2) << "\n";  // with "warnings"
   } else {
     std::cout << plydem::format_tension_table(result, settings);
+    if (!narrow.empty()) std::cout << "\nwarning: " << narrow << "\n";
   }
   return 0;
 }
@@ -521,6 +561,9 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
       "With no command it runs the paper's 0 deg E-glass/MY750 lamina with the Hex2D strategy\n"
       "and prints E1, E2, nu12, nu21 beside classical lamination theory."};
   app.require_subcommand(0, 1);
+  // Options of the program itself (--plugin) may also stand after the command: the commands
+  // (which inherit this) pass them up.
+  app.fallthrough();
   // Progress and warnings go to stderr: stdout carries only the table or the JSON object.
   if (!spdlog::get("plydem")) spdlog::set_default_logger(spdlog::stderr_color_mt("plydem"));
   spdlog::set_pattern("[%H:%M:%S] %v");
@@ -573,12 +616,18 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
                 "memory");
   add_log_options(*run, log_options);
 
+  std::vector<std::string> plugins;
+  app.add_option("--plugin", plugins,
+                 "a Python file run before the command, whose plydem.register_strategy calls add "
+                 "strategies for --strategy (repeatable; see README, Python)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-  try {
+  // The command, run after the plug-ins (if any) have registered their strategies.
+  const auto command = [&]() -> int {
     plydem::set_progress_interval(log_options.progress_interval);
     spdlog::set_level(log_options.quiet ? spdlog::level::warn : spdlog::level::info);
     if (*tension) refuse_inapplicable(*tension, tension_options);
@@ -642,6 +691,11 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
       return 0;
     }
     return run_tension(*tension ? tension_options : defaults);
+  };
+  try {
+    if (check_only) return command();  // plug-ins are not loaded: nothing runs
+    plydem::cli::load_plugins(plugins);
+    return plydem::cli::run_with_plugins(command);
   } catch (const plydem::Error& e) {
     std::cerr << "plydem: error: " << e.what() << "\n";
     return 2;

@@ -145,6 +145,11 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
         {"wall_seconds", r.specimen.wall_seconds}};
   }
   j["calibration"] = calibration_json(r.calibration);
+  // What the user should know about the coupon (experiments/protocols/coupon.hpp).
+  j["warnings"] = nlohmann::json::array();
+  const std::string narrow =
+      narrow_laminate_warning(s.coupon.width, s.coupon.thickness, s.layup);
+  if (!narrow.empty()) j["warnings"].push_back(narrow);
   return j;
 }
 

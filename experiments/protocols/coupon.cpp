@@ -124,4 +124,62 @@ double grip_stress(const Particles& p, double cross_section) {
   return 0.5 * (left_force - right_force) / cross_section;
 }
 
+std::string narrow_laminate_warning(double width, double thickness,
+                                    const std::vector<double>& layup) {
+  const double laminate = thickness * static_cast<double>(layup.size());
+  if (layup.size() < 2 || !(width < kFreeEdgeWidths * laminate)) return "";
+  return fmt::format(
+      "the coupon is {:g} mm wide, narrower than {:g} laminate thicknesses ({:g} x {:g} mm = {:g} "
+      "mm): the free-edge zones of its plies (each about one laminate thickness wide) take up "
+      "much of its width, so its moduli differ from CLT's (an infinitely wide plate) by physics, "
+      "not by discretization; compare it with FEM of the same coupon, or make it at least {:g} "
+      "mm wide (--width-mm) to compare with CLT",
+      width * 1e3, kFreeEdgeWidths, kFreeEdgeWidths, laminate * 1e3,
+      kFreeEdgeWidths * laminate * 1e3, kFreeEdgeWidths * laminate * 1e3);
+}
+
+void add_coupon_settings(CheckpointHeader& header, const std::string& strategy,
+                         const std::vector<std::pair<std::string, double>>& strategy_options,
+                         const CouponSpec& coupon, const std::vector<double>& layup,
+                         const InterfaceStiffness& interface, double grip_length,
+                         double gauge_fraction) {
+  header.add("strategy", strategy);
+  for (const auto& [name, value] : strategy_options)
+    header.add("strategy_option." + name, exact(value));
+  const Material& m = coupon.material;
+  header.add("material", m.name);
+  header.add("material.E1", exact(m.E1));
+  header.add("material.E2", exact(m.E2));
+  header.add("material.G12", exact(m.G12));
+  header.add("material.nu12", exact(m.nu12));
+  header.add("material.nu23", exact(m.nu23));
+  header.add("material.density", exact(m.density));
+  const LaminaStrength& st = m.strength;
+  header.add("material.XT", exact(st.XT));
+  header.add("material.XC", exact(st.XC));
+  header.add("material.YT", exact(st.YT));
+  header.add("material.YC", exact(st.YC));
+  header.add("material.S12", exact(st.S12));
+  header.add("material.G_fibre", exact(st.G_fibre));
+  header.add("material.G_matrix", exact(st.G_matrix));
+  header.add("material.weibull_modulus", exact(st.weibull_modulus));
+  header.add("ply_angle", exact(coupon.ply_angle));
+  header.add("length", exact(coupon.length));
+  header.add("width", exact(coupon.width));
+  header.add("thickness", exact(coupon.thickness));
+  header.add("particle_diameter", exact(coupon.particle_diameter));
+  header.add("complete_boundary_cells", coupon.complete_boundary_cells ? "true" : "false");
+  std::string angles;
+  for (double a : layup) {
+    if (!angles.empty()) angles.push_back('/');
+    angles.append(exact(a));
+  }
+  header.add("layup", angles);
+  header.add("interface.normal", exact(interface.normal));
+  header.add("interface.shear", exact(interface.shear));
+  header.add("interface.lateral_radius", exact(interface.lateral_radius));
+  header.add("grip_length", exact(grip_length));
+  header.add("gauge_fraction", exact(gauge_fraction));
+}
+
 }  // namespace plydem

@@ -10,8 +10,10 @@
 /// over the cross-section of the gauge section; strain is the least-squares fit of the gauge
 /// particles' displacements (core/measurements.hpp), away from the grips and from the free edges.
 
+#include <string>
 #include <vector>
 
+#include "core/checkpoint.hpp"
 #include "core/model.hpp"
 #include "solvers/linear_solver.hpp"
 #include "solvers/static_solver.hpp"
@@ -74,5 +76,25 @@ GaugeSection gauge_section(const Particles& particles, const CouponGrips& grips,
 /// The grip stress at the current state: the mean of the bonds' pull on the two grips
 /// (Particles::force along x, as the kernel or a solver left it) over `cross_section` [Pa].
 double grip_stress(const Particles& particles, double cross_section);
+
+/// A laminate coupon narrower than this many laminate thicknesses is dominated by its free-edge
+/// zones (each about one laminate thickness wide; Pipes & Pagano 1970), so its moduli differ from
+/// CLT's, which hold for an infinitely wide plate, by physics, not by discretization.
+inline constexpr double kFreeEdgeWidths = 5.0;
+
+/// Why `width` is too narrow for CLT to describe a coupon of the plies `layup` (each `thickness`
+/// thick), in words, or "" when it is not (a single ply, or width >= kFreeEdgeWidths laminate
+/// thicknesses).
+std::string narrow_laminate_warning(double width, double thickness,
+                                    const std::vector<double>& layup);
+
+/// The coupon's part of a checkpoint's settings (core/checkpoint.hpp): the strategy and its
+/// options, the material (name, constants and strengths), the ply angle, the coupon's size and
+/// edges, the layup and interface stiffness, the grip length and gauge fraction.
+void add_coupon_settings(CheckpointHeader& header, const std::string& strategy,
+                         const std::vector<std::pair<std::string, double>>& strategy_options,
+                         const CouponSpec& coupon, const std::vector<double>& layup,
+                         const InterfaceStiffness& interface, double grip_length,
+                         double gauge_fraction);
 
 }  // namespace plydem

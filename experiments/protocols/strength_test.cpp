@@ -9,6 +9,8 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
+#include <string_view>
 
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
@@ -172,7 +174,43 @@ void StrengthSettings::validate() const {
           "the strength test sets the events solver's callbacks itself (use "
           "StrengthTest::on_progress)");
   events.validate();
+  require(events.checkpoint_every == 0 && !events.on_checkpoint,
+          "the strength test sets the events solver's checkpoints itself (use "
+          "StrengthSettings::checkpoint)");
   plydem::validate(explicit_settings);
+  checkpoint.validate();
+}
+
+CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
+  CheckpointHeader h;
+  h.kind = fmt::format("strength/{}", strength_method_name(s.method));
+  add_coupon_settings(h, s.strategy, s.strategy_options, s.coupon, s.layup, s.interface,
+                      s.grip_length, s.gauge_fraction);
+  h.add("interface_strength.normal", exact(s.interface_strength.normal));
+  h.add("interface_strength.shear", exact(s.interface_strength.shear));
+  h.add("interface_strength.GIc", exact(s.interface_strength.GIc));
+  h.add("interface_strength.GIIc", exact(s.interface_strength.GIIc));
+  h.add("weibull_modulus", exact(s.effective_weibull_modulus()));
+  h.add("seed", fmt::format("{}", s.seed));
+  h.add("friction", exact(s.strength_options.friction_coefficient));
+  h.add("softening", s.strength_options.softening ? "true" : "false");
+  h.add("strength_particle_diameter", exact(s.strength_options.particle_diameter));
+  h.add("edge_band_diameters", exact(s.edge_band_diameters));
+  h.add("grips", strength_grips_name(s.grips));
+  h.add("linear_solver", fmt::format("{}", static_cast<int>(s.linear_solver)));
+  h.add("edge_strengths", s.consistent_edges ? "bulk" : "weighted");
+  const EventSettings& e = s.events;
+  h.add("max_events", fmt::format("{}", e.max_events));
+  h.add("stop_fraction", exact(e.stop_fraction));
+  h.add("tooth_stiffness_ratio", exact(e.tooth_stiffness_ratio));
+  h.add("last_tooth_stiffness", exact(e.last_tooth_stiffness));
+  h.add("max_update_rank", fmt::format("{}", e.max_update_rank));
+  h.add("refactor_every_event", e.refactor_every_event ? "true" : "false");
+  h.add("static.method", fmt::format("{}", static_cast<int>(e.static_settings.method)));
+  h.add("static.pivot_tolerance", exact(e.static_settings.pivot_tolerance));
+  h.add("snapshots (--out)", s.record_snapshots ? "recorded" : "not recorded");
+  h.add("settings_hash", fmt::format("{:016x}", h.settings_hash()));
+  return h;
 }
 
 double first_ply_failure_stress(FailureCriterion criterion, const std::vector<Ply>& plies,
@@ -390,7 +428,97 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
                        : std::make_shared<const Model>(state);
     }
   };
-  const EventsResult run = run_events(*model, unit, reaction_dofs, events);
+
+  // Checkpoints: the settings and the model as it starts (strengths assigned) must match.
+  const CheckpointOptions& ck = s.checkpoint;
+  CheckpointHeader header;
+  if (ck.writes() || !ck.restart.empty()) {
+    header = strength_checkpoint_header(s);
+    add_model_fingerprint(header, *model);
+    CheckpointWriter unit_bytes;
+    for (Eigen::Index i = 0; i < unit.fixed.size(); ++i) unit_bytes.boolean(unit.fixed.data()[i]);
+    unit_bytes.doubles({unit.value.data(), static_cast<std::size_t>(unit.value.size())});
+    header.add("unit_load", fmt::format("{:016x}", fnv1a64(unit_bytes.bytes())));
+  }
+  auto write_result_state = [&](CheckpointWriter& w) {
+    w.section("strength");
+    w.doubles(result.strain);
+    w.doubles(result.stress);
+    w.doubles(result.nominal_strain);
+    w.f64(peak_stress);
+    w.i64(peak_event);
+    w.boolean(peak_state != nullptr);
+    if (peak_state) write_model(w, *peak_state);
+    w.u64(result.snapshots.size());
+    for (const StrengthSnapshot& snapshot : result.snapshots) {
+      w.i64(snapshot.event);
+      w.str(snapshot.label);
+      write_model(w, *snapshot.model);
+    }
+  };
+  std::optional<EventsState> resume;
+  if (!ck.restart.empty()) {
+    CheckpointFile f = read_checkpoint(ck.restart);
+    const std::string file = ck.restart.string();
+    check_same_run(f.header, header, file);
+    CheckpointReader& in = f.payload;
+    in.section("strength");
+    result.strain = in.doubles();
+    result.stress = in.doubles();
+    result.nominal_strain = in.doubles();
+    peak_stress = in.f64();
+    peak_event = in.i64();
+    if (in.boolean()) {
+      auto m = std::make_shared<Model>();
+      read_model(in, *m);
+      peak_state = std::move(m);
+    }
+    const std::uint64_t snapshots = in.u64();
+    for (std::uint64_t k = 0; k < snapshots; ++k) {
+      StrengthSnapshot snapshot;
+      snapshot.event = in.i64();
+      snapshot.label = in.str();
+      auto m = std::make_shared<Model>();
+      read_model(in, *m);
+      snapshot.model = std::move(m);
+      // The peak's snapshot is the peak state itself (as the run shares it).
+      if (peak_state && snapshot.event == peak_event) snapshot.model = peak_state;
+      result.snapshots.push_back(std::move(snapshot));
+    }
+    Model saved;
+    read_model(in, saved);
+    static constexpr std::string_view kRunFields[] = {"displacement",
+                                                      "rotation",
+                                                      "force",
+                                                      "torque",
+                                                      "normal_stiffness",
+                                                      "shear_stiffness",
+                                                      "bending_stiffness",
+                                                      "twisting_stiffness",
+                                                      "damage",
+                                                      "state"};
+    check_same_model(*model, saved, kRunFields, file);
+    resume = read_events_state(in);
+    in.finish();
+    if (result.strain.size() != resume->result.path.size() + 1)
+      in.corrupt("the curve and the events differ in length");
+    model->particles = std::move(saved.particles);
+    model->bonds = std::move(saved.bonds);
+    spdlog::info("restarting from {} after event {} ({} bonds broken)", file, resume->events,
+                 resume->broken);
+  }
+  if (ck.writes()) {
+    events.checkpoint_every = ck.every;
+    events.on_checkpoint = [&](const Model& state, const EventsState& run_state) {
+      CheckpointWriter w;
+      write_result_state(w);
+      write_model(w, state);
+      write_events_state(w, run_state);
+      write_checkpoint(ck.file, header, w);
+    };
+  }
+  const EventsResult run =
+      run_events(*model, unit, reaction_dofs, events, resume ? &*resume : nullptr);
 
   require(!run.path.empty(),
           fmt::format("no bond of the coupon broke under the grips' pull ({}): nothing to "

@@ -125,6 +125,13 @@ struct StrengthSettings {
   /// Build even when the coupon's estimate (experiments/protocols/resource_estimate.hpp) exceeds
   /// the machine's available memory; run() refuses it otherwise, before building.
   bool force = false;
+  /// Checkpoint and restart (core/checkpoint.hpp, README "Checkpoint and restart"): every
+  /// `checkpoint.every` events the run's state goes to `checkpoint.file`; with `checkpoint.restart`
+  /// the run continues from that file (which must be of a run with the same settings: a
+  /// checkpoint of another is a plydem::Error naming the setting that differs) to the result, bit
+  /// for bit, of the run that was not stopped. Not itself part of the settings a checkpoint
+  /// matches.
+  CheckpointOptions checkpoint;
 
   /// The Weibull modulus the run uses: weibull_modulus or the material's.
   double effective_weibull_modulus() const;
@@ -234,6 +241,11 @@ class StrengthTest {
   StrengthSettings settings_;
   std::function<void(const EventProgress&)> progress_;
 };
+
+/// What a strength test's checkpoint must match (without the model's fingerprint, which run()
+/// adds): kind "strength/events", the coupon (add_coupon_settings), the strengths, grips, gauge,
+/// events settings and whether snapshots are recorded.
+CheckpointHeader strength_checkpoint_header(const StrengthSettings& settings);
 
 /// The mean stress sigma_x [Pa] at which the first ply of `plies` reaches `criterion` under
 /// uniaxial membrane load along x (classical lamination theory: ply stresses Q-bar_k A^-1 N with

@@ -59,7 +59,93 @@ void TensionSettings::validate() const {
   require(max_cycles >= 1, "max cycles must be >= 1");
   require(fixed_cycles >= 0, "fixed cycles must be >= 0");
   plydem::validate(explicit_settings);  // checked even when a static solve will not use them
+  checkpoint.validate();
+  require(
+      solver == TensionSolver::kExplicit || (!checkpoint.writes() && checkpoint.restart.empty()),
+      "--checkpoint-every, --checkpoint and --restart need the explicit solver (--solver "
+      "explicit): a static solve is one step, with nothing to continue");
 }
+
+CheckpointHeader tension_checkpoint_header(const TensionSettings& s) {
+  CheckpointHeader h;
+  h.kind = s.solver == TensionSolver::kExplicit ? "tension/explicit" : "tension/static";
+  add_coupon_settings(h, s.strategy, s.strategy_options, s.coupon, s.layup, s.interface,
+                      s.grip_length, s.gauge_fraction);
+  h.add("edge_band_diameters", exact(s.edge_band_diameters));
+  h.add("target_strain", exact(s.target_strain));
+  h.add("stages", fmt::format("{}", s.load_stages));
+  h.add("ramp_cycles", fmt::format("{}", s.ramp_cycles));
+  h.add("grip_velocity", exact(s.grip_velocity));
+  h.add("tolerance", exact(s.tolerance));
+  h.add("max_cycles", fmt::format("{}", s.max_cycles));
+  h.add("cycles (fixed)", fmt::format("{}", s.fixed_cycles));
+  h.add("grips", s.grips == GripCondition::kClamped ? "clamped" : "free");
+  h.add("measure_specimen_stiffness", s.measure_specimen_stiffness ? "true" : "false");
+  h.add("linear_solver", fmt::format("{}", static_cast<int>(s.linear_solver)));
+  const ExplicitSettings& e = s.explicit_settings;
+  h.add("damping", exact(e.local_damping));
+  h.add("safety", exact(e.safety_factor));
+  h.add("time_step", exact(e.time_step));
+  h.add("kernel", e.kernel == ExplicitKernel::kFused ? "fused" : "reference");
+  h.add("particle_order", fmt::format("{}", static_cast<int>(e.particle_order)));
+  h.add("energy_account", e.energy_account ? "true" : "false");
+  h.add("contacts", e.contacts ? "true" : "false");
+  h.add("contact.skin", exact(e.contact.skin));
+  h.add("contact.check_interval", fmt::format("{}", e.contact.check_interval));
+  h.add("contact.friction", exact(e.contact.friction));
+  h.add("strength_storage", fmt::format("{}", static_cast<int>(e.strength_storage)));
+  h.add("settings_hash", fmt::format("{:016x}", h.settings_hash()));
+  return h;
+}
+
+// The state of a checkpointed run: the header, the pull running, the finished pull along x, when
+// the next checkpoint is due, and the file a restart continues from (until its pull has read it).
+struct TensionTest::Checkpointing {
+  CheckpointHeader header;
+  int pull = 0;  // 0 along x, 1 along y
+  const PullResult* along_x = nullptr;
+  long next = 0;
+  std::optional<CheckpointFile> resume;
+};
+
+namespace {
+
+void write_pull_result(CheckpointWriter& w, const PullResult& r) {
+  w.section("pull result");
+  for (double v : {r.ply_angle, r.modulus, r.poisson, r.shear_coupling, r.fit_r_squared,
+                   r.final_ratio, r.time_step, r.grip_velocity, r.cross_section, r.loading_transits,
+                   r.build_seconds, r.wall_seconds})
+    w.f64(v);
+  for (const std::vector<double>* v : {&r.strain, &r.lateral_strain, &r.shear_strain, &r.stress})
+    w.doubles(*v);
+  w.i64(r.particles);
+  w.i64(r.bonds);
+  w.i64(r.cycles);
+  w.boolean(r.model != nullptr);
+  if (r.model) write_model(w, *r.model);
+}
+
+PullResult read_pull_result(CheckpointReader& in) {
+  in.section("pull result");
+  PullResult r;
+  for (double* v : {&r.ply_angle, &r.modulus, &r.poisson, &r.shear_coupling, &r.fit_r_squared,
+                    &r.final_ratio, &r.time_step, &r.grip_velocity, &r.cross_section,
+                    &r.loading_transits, &r.build_seconds, &r.wall_seconds})
+    *v = in.f64();
+  for (std::vector<double>* v : {&r.strain, &r.lateral_strain, &r.shear_strain, &r.stress})
+    *v = in.doubles();
+  r.particles = static_cast<int>(in.i64());
+  r.bonds = static_cast<int>(in.i64());
+  r.cycles = in.i64();
+  if (in.boolean()) {
+    auto model = std::make_shared<Model>();
+    read_model(in, *model);
+    r.model = std::move(model);
+  }
+  return r;
+}
+
+}  // namespace
 
 TensionTest::TensionTest(TensionSettings settings) : settings_(std::move(settings)) {
   settings_.validate();
@@ -94,9 +180,41 @@ TensionResult TensionTest::run(SpecimenBuilder& builder) const {
   auto coupon_x = std::make_shared<const Specimen>(build_specimen(builder, result.ply_angle));
   result.calibration = coupon_x->ply_calibrations.front();
   result.ply_calibrations = coupon_x->ply_calibrations;
-  result.along_x = pull(*coupon_x, result.ply_angle);
+  // Checkpoints: the settings and the coupon as built must match.
+  std::optional<Checkpointing> checkpointing;
+  std::optional<PullResult> restored_x;
+  const CheckpointOptions& ck = settings_.checkpoint;
+  if (ck.writes() || !ck.restart.empty()) {
+    checkpointing.emplace();
+    checkpointing->header = tension_checkpoint_header(settings_);
+    add_model_fingerprint(checkpointing->header, coupon_x->model, "coupon_x");
+    if (!ck.restart.empty()) {
+      CheckpointFile f = read_checkpoint(ck.restart);
+      check_same_run(f.header, checkpointing->header, ck.restart.string());
+      f.payload.section("tension");
+      const std::int64_t pull_index = f.payload.i64();
+      if (pull_index != 0 && pull_index != 1)
+        f.payload.corrupt(fmt::format("pull {} (0 along x, 1 along y)", pull_index));
+      if (pull_index == 1) restored_x = read_pull_result(f.payload);
+      checkpointing->pull = static_cast<int>(pull_index);
+      checkpointing->resume.emplace(std::move(f));
+      spdlog::info("restarting from {} (the pull along {})", ck.restart.string(),
+                   pull_index == 0 ? "x" : "y");
+    }
+  }
+  if (restored_x) {
+    result.along_x = std::move(*restored_x);
+  } else {
+    result.along_x = pull(*coupon_x, result.ply_angle, checkpointing ? &*checkpointing : nullptr);
+  }
+  if (checkpointing) {
+    checkpointing->pull = 1;
+    checkpointing->along_x = &result.along_x;
+    checkpointing->next = 0;
+  }
   const double angle_y = result.ply_angle - std::numbers::pi / 2;
-  result.along_y = pull(build_specimen(builder, angle_y), angle_y);
+  result.along_y =
+      pull(build_specimen(builder, angle_y), angle_y, checkpointing ? &*checkpointing : nullptr);
   result.dem.Ex = result.along_x.modulus;
   result.dem.nu_xy = result.along_x.poisson;
   result.dem.shear_coupling_x = result.along_x.shear_coupling;
@@ -141,6 +259,11 @@ PullResult TensionTest::pull(const Strategy& strategy, double ply_angle) const {
 }
 
 PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
+  return pull(specimen, ply_angle, nullptr);
+}
+
+PullResult TensionTest::pull(const Specimen& specimen, double ply_angle,
+                             Checkpointing* checkpointing) const {
   const auto start = Clock::now();
   const TensionSettings& s = settings_;
   CouponSpec spec = s.coupon;
@@ -250,6 +373,70 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
     result.stress.push_back(smp.stress);
   };
   if (s.fixed_cycles == 0 || s.solver == TensionSolver::kStatic) record(Sample{});
+
+  // Checkpoints (explicit runs): where the loading is (`at`, kept by the hooks), written at the
+  // first check at or past each `checkpoint.every` cycles; a restart reads it back (`resumed`).
+  struct LoadingState {
+    long stage = 1;
+    long phase = 0;  // 0 moving the grips, 1 relaxing
+    long stage_start = 0;
+    long relax_max = 0;
+  };
+  LoadingState at, resumed;
+  long resumed_cycles = 0;  // of the phase's run, done before the checkpoint
+  bool resuming = false;
+  const long every = s.checkpoint.every;
+  auto next_due = [&] { return (integrator->cycles() / every + 1) * every; };
+  auto save = [&](long run_cycles) {
+    if (!checkpointing || every <= 0 || integrator->cycles() < checkpointing->next) return;
+    CheckpointWriter w;
+    w.section("tension");
+    w.i64(checkpointing->pull);
+    if (checkpointing->pull == 1) write_pull_result(w, *checkpointing->along_x);
+    w.section("pull");
+    for (long v :
+         {at.stage, at.phase, run_cycles, at.stage_start, at.relax_max, cycles_per_finished_stage})
+      w.i64(v);
+    for (const std::vector<double>* v :
+         {&result.strain, &result.lateral_strain, &result.shear_strain, &result.stress})
+      w.doubles(*v);
+    w.f64(result.final_ratio);
+    integrator->save(w);
+    write_checkpoint(s.checkpoint.file, checkpointing->header, w);
+    checkpointing->next = next_due();
+  };
+  if (integrator && checkpointing && every > 0) checkpointing->next = every;
+  if (integrator && checkpointing && checkpointing->resume) {
+    CheckpointReader& in = checkpointing->resume->payload;
+    in.section("pull");
+    resumed.stage = in.i64();
+    resumed.phase = in.i64();
+    resumed_cycles = in.i64();
+    resumed.stage_start = in.i64();
+    resumed.relax_max = in.i64();
+    cycles_per_finished_stage = in.i64();
+    if (resumed.stage < 1 || resumed.stage > s.load_stages || resumed.phase < 0 ||
+        resumed.phase > 1 || resumed_cycles < 0)
+      in.corrupt(fmt::format("stage {}, phase {}, {} cycles", resumed.stage, resumed.phase,
+                             resumed_cycles));
+    for (std::vector<double>* v :
+         {&result.strain, &result.lateral_strain, &result.shear_strain, &result.stress})
+      *v = in.doubles();
+    result.final_ratio = in.f64();
+    integrator->restore(in);
+    in.finish();
+    checkpointing->resume.reset();
+    resuming = true;
+    spdlog::info("continuing the pull along {} at cycle {}: {}", checkpointing->pull == 0 ? "x" : "y",
+                 integrator->cycles(),
+                 s.fixed_cycles > 0 ? fmt::format("{} of {} fixed cycles", resumed_cycles,
+                                                  s.fixed_cycles)
+                                    : fmt::format("stage {} of {}, {}", resumed.stage,
+                                                  s.load_stages,
+                                                  resumed.phase == 0 ? "moving the grips"
+                                                                     : "relaxing"));
+    if (every > 0) checkpointing->next = next_due();
+  }
   if (s.solver == TensionSolver::kStatic) {
     // The model is linear: one solve at the target strain, fitted through the unloaded origin.
     const StaticResult solved =
@@ -265,24 +452,27 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
     result.loading_transits = loading_transits(total_grip_travel / v);
     grips_moving(v);
     // One check per sample (every 1% of the run), the samples from the second half.
-    const long every = std::max(1L, s.fixed_cycles / 100);
+    const long sample_every = std::max(1L, s.fixed_cycles / 100);
+    const long done = resuming ? resumed_cycles : 0;
     Particles seen = p;  // the sampled particles' state, gathered from the kernel
     RunControl control;
-    control.check_interval = every;
-    control.max_cycles = s.fixed_cycles;
+    control.check_interval = sample_every;
+    control.max_cycles = s.fixed_cycles - done;
     control.progress_seconds = 0;  // report() keeps its own two seconds
     control.on_progress = [&](const RunCheck& check) {
-      report("loading", check.report, s.fixed_cycles - check.run_cycles);
+      report("loading", check.report, s.fixed_cycles - done - check.run_cycles);
     };
     control.on_check = [&](const RunCheck& check) {
-      const long c = check.run_cycles;
+      const long c = done + check.run_cycles;
       // The forces belong to the state before the last cycle's update: sample both together.
-      if (c % every == 0 && c > s.fixed_cycles / 2) {
+      if (c % sample_every == 0 && c > s.fixed_cycles / 2) {
         integrator->gather(sampled, seen, StateAt::kForces);
         record(sample(seen));
       }
+      if (c < s.fixed_cycles) save(c);  // the last check ends the run: nothing to continue
       return true;
     };
+    require(done < s.fixed_cycles, "the checkpoint's fixed-cycle run is finished already");
     const CycleReport cycle = integrator->run(control).last;
     result.final_ratio = cycle.unbalanced_force_ratio;
     if (result.final_ratio > s.tolerance) {
@@ -298,29 +488,55 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle) const {
     result.grip_velocity = v;
     result.loading_transits = loading_transits(stage_travel / v);
     const long ramp = std::max(1L, std::lround(stage_travel / (v * dt)));
-    for (int stage = 1; stage <= s.load_stages; ++stage) {
-      const long stage_start = integrator->cycles();
+    const int first_stage = resuming ? static_cast<int>(resumed.stage) : 1;
+    for (int stage = first_stage; stage <= s.load_stages; ++stage) {
+      const bool resume_here = resuming && stage == first_stage;
+      const long stage_start = resume_here ? resumed.stage_start : integrator->cycles();
+      at.stage = stage;
+      at.stage_start = stage_start;
       stages_left = s.load_stages - stage;
-      grips_moving(v);
-      RunControl loading;
-      loading.check_interval = kProgressCheckCycles;
-      loading.max_cycles = ramp;
-      loading.progress_seconds = 0;  // report() keeps its own two seconds
-      loading.on_progress = [&](const RunCheck& check) {
-        const long done = check.cycles - stage_start;
-        report("loading", check.report,
-               cycles_per_finished_stage > 0 ? std::max(0L, cycles_per_finished_stage - done) : -1);
-      };
-      integrator->run(loading);
+      if (!(resume_here && resumed.phase == 1)) {
+        const long done = resume_here ? resumed_cycles : 0;
+        grips_moving(v);
+        RunControl loading;
+        loading.check_interval = kProgressCheckCycles;
+        loading.max_cycles = ramp - done;
+        loading.progress_seconds = 0;  // report() keeps its own two seconds
+        loading.on_progress = [&](const RunCheck& check) {
+          const long moved = check.cycles - stage_start;
+          report(
+              "loading", check.report,
+              cycles_per_finished_stage > 0 ? std::max(0L, cycles_per_finished_stage - moved) : -1);
+        };
+        at.phase = 0;
+        loading.on_check = [&](const RunCheck& check) {
+          if (done + check.run_cycles < ramp) save(done + check.run_cycles);
+          return true;
+        };
+        require(done < ramp, "the checkpoint's loading stage is finished already");
+        integrator->run(loading);
+      }
       grips_moving(0.0);
       // Relaxation, the ratio checked after every cycle: the stage ends at the first cycle whose
       // ratio is within the tolerance (and after one cycle at least).
+      const bool relax_resumed = resume_here && resumed.phase == 1;
+      const long relaxed_before = relax_resumed ? resumed_cycles : 0;
+      at.phase = 1;
+      at.relax_max =
+          relax_resumed ? resumed.relax_max : std::max(1L, s.max_cycles - integrator->cycles());
       RunControl relaxing;
       relaxing.check_interval = kRelaxationCheckCycles;
       relaxing.tolerance = s.tolerance;
-      relaxing.max_cycles = std::max(1L, s.max_cycles - integrator->cycles());
+      relaxing.max_cycles = at.relax_max - relaxed_before;
       relaxing.progress_seconds = 0;
       relaxing.on_progress = [&](const RunCheck& check) { report("relaxing", check.report, -1); };
+      relaxing.on_check = [&](const RunCheck& check) {
+        // Not at the check that ends the run (quasi-static or out of cycles).
+        const long c = relaxed_before + check.run_cycles;
+        if (check.report.unbalanced_force_ratio > s.tolerance && c < at.relax_max) save(c);
+        return true;
+      };
+      require(relaxing.max_cycles > 0, "the checkpoint's relaxation is finished already");
       const RunReport relaxed = integrator->run(relaxing);
       const CycleReport& cycle = relaxed.last;
       if (relaxed.stop != RunStop::kQuasiStatic) {

@@ -75,10 +75,22 @@ struct TensionSettings {
   /// Build even when the coupon's estimate (experiments/protocols/resource_estimate.hpp) exceeds
   /// the machine's available memory; run() refuses it otherwise, before building.
   bool force = false;
+  /// Checkpoint and restart of explicit runs (core/checkpoint.hpp, README "Checkpoint and
+  /// restart"): at the first check at or past every `checkpoint.every` cycles of a pull, the run's
+  /// state (the pull and its stage, the integrator, the points so far, the finished pull along x)
+  /// goes to `checkpoint.file`; with `checkpoint.restart` the run continues from that file to the
+  /// result, bit for bit, of the run that was not stopped. A checkpoint of a run with other
+  /// settings is a plydem::Error naming the setting that differs. Static solves refuse it.
+  CheckpointOptions checkpoint;
 
   /// Throws plydem::Error naming the first bad setting.
   void validate() const;
 };
+
+/// What a tension test's checkpoint must match (without the coupon's fingerprint, which run()
+/// adds): kind "tension/explicit", the coupon (add_coupon_settings), the loading and the
+/// integrator's settings.
+CheckpointHeader tension_checkpoint_header(const TensionSettings& settings);
 
 /// One coupon pulled along x.
 struct PullResult {
@@ -171,6 +183,8 @@ class TensionTest {
   double grip_length() const;
 
  private:
+  struct Checkpointing;
+  PullResult pull(const Specimen& specimen, double ply_angle, Checkpointing* checkpointing) const;
   TensionSettings settings_;
   std::function<void(const TensionProgress&)> progress_;
 };
