@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/progress.hpp"
 
 namespace plydem {
 namespace {
@@ -273,7 +274,9 @@ std::vector<std::pair<int, int>> find_contact_pairs(const PositionArray& positio
   validate(position, radius, contact_radius, "find_contact_pairs");
   const auto n = static_cast<std::size_t>(position.rows());
   if (n == 0) return {};
+  ProgressMeter meter("building the coupon: neighbour search", 4, "steps");
   const CellList list = build_cell_list(position, radius, contact_radius);
+  meter.update(1);
 
   // Two sweeps, counting then filling: the pairs land directly in (i, j) order by a counting
   // sort on i, with no growing buffer and no second copy. Re-testing the candidates is cheaper
@@ -282,10 +285,12 @@ std::vector<std::pair<int, int>> find_contact_pairs(const PositionArray& positio
   for_each_contact(list, contact_radius,
                    [&](int i, int) { ++start[static_cast<std::size_t>(i) + 1]; });
   for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+  meter.update(2);
   std::vector<std::pair<int, int>> pairs(start[n]);
   for_each_contact(list, contact_radius, [&](int i, int j) {
     pairs[start[static_cast<std::size_t>(i)]++] = {i, j};
   });
+  meter.update(3);
   // start[i] now marks the end of i's pairs, which is where i + 1's begin.
   std::size_t begin = 0;
   for (std::size_t i = 0; i < n; ++i) {

@@ -127,10 +127,11 @@ std::optional<double> read_number(const toml::table& table, std::string_view key
               " must be a number, got a " + type.str());
 }
 
-Material parse_material_file(const std::string& file) {
+// `text` is the file's content when given, else the file is read.
+Material parse_material_file(const std::string& file, const std::string* text = nullptr) {
   toml::table table;
   try {
-    table = toml::parse_file(file);
+    table = text ? toml::parse(*text, std::string_view(file)) : toml::parse_file(file);
   } catch (const toml::parse_error& e) {
     const auto& where = e.source().begin;
     throw Error("material file " + in_quotes(file) + ": TOML syntax error at line " +
@@ -267,6 +268,16 @@ Material load_material(const std::string& name_or_file) {
     validate(m);
   } catch (const Error& e) {
     throw Error("material file " + in_quotes(name_or_file) + ": " + e.what());
+  }
+  return m;
+}
+
+Material parse_material(const std::string& text, const std::string& origin) {
+  Material m = parse_material_file(origin, &text);
+  try {
+    validate(m);
+  } catch (const Error& e) {
+    throw Error("material file " + in_quotes(origin) + ": " + e.what());
   }
   return m;
 }

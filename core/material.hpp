@@ -62,5 +62,8 @@ std::vector<std::string> builtin_material_names();
 /// G_matrix (J/m^2) and weibull_modulus. Validated before it is returned; throws plydem::Error
 /// otherwise.
 Material load_material(const std::string& name_or_file);
+/// The material file's TOML text, read as load_material reads a file; `origin` names it in
+/// messages.
+Material parse_material(const std::string& text, const std::string& origin);
 
 }  // namespace plydem

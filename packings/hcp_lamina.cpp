@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/progress.hpp"
 
 namespace plydem {
 namespace {
@@ -198,8 +199,12 @@ HcpLamina::Sites HcpLamina::fill_rectangle(double length, double width) const {
     const double count = 3.0 * (hi[0] - lo[0] + 3) * (hi[1] - lo[1] + 3);
     require(count < 5e8, fmt::format("the coupon would need about {:.3g} lattice sites", count));
     const size_t first = sites.size();
-    for (long i = static_cast<long>(std::floor(lo[0])) - 1;
-         i <= static_cast<long>(std::ceil(hi[0])) + 1; ++i) {
+    const long first_row = static_cast<long>(std::floor(lo[0])) - 1;
+    const long last_row = static_cast<long>(std::ceil(hi[0])) + 1;
+    ProgressMeter meter("building the coupon: packing",
+                        static_cast<double>(last_row - first_row + 1), "lattice rows");
+    for (long i = first_row; i <= last_row; ++i) {
+      meter.update(static_cast<double>(i - first_row));
       for (long j = static_cast<long>(std::floor(lo[1])) - 1;
            j <= static_cast<long>(std::ceil(hi[1])) + 1; ++j) {
         const Eigen::Vector2d p =

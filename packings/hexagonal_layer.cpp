@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/progress.hpp"
 
 namespace plydem {
 
@@ -76,8 +77,12 @@ PositionArray HexagonalLayer::fill_rectangle(double length, double width) const 
   require(count < 5e8, fmt::format("the coupon would need about {:.3g} lattice sites", count));
   const double tol = 1e-9 * spacing_;
   std::vector<Eigen::Vector2d> sites;
-  for (long i = static_cast<long>(std::floor(lo[0])) - 1;
-       i <= static_cast<long>(std::ceil(hi[0])) + 1; ++i) {
+  const long first_row = static_cast<long>(std::floor(lo[0])) - 1;
+  const long last_row = static_cast<long>(std::ceil(hi[0])) + 1;
+  ProgressMeter meter("building the coupon: packing", static_cast<double>(last_row - first_row + 1),
+                      "lattice rows");
+  for (long i = first_row; i <= last_row; ++i) {
+    meter.update(static_cast<double>(i - first_row));
     for (long j = static_cast<long>(std::floor(lo[1])) - 1;
          j <= static_cast<long>(std::ceil(hi[1])) + 1; ++j) {
       const Eigen::Vector2d p = origin + static_cast<double>(i) * a1 + static_cast<double>(j) * a2;

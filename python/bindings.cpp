@@ -1086,6 +1086,9 @@ void plydem::python::define_module(py::module_& m) {
                      "explicit: > 0 = the paper's fixed-cycle mode")
       .def_readwrite("measure_specimen_stiffness", &TensionSettings::measure_specimen_stiffness,
                      "also measure the membrane stiffness and Gxy")
+      .def_readwrite("force", &TensionSettings::force,
+                     "build even when the coupon's memory estimate exceeds the machine's available "
+                     "memory (otherwise refused with plydem.Error before building)")
       .def_property(
           "grips", [](const TensionSettings& s) { return grips_name(s.grips); },
           [](TensionSettings& s, const std::string& v) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "core/error.hpp"
+#include "core/progress.hpp"
 
 namespace plydem {
 
@@ -294,7 +295,20 @@ void SupernodalCholesky::factorize(const SparseMatrix& a, double pivot_tolerance
   std::vector<int> local(n, 0), map;
   std::vector<double> diagonal;
   Eigen::MatrixXd saved;
+  // Progress by the supernodes' share of the work, k m^2 each (panel k columns, front m rows).
+  auto work_of = [&](int s) {
+    const double k = first_column_[s + 1] - first_column_[s];
+    const double m = row_start_[s + 1] - row_start_[s];
+    return k * m * m;
+  };
+  double total_work = 0, work_done = 0;
+  for (int s = 0; s < supernodes; ++s) total_work += work_of(s);
+  ProgressMeter meter(fmt::format("factorizing K ({} unknowns, {:.3g} factor entries)", n,
+                                  static_cast<double>(factor_entries())),
+                      total_work, "");
   for (int s = 0; s < supernodes; ++s) {
+    meter.update(work_done);
+    work_done += work_of(s);
     const int f = first_column_[s], k = first_column_[s + 1] - f;
     const int* rows = rows_.data() + row_start_[s];
     const int m = row_start_[s + 1] - row_start_[s], mu = m - k;

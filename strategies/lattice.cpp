@@ -17,6 +17,7 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/parallel_bond.hpp"
+#include "core/progress.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/specimen.hpp"
 
@@ -621,6 +622,49 @@ RandomPackingSpec LatticeStrategy::coupon_packing(const CouponSpec& coupon) cons
   return spec;
 }
 
+std::optional<PackingEstimate> LatticeStrategy::estimate_packing(const CouponSpec& coupon) const {
+  coupon.validate();
+  RandomPackingSpec spec = coupon_packing(coupon);
+  const double d = coupon.particle_diameter;
+  // The sample: 12 diameters (4 bond reaches) in x and y, periodic there, and the coupon's
+  // thickness up to 12 diameters (a thicker ply's bulk coordination is that of its middle).
+  const double edge = std::max(12.0, 3.0 * contact_radius_ + 1.0) * d;
+  RandomPackingSpec sample_spec = spec;
+  sample_spec.box = Eigen::Vector3d(edge, edge, std::min(coupon.thickness, edge));
+  const RandomPacking sample = random_sequential_addition(sample_spec);
+  const PackingBonds bonds = bonds_within(sample, contact_radius_);
+  const double n = static_cast<double>(sample.position.rows());
+  // Mean |branch| along x and y: the share of bonds a cut face of the coupon removes.
+  double reach_x = 0, reach_y = 0;
+  for (int k = 0; k < bonds.size(); ++k) {
+    const auto [i, j] = bonds.pairs[k];
+    const Eigen::Vector3d branch =
+        (sample.position.row(j) - sample.position.row(i)).transpose().matrix() +
+        sample_spec.box.cwiseProduct(bonds.image.row(k).transpose().cast<double>().matrix());
+    reach_x += std::abs(branch.x());
+    reach_y += std::abs(branch.y());
+  }
+  const double per_bond = bonds.size() > 0 ? 1.0 / bonds.size() : 0.0;
+  reach_x *= per_bond;
+  reach_y *= per_bond;
+  int top = 0, bottom = 0;
+  const double z_max = sample.position.col(2).maxCoeff(), z_min = sample.position.col(2).minCoeff();
+  for (int i = 0; i < sample.position.rows(); ++i) {
+    top += sample.position(i, 2) >= z_max - 0.5 * d ? 1 : 0;
+    bottom += sample.position(i, 2) <= z_min + 0.5 * d ? 1 : 0;
+  }
+  PackingEstimate e;
+  // The coupon's count directly: count() is an int, too small for the largest requests.
+  e.particles =
+      std::round(spec.packing_fraction * spec.box.prod() / (std::numbers::pi / 6.0 * d * d * d));
+  e.bonds = e.particles * (bonds.size() / n) * std::max(0.0, 1.0 - reach_x / coupon.length) *
+            std::max(0.0, 1.0 - reach_y / coupon.width);
+  e.top_surface_particles = top / (edge * edge) * coupon.length * coupon.width;
+  e.bottom_surface_density = bottom / (edge * edge);
+  e.layers = std::max(1, static_cast<int>(std::lround(coupon.thickness / d)));
+  return e;
+}
+
 PeriodicModel LatticeStrategy::calibration_sample(const OrientationModuli& moduli, double ply_angle,
                                                   double thickness, double diameter,
                                                   double density) const {
@@ -770,6 +814,9 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
     // Stops at the tolerance, or when five steps have gained less than 0.1% of the error (the law
     // cannot get closer: the constraints hold it), or after 100 steps.
     std::vector<double> history{residual.norm()};
+    ProgressMeter meter(
+        fmt::format("calibrating the lattice on its {}-particle sample", model.particles.size()), 0,
+        "Gauss-Newton steps");
     while (residual.norm() / goal_norm >= tolerance_ && out.iterations < 100 && failures < 12 &&
            !(history.size() > 5 && history.back() > 0.999 * history[history.size() - 6])) {
       ++out.iterations;
@@ -797,6 +844,8 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
         ++failures;
       }
       history.push_back(residual.norm());
+      meter.update(out.iterations, fmt::format("relative error {:.3g} (stops below {:.3g})",
+                                               residual.norm() / goal_norm, tolerance_));
     }
     out.moduli = moduli_of(p);
     apply_law(out.moduli, g, radius, nullptr, model.bonds);

@@ -141,6 +141,10 @@ class LatticeStrategy : public Strategy {
   Calibration calibrate_coupon(const CouponSpec& coupon) const override;
   /// Adds the coupon's size and particle diameter: they make its packing.
   std::string calibration_key(const CouponSpec& coupon) const override;
+  /// The coupon's sphere count (the packing fraction of its box) and, from a packing of 12 x 12
+  /// diameters periodic in x and y (milliseconds), the bonds per sphere less the share that the
+  /// coupon's cut periodic faces remove, and the surface spheres.
+  std::optional<PackingEstimate> estimate_packing(const CouponSpec& coupon) const override;
   /// Throws plydem::Error unless `calibration` is calibrate_coupon() of this coupon's packing.
   Model assemble(const CouponSpec& coupon, const Calibration& calibration) const override;
 

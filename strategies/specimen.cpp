@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "core/error.hpp"
+#include "core/progress.hpp"
 
 namespace plydem {
 
@@ -39,7 +40,9 @@ Model assemble_specimen(const SpecimenLayout& layout,
   bonds.resize(bond_count);
   // The springs scale with the bond radius only through bending and twisting.
   const FamilyStiffnessRule rule = parallel_bond_rule(layout.radius);
+  ProgressMeter meter("building the coupon: bonds", bond_count, "bonds");
   for (int b = 0; b < bond_count; ++b) {
+    if (b % 4096 == 0) meter.update(b);
     bonds.first(b) = layout.pairs[b].first;
     bonds.second(b) = layout.pairs[b].second;
     const int f = layout.family.empty() ? 0 : layout.family[b];

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -91,6 +92,53 @@ Specimen Strategy::build(const CouponSpec& coupon, const Calibration& calibratio
   count_build_work(0, 1);
   specimen.build_seconds = seconds_since(start);
   return specimen;
+}
+
+std::optional<PackingEstimate> Strategy::estimate_packing(const CouponSpec& coupon) const {
+  coupon.validate();
+  const std::optional<UnitCell> found = unit_cell(Calibration{}, coupon.thickness);
+  if (!found || found->basis.empty() || found->radius.empty()) return std::nullopt;
+  const UnitCell& cell = *found;
+  // The cell's length unit: its particle diameter is the coupon's.
+  const double scale = coupon.particle_diameter / (2 * cell.radius[0]);
+  const double area =
+      std::abs(
+          cell.lattice_vectors.col(0).head<2>().x() * cell.lattice_vectors.col(1).head<2>().y() -
+          cell.lattice_vectors.col(0).head<2>().y() * cell.lattice_vectors.col(1).head<2>().x()) *
+      scale * scale;
+  const double spacing = std::sqrt(area);
+  // Centres fill [r, L - r] x [r, W - r]; lattice points in an a x b rectangle, with half a
+  // spacing for the rows its edges catch (exact on average between aligned and turned lattices).
+  const double a = coupon.length - coupon.particle_diameter;
+  const double b = coupon.width - coupon.particle_diameter;
+  auto points = [&](double along, double across) {
+    return std::max(0.0, along + 0.5 * spacing) * std::max(0.0, across + 0.5 * spacing) / area;
+  };
+  const double n = static_cast<double>(cell.basis.size());
+  PackingEstimate e;
+  e.particles = n * points(a, b);
+  for (int k = 0; k < static_cast<int>(cell.bonds.size()); ++k) {
+    const Eigen::Vector3d branch = cell.branch(k) * scale;
+    e.bonds += points(a - std::abs(branch.x()), b - std::abs(branch.y()));
+  }
+  double z_min = cell.basis[0].z(), z_max = z_min;
+  for (const Eigen::Vector3d& x : cell.basis) {
+    z_min = std::min(z_min, x.z());
+    z_max = std::max(z_max, x.z());
+  }
+  int top = 0, bottom = 0;
+  std::vector<double> layer_heights;
+  for (const Eigen::Vector3d& x : cell.basis) {
+    top += x.z() >= z_max - cell.radius[0] ? 1 : 0;
+    bottom += x.z() <= z_min + cell.radius[0] ? 1 : 0;
+    bool seen = false;
+    for (double z : layer_heights) seen = seen || std::abs(z - x.z()) < 1e-9 * cell.radius[0];
+    if (!seen) layer_heights.push_back(x.z());
+  }
+  e.top_surface_particles = top * points(a, b);
+  e.bottom_surface_density = bottom / area;
+  e.layers = static_cast<int>(layer_heights.size());
+  return e;
 }
 
 void Strategy::set_option(const std::string& name, double value) {

@@ -88,6 +88,19 @@ BuildStatistics build_statistics();
 /// Adds to the process counts (Strategy::build and SpecimenBuilder call it).
 void count_build_work(long calibrations, long builds);
 
+/// What a coupon of a strategy will hold, estimated before it is built (from the strategy's unit
+/// cell, or a small sample of its packing): for the memory checks of
+/// experiments/protocols/resource_estimate.hpp.
+struct PackingEstimate {
+  double particles = 0;
+  double bonds = 0;
+  /// Particles within half a diameter of the ply's highest centre (what interface bonds join).
+  double top_surface_particles = 0;
+  /// Particles within half a diameter of the ply's lowest centre, per unit area [1/m^2].
+  double bottom_surface_density = 0;
+  int layers = 1;  ///< particle layers through the ply's thickness
+};
+
 /// A strategy-specific parameter (hcp's layer spacing, lattice's seed), with its current value.
 /// Set from the command line with `--strategy-option NAME=VALUE`.
 struct StrategyOption {
@@ -137,6 +150,13 @@ class Strategy {
     (void)thickness;
     return std::nullopt;
   }
+
+  /// The particles and bonds a build of `coupon` will make, estimated without building it. By
+  /// default from unit_cell(Calibration{}, coupon.thickness): the cell's lattice points in the
+  /// rectangle the particle centres fill, and for each cell bond the points whose partner lies in
+  /// it too (so free edges lose their share); within a few percent of the built counts for
+  /// coupons 20 diameters wide. nullopt where the strategy has no unit cell (lattice overrides it).
+  virtual std::optional<PackingEstimate> estimate_packing(const CouponSpec& coupon) const;
 
   /// Calibrates and builds the coupon.
   Specimen build(const CouponSpec& coupon) const;

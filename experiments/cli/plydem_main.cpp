@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -25,6 +26,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "core/progress.hpp"
 #include "experiments/cli/python_plugin.hpp"
 #include "experiments/output/report.hpp"
 #include "experiments/output/strength_report.hpp"
@@ -53,6 +55,7 @@ struct CouponOptions {
   std::vector<std::string> strategy_options;
   bool json = false;
   bool raw_edges = false;
+  bool force = false;
 };
 
 // Checkpoint and restart (README, "Checkpoint and restart"): the flags of `tension --solver
@@ -167,6 +170,81 @@ void add_coupon_options(CLI::App& app, CouponOptions& o, const std::string& grip
   app.add_flag("--raw-edges", o.raw_edges,
                "do not complete the boundary cells of free edges (edge bonds keep bulk stiffness)");
   app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
+  app.add_flag("--force", o.force,
+               "build the coupon even when its memory estimate exceeds the machine's available "
+               "memory (without it such a coupon is refused, with the estimate, before building)");
+}
+
+// What every command takes: how much it says on stderr.
+struct LogOptions {
+  bool quiet = false;
+  double progress_interval = 2;
+};
+
+void add_log_options(CLI::App& app, LogOptions& o) {
+  app.add_flag("--quiet", o.quiet,
+               "no progress or statistics on stderr (warnings and errors stay)");
+  app.add_option("--progress-interval", o.progress_interval,
+                 "seconds before a long phase first reports its progress, and between reports")
+      ->capture_default_str();
+}
+
+// An option given where it would change nothing is refused, with the reason.
+void refuse_given(const CLI::App& app, const std::vector<std::string>& names,
+                  const std::string& reason) {
+  for (const std::string& name : names) {
+    if (app.count(name) > 0) {
+      // Positional arguments by their name: "the config".
+      const std::string what = name.front() == '-' ? name : "the " + name;
+      throw plydem::Error(fmt::format("{} does nothing here: {}", what, reason));
+    }
+  }
+}
+
+void refuse_inapplicable(const CLI::App& app, const CouponOptions& o) {
+  if (o.layup.empty()) {
+    refuse_given(app, {"--interface-normal", "--interface-shear"},
+                 "interface bonds join the plies of a laminate, and one ply has no interface "
+                 "(give --layup)");
+  }
+}
+
+void refuse_inapplicable(const CLI::App& app, const TensionOptions& o) {
+  refuse_inapplicable(app, static_cast<const CouponOptions&>(o));
+  if (o.solver == "static") {
+    refuse_given(app,
+                 {"--stages", "--ramp-cycles", "--cycles", "--max-cycles", "--tolerance",
+                  "--damping", "--safety", "--grip-velocity-mm-s"},
+                 "it is a setting of explicit dynamics, and the static solver (--solver static, "
+                 "the default) solves once at the target strain (add --solver explicit)");
+  } else if (o.cycles > 0) {
+    refuse_given(app, {"--stages", "--ramp-cycles", "--max-cycles"},
+                 "the fixed-cycle mode (--cycles N) moves the grips for exactly N cycles in one "
+                 "stage, without relaxing");
+  } else if (o.grip_velocity_mm_s > 0) {
+    refuse_given(app, {"--ramp-cycles"},
+                 "--grip-velocity-mm-s sets the grips' speed, which --ramp-cycles would derive");
+  }
+}
+
+void refuse_inapplicable(const CLI::App& app, const StrengthCommandOptions& o) {
+  refuse_inapplicable(app, static_cast<const CouponOptions&>(o));
+  if (o.layup.empty()) {
+    refuse_given(app,
+                 {"--interface-strength-normal", "--interface-strength-shear", "--interface-GIc",
+                  "--interface-GIIc"},
+                 "interface strengths and fracture energies need a laminate (--layup): one ply has "
+                 "no interface");
+  }
+  if (!o.softening) {
+    refuse_given(app, {"--tooth-stiffness-ratio", "--interface-GIc", "--interface-GIIc"},
+                 "it is a setting of softening bonds, and the bonds are brittle (add --softening)");
+  }
+  if (o.grips != "uniform") {
+    refuse_given(app, {"--edge-strengths"},
+                 "the edge strengths are made consistent with the bulk under uniform grips only "
+                 "(--grips uniform, the default)");
+  }
 }
 
 void add_tension_options(CLI::App& app, TensionOptions& o) {
@@ -290,6 +368,7 @@ void set_coupon(const CouponOptions& o, Settings& s) {
   s.grip_length = o.grip_mm * mm;
   s.gauge_fraction = o.gauge_fraction;
   s.linear_solver = plydem::parse_linear_solver(o.linear_solver);
+  s.force = o.force;
   make_strategy(o);  // unknown strategies and options fail here, before any work
 }
 
@@ -330,6 +409,7 @@ plydem::StrengthSettings to_settings(const StrengthCommandOptions& o) {
   s.events.max_events = o.max_events;
   s.events.stop_fraction = o.stop_fraction;
   s.events.tooth_stiffness_ratio = o.tooth_stiffness_ratio;
+  s.events.progress_seconds = std::max(1e-9, plydem::progress_interval());
   s.record_snapshots = !o.out.empty();
   s.consistent_edges = o.edge_strengths == "bulk";
   s.checkpoint = to_checkpoint(o.checkpoint);
@@ -446,9 +526,36 @@ int run_calibrate(const TensionOptions& o, bool json) {
   return 0;
 }
 
+// What plydem_command_line's check_only does after parsing: the settings the command would run
+// with, and for a test its coupon's estimate (refused as the run would refuse it).
+int check_command(const TensionOptions& tension, bool strength_given,
+                  const StrengthCommandOptions& strength, bool calibrate_given,
+                  const TensionOptions& calibrate, bool run_given, bool run_list,
+                  const std::string& run_config) {
+  if (calibrate_given) {
+    plydem::require(std::isfinite(calibrate.angle_deg), "--angle is not a finite number");
+    (void)plydem::load_material(calibrate.material);
+    (void)make_strategy(calibrate);
+  } else if (strength_given) {
+    const plydem::StrengthSettings settings = to_settings(strength);
+    const plydem::StrengthTest test(settings);
+    plydem::check_resources(test.estimate(*make_strategy(strength)), settings.force, "--force");
+  } else if (run_given) {
+    if (!run_list && !run_config.empty()) (void)plydem::ExperimentConfig::load(run_config);
+  } else {
+    const plydem::TensionSettings settings = to_settings(tension);
+    const plydem::TensionTest test(settings);
+    plydem::check_resources(test.estimate(*make_strategy(tension)), settings.force, "--force");
+  }
+  return 0;
+}
+
 }  // namespace
 
-int main(int argc, char** argv) {
+/// The command line without main(): `check_only` parses, refuses what does not apply, converts
+/// the options to the tests' settings and estimates the coupon's memory, and returns there (the
+/// fuzz target tests/fuzz/fuzz_command_line.cpp calls it so).
+int plydem_command_line(int argc, char** argv, bool check_only) {
   CLI::App app{
       "plydem: particle (DEM and lattice) models of fibre-reinforced composite laminae.\n"
       "With no command it runs the paper's 0 deg E-glass/MY750 lamina with the Hex2D strategy\n"
@@ -458,8 +565,10 @@ int main(int argc, char** argv) {
   // (which inherit this) pass them up.
   app.fallthrough();
   // Progress and warnings go to stderr: stdout carries only the table or the JSON object.
-  spdlog::set_default_logger(spdlog::stderr_color_mt("plydem"));
+  if (!spdlog::get("plydem")) spdlog::set_default_logger(spdlog::stderr_color_mt("plydem"));
   spdlog::set_pattern("[%H:%M:%S] %v");
+  LogOptions log_options;
+  add_log_options(app, log_options);
 
   TensionOptions defaults;
   TensionOptions tension_options;
@@ -484,6 +593,9 @@ int main(int argc, char** argv) {
   calibrate->add_flag("--json", calibrate_json, "print one JSON object (SI units)");
   CLI::App* strategies = app.add_subcommand("strategies", "list the registered strategies");
   CLI::App* materials = app.add_subcommand("materials", "list the built-in materials");
+  for (CLI::App* command : {tension, strength, calibrate, strategies, materials}) {
+    add_log_options(*command, log_options);
+  }
   plydem::RunOptions run_options;
   std::string run_config, run_out;
   bool run_list = false;
@@ -499,6 +611,10 @@ int main(int argc, char** argv) {
   run->add_flag("--list", run_list,
                 "list the configs in ./experiments (else the source tree's) with their "
                 "descriptions");
+  run->add_flag("--force", run_options.force,
+                "build coupons even when their memory estimate exceeds the machine's available "
+                "memory");
+  add_log_options(*run, log_options);
 
   std::vector<std::string> plugins;
   app.add_option("--plugin", plugins,
@@ -512,6 +628,19 @@ int main(int argc, char** argv) {
   }
   // The command, run after the plug-ins (if any) have registered their strategies.
   const auto command = [&]() -> int {
+    plydem::set_progress_interval(log_options.progress_interval);
+    spdlog::set_level(log_options.quiet ? spdlog::level::warn : spdlog::level::info);
+    if (*tension) refuse_inapplicable(*tension, tension_options);
+    if (*strength) refuse_inapplicable(*strength, strength_options);
+    if (*run && run_list) {
+      refuse_given(*run, {"config", "--out", "--quick", "--ccx", "--force"},
+                   "--list only lists the configs");
+    }
+    if (check_only) {
+      return check_command(*tension ? tension_options : defaults, strength->parsed(),
+                           strength_options, calibrate->parsed(), calibrate_options, run->parsed(),
+                           run_list, run_config);
+    }
     if (*strategies) {
       const plydem::Registry& registry = plydem::default_registry();
       for (const std::string& name : registry.names()) {
@@ -564,6 +693,7 @@ int main(int argc, char** argv) {
     return run_tension(*tension ? tension_options : defaults);
   };
   try {
+    if (check_only) return command();  // plug-ins are not loaded: nothing runs
     plydem::cli::load_plugins(plugins);
     return plydem::cli::run_with_plugins(command);
   } catch (const plydem::Error& e) {
@@ -574,3 +704,9 @@ int main(int argc, char** argv) {
     return 3;
   }
 }
+
+#ifndef PLYDEM_NO_MAIN
+int main(int argc, char** argv) {
+  return plydem_command_line(argc, argv, false);
+}
+#endif

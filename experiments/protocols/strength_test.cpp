@@ -230,6 +230,13 @@ void StrengthTest::on_progress(std::function<void(const EventProgress&)> callbac
   progress_ = std::move(callback);
 }
 
+ResourceEstimate StrengthTest::estimate(const Strategy& strategy) const {
+  // The built coupon and the events solver's working copy (and the VTU series' snapshots).
+  return estimate_resources(strategy, settings_.coupon, settings_.layup, settings_.interface,
+                            SolverUse::kEvents, settings_.record_snapshots ? 10 : 2,
+                            settings_.events.max_update_rank);
+}
+
 StrengthResult StrengthTest::run() const {
   const std::unique_ptr<Strategy> strategy = default_registry().create(settings_.strategy);
   for (const auto& [name, value] : settings_.strategy_options) strategy->set_option(name, value);
@@ -249,12 +256,11 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
         "integrator does not break bonds yet); use the events method (--method events)");
   }
 
-  if (!s.strength_options.softening &&
-      (s.interface_strength.GIc > 0 || s.interface_strength.GIIc > 0)) {
-    spdlog::warn(
-        "the interface fracture energies GIc, GIIc are used by softening bonds only "
-        "(--softening); these brittle interfaces ignore them");
-  }
+  require(s.strength_options.softening ||
+              !(s.interface_strength.GIc > 0 || s.interface_strength.GIIc > 0),
+          "the interface fracture energies GIc, GIIc are used by softening bonds only "
+          "(--softening); brittle interfaces would ignore them");
+  check_resources(estimate(builder.strategy()), s.force, "--force");
 
   StrengthResult result;
   result.strategy = s.strategy;

@@ -49,6 +49,7 @@
 #include "core/elasticity.hpp"
 #include "core/failure_criteria.hpp"
 #include "experiments/protocols/coupon.hpp"
+#include "experiments/protocols/resource_estimate.hpp"
 #include "solvers/bond_events.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/laminate.hpp"
@@ -121,6 +122,9 @@ struct StrengthSettings {
   /// Scatter then multiplies the raised strengths as it does the others. false: strengths from the
   /// stiffness weights alone.
   bool consistent_edges = true;
+  /// Build even when the coupon's estimate (experiments/protocols/resource_estimate.hpp) exceeds
+  /// the machine's available memory; run() refuses it otherwise, before building.
+  bool force = false;
   /// Checkpoint and restart (core/checkpoint.hpp, README "Checkpoint and restart"): every
   /// `checkpoint.every` events the run's state goes to `checkpoint.file`; with `checkpoint.restart`
   /// the run continues from that file (which must be of a run with the same settings: a
@@ -228,6 +232,9 @@ class StrengthTest {
   StrengthResult run() const;
   /// The same with `builder`'s strategy and stiffness calibrations (shared by several tests).
   StrengthResult run(SpecimenBuilder& builder) const;
+  /// What run() will need (particles, bonds, memory), estimated before building; run() refuses
+  /// it, unless settings.force, when it exceeds the machine's available memory.
+  ResourceEstimate estimate(const Strategy& strategy) const;
   const StrengthSettings& settings() const { return settings_; }
 
  private:

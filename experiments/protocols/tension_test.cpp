@@ -12,6 +12,7 @@
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
 #include "core/measurements.hpp"
+#include "core/progress.hpp"
 #include "experiments/protocols/coupon.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/registry.hpp"
@@ -164,6 +165,7 @@ TensionResult TensionTest::run() const {
 TensionResult TensionTest::run(SpecimenBuilder& builder) const {
   const auto start = Clock::now();
   const BuildStatistics before = builder.statistics();
+  check_resources(estimate(builder.strategy()), settings_.force, "--force");
   TensionResult result;
   result.strategy = settings_.strategy;
   result.material = settings_.coupon.material;
@@ -228,6 +230,14 @@ TensionResult TensionTest::run(SpecimenBuilder& builder) const {
   result.build_statistics.builds = builder.statistics().builds - before.builds;
   result.wall_seconds = seconds_since(start);
   return result;
+}
+
+ResourceEstimate TensionTest::estimate(const Strategy& strategy) const {
+  // Both coupons, the built one kept, and the specimen stiffness' copy.
+  return estimate_resources(
+      strategy, settings_.coupon, settings_.layup, settings_.interface,
+      settings_.solver == TensionSolver::kStatic ? SolverUse::kStatic : SolverUse::kExplicit,
+      settings_.measure_specimen_stiffness ? 4 : 3);
 }
 
 Specimen TensionTest::build_specimen(SpecimenBuilder& builder, double ply_angle) const {
@@ -304,15 +314,16 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle,
   result.time_step = dt;
   result.cross_section = area;
   const double total_grip_travel = 0.5 * s.target_strain * span;
-  // Progress every two seconds, with an estimate of the time left: `planned` cycles are known
-  // (loading), relaxation is extrapolated from the ratio's decay since the last report.
+  // Progress every progress_interval() (two seconds), with an estimate of the time left: `planned`
+  // cycles are known (loading), relaxation is extrapolated from the ratio's decay since the last
+  // report.
   auto last_report = Clock::now();
   long last_cycles = 0;
   double last_ratio = 0;
   long cycles_per_finished_stage = 0;
   int stages_left = 0;
   auto report = [&](const char* phase, const CycleReport& cycle, long planned_left) {
-    if (!progress_ || seconds_since(last_report) <= 2.0) return;
+    if (!progress_ || seconds_since(last_report) < progress_interval()) return;
     const long cycles = integrator->cycles();
     const double ratio = cycle.unbalanced_force_ratio;
     const double per_cycle = seconds_since(start) / std::max(1L, cycles);

@@ -27,6 +27,7 @@
 
 #include "core/elasticity.hpp"
 #include "experiments/protocols/coupon.hpp"
+#include "experiments/protocols/resource_estimate.hpp"
 #include "experiments/protocols/stiffness_test.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "solvers/linear_solver.hpp"
@@ -71,6 +72,9 @@ struct TensionSettings {
   /// supernodal Cholesky or CHOLMOD.
   LinearSolverKind linear_solver = LinearSolverKind::kAuto;
   ExplicitSettings explicit_settings;
+  /// Build even when the coupon's estimate (experiments/protocols/resource_estimate.hpp) exceeds
+  /// the machine's available memory; run() refuses it otherwise, before building.
+  bool force = false;
   /// Checkpoint and restart of explicit runs (core/checkpoint.hpp, README "Checkpoint and
   /// restart"): at the first check at or past every `checkpoint.every` cycles of a pull, the run's
   /// state (the pull and its stage, the integrator, the points so far, the finished pull along x)
@@ -169,6 +173,9 @@ class TensionTest {
   /// A copy of `specimen` pulled along x (build_specimen at `ply_angle`: no new build); the
   /// result's wall_seconds count the specimen's build_seconds.
   PullResult pull(const Specimen& specimen, double ply_angle) const;
+  /// What run() will need (particles, bonds, memory), estimated before building; run() refuses
+  /// it, unless settings.force, when it exceeds the machine's available memory.
+  ResourceEstimate estimate(const Strategy& strategy) const;
   /// The specimen pull() loads, before grips are assigned.
   Specimen build_specimen(SpecimenBuilder& builder, double ply_angle) const;
   Specimen build_specimen(const Strategy& strategy, double ply_angle) const;

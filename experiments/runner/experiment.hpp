@@ -70,6 +70,9 @@ struct ExperimentContext {
   bool quick = false;
   /// CalculiX executable (`ccx`); when it is missing the FEM columns say so plainly.
   std::string calculix = "ccx";
+  /// Build coupons even when their memory estimate exceeds the machine's available memory
+  /// (`plydem run --force`; experiments/protocols/resource_estimate.hpp).
+  bool force = false;
 };
 
 /// One value in results.csv: `experiment,case,quantity,source,value,unit`. `source` is where the

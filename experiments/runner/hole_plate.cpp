@@ -13,6 +13,7 @@
 #include "core/material.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/output/vtk_output.hpp"
+#include "experiments/protocols/resource_estimate.hpp"
 #include "strategies/boundary_cells.hpp"
 #include "strategies/registry.hpp"
 
@@ -322,6 +323,10 @@ HolePlateDem solve_hole_plate_dem(const HolePlateSettings& settings) {
   HolePlateDem dem;
   dem.plies = static_cast<int>(spec.ply_angles.size());
   const BoundaryCompletion completion = boundary_completion(*strategy, settings.strategy);
+  // The plate (hole included: an upper bound), its solved copy and one static solve.
+  check_resources(estimate_resources(*strategy, spec.coupon, spec.ply_angles, spec.interface,
+                                     SolverUse::kStatic, 2),
+                  settings.force, "--force");
   dem.model = build_laminate(*strategy, spec).model;
   if (settings.hole_diameter > 0) {
     dem.hole =
@@ -608,6 +613,7 @@ ExperimentOutput HolePlateExperiment::run(const ExperimentConfig& config,
                                           const ExperimentContext& context) const {
   HolePlateSettings s = hole_plate_settings(config, context.quick);
   s.calculix = context.calculix;
+  s.force = context.force;
   const std::filesystem::path& out_dir = context.out_dir;
   const std::string stem = config.name().empty() ? std::string("hole") : config.name();
   const std::vector<double> angles = parse_layup(s.layup);

@@ -72,6 +72,9 @@ struct HolePlateSettings {
   FemMeshSettings fem_mesh;  ///< C3D8I, one element per ply, automatic sizes by default
   int fem_threads = 1;       ///< for ccx
   std::string calculix = "ccx";
+  /// Build even when the plate's memory estimate exceeds the machine's available memory
+  /// (experiments/protocols/resource_estimate.hpp).
+  bool force = false;
 
   // The comparison.
   double grid_spacing = 0.5e-3;     ///< [m]

@@ -260,6 +260,7 @@ class LaminaStrategiesExperiment : public Experiment {
                               c.path().string()));
     }
     TensionSettings base;
+    base.force = context.force;
     base.coupon = coupon;
     base.coupon.ply_angle = radians(angle_deg);
     base.grips = grips_from_config(c);
@@ -493,6 +494,7 @@ class LaminaAnglesExperiment : public Experiment {
         }
         try {
           TensionSettings s;
+          s.force = context.force;
           s.strategy = strategy_name;
           s.coupon = coupon;
           s.coupon.ply_angle = angle;
@@ -590,6 +592,7 @@ class LaminateExperiment : public Experiment {
       throw Error(fmt::format("{}: the key 'layup' is missing", c.path().string()));
     const std::string table = c.string("table", "Laminate");
     TensionSettings s;
+    s.force = context.force;
     s.strategy = c.string("strategy", "hex2d");
     s.coupon = coupon_from_config(c, context.quick);
     s.layup = parse_layup(layup_text);

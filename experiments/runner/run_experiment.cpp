@@ -162,6 +162,7 @@ RunSummary run_experiment(const RunOptions& options) {
   context.out_dir = summary.out_dir;
   context.quick = options.quick;
   context.calculix = options.calculix;
+  context.force = options.force;
   spdlog::info("running {} ({}){} into {}", options.config.string(), kind,
                options.quick ? ", quick" : "", summary.out_dir.string());
   summary.output = experiment->run(config, context);

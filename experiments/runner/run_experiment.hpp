@@ -20,6 +20,7 @@ struct RunOptions {
   std::filesystem::path out_dir;  ///< empty = results/NAME (relative to the current directory)
   bool quick = false;             ///< ExperimentContext::quick
   std::string calculix = "ccx";   ///< ExperimentContext::calculix
+  bool force = false;             ///< ExperimentContext::force
 };
 
 struct RunSummary {

@@ -215,6 +215,7 @@ class StrengthExperiment : public Experiment {
     const std::string name = c.name();
     const std::string origin = c.path().string();
     StrengthSettings base;
+    base.force = context.force;
     base.strategy = c.string("strategy", base.strategy);
     base.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
                                                    fmt::format("{}: strategy_options", origin));
@@ -252,6 +253,27 @@ class StrengthExperiment : public Experiment {
     base.events.max_update_rank =
         static_cast<int>(c.integer("events.max_update_rank", base.events.max_update_rank));
     base.record_snapshots = c.boolean("output.vtu_series", false);
+    // Keys that would change nothing are errors, as on the command line.
+    auto refuse_given = [&](std::initializer_list<const char*> keys, const char* reason) {
+      for (const char* key : keys) {
+        if (c.contains(key))
+          throw Error(fmt::format("{}: '{}' does nothing here: {}", origin, key, reason));
+      }
+    };
+    if (base.layup.empty()) {
+      refuse_given({"interface.normal", "interface.shear", "interface.strength_normal",
+                    "interface.strength_shear", "interface.GIc", "interface.GIIc"},
+                   "interfaces join the plies of a laminate, and one ply has none (set layup)");
+    }
+    if (!base.strength_options.softening) {
+      refuse_given({"events.tooth_stiffness_ratio", "interface.GIc", "interface.GIIc"},
+                   "it is a setting of softening bonds, and the bonds are brittle (softening = "
+                   "true)");
+    }
+    if (base.grips != StrengthGrips::kUniform) {
+      refuse_given({"edge_strengths"},
+                   "the edge strengths are made consistent with the bulk under uniform grips only");
+    }
     std::vector<double> angles = c.numbers("angles_deg", {c.number("angle_deg", 0)});
     require(!angles.empty(), fmt::format("{}: angles_deg is empty", origin));
     base.validate();  // a bad setting fails before the first coupon is built

@@ -1,0 +1,17 @@
+# Runs COMMAND (a ;-list), expects exit 0, stdout matching STDOUT (a regex, optional) and stderr
+# either empty (STDERR_EMPTY=ON) or matching STDERR (a regex).
+execute_process(COMMAND ${COMMAND} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "expected exit 0, got ${rc}. stdout:\n${out}\nstderr:\n${err}")
+endif()
+if(DEFINED STDOUT AND NOT out MATCHES "${STDOUT}")
+  message(FATAL_ERROR "stdout does not match '${STDOUT}':\n${out}")
+endif()
+if(STDERR_EMPTY AND NOT err STREQUAL "")
+  message(FATAL_ERROR "expected an empty stderr, got:\n${err}")
+endif()
+if(DEFINED STDERR AND NOT err MATCHES "${STDERR}")
+  message(FATAL_ERROR "stderr does not match '${STDERR}':\n${err}")
+endif()
+string(LENGTH "${err}" err_length)
+message(STATUS "exit 0, ${err_length} characters on stderr")
