@@ -18,8 +18,10 @@
 #include "core/material.hpp"
 #include "solvers/bond_events.hpp"
 #include "strategies/registry.hpp"
+#include "support/coupon_fixtures.hpp"
 
 using namespace plydem;
+using plydem::test::grip_constraints;
 
 namespace {
 
@@ -86,26 +88,6 @@ double area_under_path(const EventsResult& r, double travel) {
     previous = p.load_factor;
   }
   return work;
-}
-
-// Particles within two diameters of each end of a coupon: left and right grips.
-void grip_constraints(const Model& m, double d, double travel, DofConstraints& unit,
-                      DofFlags& reaction) {
-  const Particles& p = m.particles;
-  const double x_min = p.reference_position.col(0).minCoeff();
-  const double x_max = p.reference_position.col(0).maxCoeff();
-  unit = DofConstraints(p.size());
-  reaction = flags_for(p.size());
-  for (int i = 0; i < p.size(); ++i) {
-    const double x = p.reference_position(i, 0);
-    const bool left = x <= x_min + 2 * d, right = x >= x_max - 2 * d;
-    if (!left && !right) continue;
-    unit.fix(i, Dof::kUx, right ? travel : 0.0);
-    unit.fix(i, Dof::kUz);
-    unit.fix(i, Dof::kThetaX);
-    unit.fix(i, Dof::kThetaY);
-    if (right) reaction(i, static_cast<int>(Dof::kUx)) = true;
-  }
 }
 
 Model hex2d_coupon(double length, double width, double diameter, double ply_angle = 0) {

@@ -24,8 +24,10 @@
 #include "solvers/bond_events.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/registry.hpp"
+#include "support/coupon_fixtures.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -49,53 +51,6 @@ std::string read_bytes(const fs::path& file) {
 void write_bytes(const fs::path& file, const std::string& bytes) {
   std::ofstream out(file, std::ios::binary | std::ios::trunc);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
-// The hex2d coupon of tests/test_explicit_breaking.cpp: 2 x 0.5 mm, 0.1 mm particles, grips two
-// diameters long at both ends.
-Model small_coupon(double length = 2e-3, double width = 0.5e-3, double diameter = 0.1e-3) {
-  CouponSpec spec;
-  spec.material = load_material("eglass-my750");
-  spec.length = length;
-  spec.width = width;
-  spec.particle_diameter = diameter;
-  Model m = default_registry().create("hex2d")->build(spec).model;
-  Particles& p = m.particles;
-  const double x_min = p.reference_position.col(0).minCoeff();
-  const double x_max = p.reference_position.col(0).maxCoeff();
-  for (int i = 0; i < p.size(); ++i) {
-    const double x = p.reference_position(i, 0);
-    p.group(i) = static_cast<int>(x <= x_min + 2 * diameter   ? BoundaryGroup::kLeftGrip
-                                  : x >= x_max - 2 * diameter ? BoundaryGroup::kRightGrip
-                                                              : BoundaryGroup::kFree);
-  }
-  return m;
-}
-
-std::vector<PrescribedMotion> pull(double speed) {
-  PrescribedMotion left, right;
-  left.group = BoundaryGroup::kLeftGrip;
-  right.group = BoundaryGroup::kRightGrip;
-  left.velocity = Eigen::Vector3d(-speed, 0, 0);
-  right.velocity = Eigen::Vector3d(speed, 0, 0);
-  for (PrescribedMotion* m : {&left, &right}) {
-    m->fix_velocity = {true, false, true};
-    m->fix_angular_velocity = {true, true, false};
-  }
-  return {left, right};
 }
 
 // Strengths that the pull reaches after about `cycles` cycles (the largest bond stress of an
@@ -311,17 +266,17 @@ TEST_CASE("an explicit checkpoint of another model or other settings is refused"
   CHECK_NOTHROW(restore_into(initial, settings));
   Model stronger = initial;
   stronger.bonds.tensile_strength *= 1.01;
-  CHECK(contains(error_of([&] { restore_into(stronger, settings); }),
+  CHECK(contains(error_message([&] { restore_into(stronger, settings); }),
                  "is for another model: field tensile_strength of the bonds differs"));
   ExplicitSettings other = settings;
   other.time_step *= 0.5;
-  CHECK(contains(error_of([&] { restore_into(initial, other); }),
+  CHECK(contains(error_message([&] { restore_into(initial, other); }),
                  "is for another run: time step is"));
   other = settings;
   other.kernel = ExplicitKernel::kReference;
-  CHECK(contains(error_of([&] { restore_into(initial, other); }),
+  CHECK(contains(error_message([&] { restore_into(initial, other); }),
                  "is for another run: kernel is fused there, reference here"));
-  CHECK(contains(error_of([&] { restore_into(small_coupon(2e-3, 0.6e-3), settings); }),
+  CHECK(contains(error_message([&] { restore_into(small_coupon(2e-3, 0.6e-3), settings); }),
                  "is for another"));
 }
 
@@ -345,24 +300,6 @@ Model events_coupon(double ductility) {
   return m;
 }
 
-void grips(const Model& m, double d, double travel, DofConstraints& unit, DofFlags& reaction) {
-  const Particles& p = m.particles;
-  const double x_min = p.reference_position.col(0).minCoeff();
-  const double x_max = p.reference_position.col(0).maxCoeff();
-  unit = DofConstraints(p.size());
-  reaction = DofFlags::Constant(p.size(), kDofsPerParticle, false);
-  for (int i = 0; i < p.size(); ++i) {
-    const double x = p.reference_position(i, 0);
-    const bool left = x <= x_min + 2 * d, right = x >= x_max - 2 * d;
-    if (!left && !right) continue;
-    unit.fix(i, Dof::kUx, right ? travel : 0.0);
-    unit.fix(i, Dof::kUz);
-    unit.fix(i, Dof::kThetaX);
-    unit.fix(i, Dof::kThetaY);
-    if (right) reaction(i, static_cast<int>(Dof::kUx)) = true;
-  }
-}
-
 bool same_path(const std::vector<EventPoint>& a, const std::vector<EventPoint>& b) {
   if (a.size() != b.size()) return false;
   for (std::size_t k = 0; k < a.size(); ++k)
@@ -381,7 +318,7 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
     const Model built = events_coupon(ductility);
     DofConstraints unit;
     DofFlags reaction;
-    grips(built, 0.1e-3, 1e-6, unit, reaction);
+    grip_constraints(built, 0.1e-3, 1e-6, unit, reaction);
     EventSettings settings;
     settings.static_settings.pin_rigid_modes = true;
     settings.max_events = ductility > 1 ? 300 : 2000;
@@ -487,7 +424,7 @@ TEST_CASE("a corrupt, truncated, other-version or mismatched checkpoint is a cle
   const std::string name = file.path.string();
   auto read_error = [&](const std::string& bytes) {
     write_bytes(file.path, bytes);
-    return error_of([&] { read_checkpoint(file.path); });
+    return error_message([&] { read_checkpoint(file.path); });
   };
   // One byte of the payload changed.
   std::string bytes = good;
@@ -512,26 +449,26 @@ TEST_CASE("a corrupt, truncated, other-version or mismatched checkpoint is a cle
   CHECK(contains(read_error("seed = 1\n"), "is not a plydem checkpoint"));
   std::error_code ec;
   fs::remove(file.path, ec);
-  CHECK(contains(error_of([&] { read_checkpoint(file.path); }), "cannot read checkpoint"));
+  CHECK(contains(error_message([&] { read_checkpoint(file.path); }), "cannot read checkpoint"));
   // Written whole again: no temporary file left beside it.
   write_checkpoint(file.path, header, w);
   CHECK(!fs::exists(fs::path(name + ".tmp")));
   // Mismatched settings name what differs.
   const CheckpointHeader seed2 = make_header("strength/events", "2", m);
-  e = error_of([&] { check_same_run(header, seed2, name); });
+  e = error_message([&] { check_same_run(header, seed2, name); });
   CHECK(e == fmt::format("checkpoint {} is for another run: seed is 1 there, 2 here", name));
   const CheckpointHeader tension = make_header("tension/explicit", "1", m);
-  CHECK(contains(error_of([&] { check_same_run(header, tension, name); }),
+  CHECK(contains(error_message([&] { check_same_run(header, tension, name); }),
                  "a strength/events run, this is tension/explicit"));
   Model other = m;
   other.particles.mass *= 2;
   const CheckpointHeader heavier = make_header("strength/events", "1", other);
-  e = error_of([&] { check_same_run(header, heavier, name); });
+  e = error_message([&] { check_same_run(header, heavier, name); });
   CHECK(contains(e, "model.particles.mass is"));
   MESSAGE(e);
   CHECK_NOTHROW(check_same_run(header, header, name));
   // A payload read past its end is truncated, not a crash.
   CheckpointReader short_reader(w.bytes().substr(0, 40), "memory");
   Model back;
-  CHECK(contains(error_of([&] { read_model(short_reader, back); }), "truncated"));
+  CHECK(contains(error_message([&] { read_model(short_reader, back); }), "truncated"));
 }

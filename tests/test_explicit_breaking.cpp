@@ -20,8 +20,10 @@
 #include "core/material.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/registry.hpp"
+#include "support/coupon_fixtures.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 
 namespace {
 
@@ -136,27 +138,6 @@ PairRun run_pair(const PairSpec& spec, const std::vector<PrescribedMotion>& moti
   return r;
 }
 
-// The hex2d coupon of the brief: 2 x 0.5 mm, 0.1 mm particles, grips two diameters long at both
-// ends.
-Model small_coupon(double length = 2e-3, double width = 0.5e-3, double diameter = 0.1e-3) {
-  CouponSpec spec;
-  spec.material = load_material("eglass-my750");
-  spec.length = length;
-  spec.width = width;
-  spec.particle_diameter = diameter;
-  Model m = default_registry().create("hex2d")->build(spec).model;
-  Particles& p = m.particles;
-  const double x_min = p.reference_position.col(0).minCoeff();
-  const double x_max = p.reference_position.col(0).maxCoeff();
-  for (int i = 0; i < p.size(); ++i) {
-    const double x = p.reference_position(i, 0);
-    p.group(i) = static_cast<int>(x <= x_min + 2 * diameter   ? BoundaryGroup::kLeftGrip
-                                  : x >= x_max - 2 * diameter ? BoundaryGroup::kRightGrip
-                                                              : BoundaryGroup::kFree);
-  }
-  return m;
-}
-
 // Uniform strengths on every bond, by hand: the section a disc of the particle radius.
 void set_strengths(Model& m, double tensile, double cohesion, double friction,
                    double ductility = 1) {
@@ -168,20 +149,6 @@ void set_strengths(Model& m, double tensile, double cohesion, double friction,
     b.friction_coefficient(k) = friction;
     b.ductility(k) = ductility;
   }
-}
-
-// Grips moving apart along x at `speed` each (free laterally), as the tension test pulls.
-std::vector<PrescribedMotion> pull(double speed) {
-  PrescribedMotion left, right;
-  left.group = BoundaryGroup::kLeftGrip;
-  right.group = BoundaryGroup::kRightGrip;
-  left.velocity = Eigen::Vector3d(-speed, 0, 0);
-  right.velocity = Eigen::Vector3d(speed, 0, 0);
-  for (PrescribedMotion* m : {&left, &right}) {
-    m->fix_velocity = {true, false, true};
-    m->fix_angular_velocity = {true, true, false};
-  }
-  return {left, right};
 }
 
 // The stress a coupon's bonds reach per unit grip travel is not known by hand; the strengths of

@@ -17,8 +17,11 @@
 #include "solvers/static_solver.hpp"
 #include "strategies/hex2d.hpp"
 #include "strategies/laminate.hpp"
+#include "support/coupon_fixtures.hpp"
 
 using namespace plydem;
+using plydem::test::contains;
+using plydem::test::error_message;
 
 namespace {
 
@@ -84,28 +87,15 @@ double relative_difference(const DofArray& a, const DofArray& b) {
   return std::max(u, t);
 }
 
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 }  // namespace
 
 TEST_CASE("names: auto, direct and cholmod parse; petsc and unknown names are clear errors") {
   for (LinearSolverKind kind :
        {LinearSolverKind::kAuto, LinearSolverKind::kDirect, LinearSolverKind::kCholmod})
     CHECK(parse_linear_solver(linear_solver_name(kind)) == kind);
-  const std::string petsc = message_of([] { parse_linear_solver("petsc"); });
+  const std::string petsc = error_message([] { parse_linear_solver("petsc"); });
   CHECK(contains(petsc, "PETSc is not built into plydem yet"));
-  const std::string unknown = message_of([] { parse_linear_solver("umfpack"); });
+  const std::string unknown = error_message([] { parse_linear_solver("umfpack"); });
   CHECK(contains(unknown, "unknown linear solver 'umfpack'"));
   CHECK(contains(unknown, "auto, direct or cholmod"));
 }
@@ -203,7 +193,7 @@ TEST_CASE("a mechanism is refused with the same zero pivots by either solver") {
   c.fix(4, Dof::kUx, 1e-7);
   for (LinearSolverKind kind : {LinearSolverKind::kDirect, LinearSolverKind::kCholmod}) {
     CAPTURE(linear_solver_name(kind));
-    const std::string error = message_of([&] { solve_static(m, c, with(kind)); });
+    const std::string error = error_message([&] { solve_static(m, c, with(kind)); });
     CHECK(contains(error, "8 zero pivots"));
     CHECK(contains(error, "mechanism"));
   }
@@ -236,8 +226,8 @@ TEST_CASE("a factorization reused for several prescribed values equals fresh sol
     bad(0, 0) = std::nan("");
     Model m = built;
     if (pattern.fixed(0, 0))
-      CHECK(contains(message_of([&] { system.solve(m, bad); }), "not finite"));
-    CHECK(contains(message_of([&] { system.solve(m, DofArray::Zero(3, 6)); }), "are for 3"));
+      CHECK(contains(error_message([&] { system.solve(m, bad); }), "not finite"));
+    CHECK(contains(error_message([&] { system.solve(m, DofArray::Zero(3, 6)); }), "are for 3"));
   }
 }
 
