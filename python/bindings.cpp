@@ -328,6 +328,35 @@ Eigen::Matrix<double, N, N> square_matrix(const py::object& value, const char* w
   return m;
 }
 
+// The attributes TensionSettings and StrengthSettings share (their fields of the same names):
+// the strategy, the coupon, the laminate, the gauge and the static solves' solver.
+template <class Settings>
+void def_coupon_settings(py::class_<Settings>& cls) {
+  cls.def_readwrite("strategy", &Settings::strategy, "registered strategy name")
+      .def_readwrite("strategy_options", &Settings::strategy_options,
+                     "list of (name, value), applied in order before calibration")
+      .def_readwrite("coupon", &Settings::coupon, "material, ply angle and size")
+      .def_readwrite("layup", &Settings::layup,
+                     "ply angles of a laminate, bottom to top [rad]; empty = one ply")
+      .def_property(
+          "interface_normal", [](const Settings& s) { return s.interface.normal; },
+          [](Settings& s, double v) { s.interface.normal = v; },
+          "interface normal stiffness per unit area [N/m^3]; 0 = 10 E2/t")
+      .def_property(
+          "interface_shear", [](const Settings& s) { return s.interface.shear; },
+          [](Settings& s, double v) { s.interface.shear = v; },
+          "interface shear stiffness per unit area [N/m^3]; 0 = 10 G12/t")
+      .def_readwrite("grip_length", &Settings::grip_length, "[m]; 0 = two diameters")
+      .def_readwrite("gauge_fraction", &Settings::gauge_fraction,
+                     "central fraction of the length measured")
+      .def_readwrite("edge_band_diameters", &Settings::edge_band_diameters,
+                     "gauge particles this many diameters from a free edge are left out")
+      .def_property(
+          "linear_solver", [](const Settings& s) { return linear_solver_name(s.linear_solver); },
+          [](Settings& s, const std::string& v) { s.linear_solver = parse_linear_solver(v); },
+          "static solves: 'auto' (by size), 'direct' or 'cholmod'");
+}
+
 }  // namespace
 
 void plydem::python::define_module(py::module_& m) {
@@ -1047,35 +1076,18 @@ void plydem::python::define_module(py::module_& m) {
           "cycle's energies and ratio, wall_seconds.");
 
   // --- the tension test -----------------------------------------------------------------------
-  py::class_<TensionSettings>(
+  py::class_<TensionSettings> tension_settings(
       m, "TensionSettings",
       "The virtual uniaxial tension test (paper Secs. 3.4 and 4), as `plydem tension` sets it "
-      "up; keywords set the attributes below. Angles in radians, sizes in metres.")
+      "up; keywords set the attributes below. Angles in radians, sizes in metres.");
+  def_coupon_settings(tension_settings);
+  tension_settings
       .def(py::init([](py::kwargs kwargs) {
              TensionSettings settings;
              settings.coupon.material = load_material("eglass-my750");
              return from_kwargs<TensionSettings>(kwargs, settings);
            }),
            "TensionSettings(**keywords): the command line's defaults, changed by the keywords.")
-      .def_readwrite("strategy", &TensionSettings::strategy, "registered strategy name")
-      .def_readwrite("strategy_options", &TensionSettings::strategy_options,
-                     "list of (name, value), applied in order before calibration")
-      .def_readwrite("coupon", &TensionSettings::coupon, "material, ply angle and size")
-      .def_readwrite("layup", &TensionSettings::layup,
-                     "ply angles of a laminate, bottom to top [rad]; empty = one ply")
-      .def_property(
-          "interface_normal", [](const TensionSettings& s) { return s.interface.normal; },
-          [](TensionSettings& s, double v) { s.interface.normal = v; },
-          "interface normal stiffness per unit area [N/m^3]; 0 = 10 E2/t")
-      .def_property(
-          "interface_shear", [](const TensionSettings& s) { return s.interface.shear; },
-          [](TensionSettings& s, double v) { s.interface.shear = v; },
-          "interface shear stiffness per unit area [N/m^3]; 0 = 10 G12/t")
-      .def_readwrite("grip_length", &TensionSettings::grip_length, "[m]; 0 = two diameters")
-      .def_readwrite("gauge_fraction", &TensionSettings::gauge_fraction,
-                     "central fraction of the length measured")
-      .def_readwrite("edge_band_diameters", &TensionSettings::edge_band_diameters,
-                     "gauge particles this many diameters from a free edge are left out")
       .def_readwrite("target_strain", &TensionSettings::target_strain, "nominal final strain")
       .def_readwrite("load_stages", &TensionSettings::load_stages, "points of the fit")
       .def_readwrite("ramp_cycles", &TensionSettings::ramp_cycles, "explicit: cycles per stage")
@@ -1112,13 +1124,6 @@ void plydem::python::define_module(py::module_& m) {
           "safety", [](const TensionSettings& s) { return s.explicit_settings.safety_factor; },
           [](TensionSettings& s, double v) { s.explicit_settings.safety_factor = v; },
           "explicit: time step as a fraction of the critical one")
-      .def_property(
-          "linear_solver",
-          [](const TensionSettings& s) { return linear_solver_name(s.linear_solver); },
-          [](TensionSettings& s, const std::string& v) {
-            s.linear_solver = parse_linear_solver(v);
-          },
-          "static solves: 'auto' (by size), 'direct' or 'cholmod'")
       .def("validate", &TensionSettings::validate, "Raises plydem.Error naming a bad setting.");
 
   m.def(
@@ -1146,31 +1151,19 @@ void plydem::python::define_module(py::module_& m) {
       "tension --json` prints: Ex, Ey, nu_xy, nu_yx, theory, particles, bonds, wall_seconds, ...");
 
   // --- the strength test ----------------------------------------------------------------------
-  py::class_<StrengthSettings>(
+  py::class_<StrengthSettings> strength_settings(
       m, "StrengthSettings",
-      "The tension test to failure (`plydem strength`), with the command line's defaults; "
-      "keywords set the attributes below. Angles in radians, sizes in metres, strengths in Pa.")
+      "The tension test to failure (`plydem strength`), with the command line's defaults (its "
+      "strategy: square); "
+      "keywords set the attributes below. Angles in radians, sizes in metres, strengths in Pa.");
+  def_coupon_settings(strength_settings);
+  strength_settings
       .def(py::init([](py::kwargs kwargs) {
              StrengthSettings settings;
              settings.coupon.material = load_material("eglass-my750");
              return from_kwargs<StrengthSettings>(kwargs, settings);
            }),
            "StrengthSettings(**keywords): the command line's defaults, changed by the keywords.")
-      .def_readwrite("strategy", &StrengthSettings::strategy,
-                     "registered strategy name (default square)")
-      .def_readwrite("strategy_options", &StrengthSettings::strategy_options,
-                     "list of (name, value), applied in order before calibration")
-      .def_readwrite("coupon", &StrengthSettings::coupon, "material, ply angle and size")
-      .def_readwrite("layup", &StrengthSettings::layup,
-                     "ply angles of a laminate, bottom to top [rad]; empty = one ply")
-      .def_property(
-          "interface_normal", [](const StrengthSettings& s) { return s.interface.normal; },
-          [](StrengthSettings& s, double v) { s.interface.normal = v; },
-          "interface normal stiffness per unit area [N/m^3]; 0 = 10 E2/t")
-      .def_property(
-          "interface_shear", [](const StrengthSettings& s) { return s.interface.shear; },
-          [](StrengthSettings& s, double v) { s.interface.shear = v; },
-          "interface shear stiffness per unit area [N/m^3]; 0 = 10 G12/t")
       .def_property(
           "interface_strength_normal",
           [](const StrengthSettings& s) { return s.interface_strength.normal; },
@@ -1206,11 +1199,6 @@ void plydem::python::define_module(py::module_& m) {
           "softening", [](const StrengthSettings& s) { return s.strength_options.softening; },
           [](StrengthSettings& s, bool v) { s.strength_options.softening = v; },
           "linear-softening bonds dissipating G_fibre, G_matrix (else brittle)")
-      .def_readwrite("grip_length", &StrengthSettings::grip_length, "[m]; 0 = two diameters")
-      .def_readwrite("gauge_fraction", &StrengthSettings::gauge_fraction,
-                     "central fraction of the length measured")
-      .def_readwrite("edge_band_diameters", &StrengthSettings::edge_band_diameters,
-                     "gauge particles this many diameters from a free edge are left out")
       .def_property(
           "grips", [](const StrengthSettings& s) { return strength_grips_name(s.grips); },
           [](StrengthSettings& s, const std::string& v) { s.grips = parse_strength_grips(v); },
@@ -1224,13 +1212,6 @@ void plydem::python::define_module(py::module_& m) {
             s.consistent_edges = v == "bulk";
           },
           "'bulk' (edge bonds fail with the bulk) or 'weighted' (from stiffness weights alone)")
-      .def_property(
-          "linear_solver",
-          [](const StrengthSettings& s) { return linear_solver_name(s.linear_solver); },
-          [](StrengthSettings& s, const std::string& v) {
-            s.linear_solver = parse_linear_solver(v);
-          },
-          "'auto', 'direct' or 'cholmod'")
       .def_property(
           "max_events", [](const StrengthSettings& s) { return s.events.max_events; },
           [](StrengthSettings& s, long v) { s.events.max_events = v; },
