@@ -808,6 +808,8 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
       pending_stop = "failed";
     else if (events >= settings.max_events)
       pending_stop = "event limit";
+    if (pending_stop.empty() && settings.stop_after)
+      pending_stop = settings.stop_after(model, point);
     if (settings.checkpoint_every > 0 && settings.on_checkpoint &&
         events % settings.checkpoint_every == 0) {
       EventsState s;

@@ -94,6 +94,9 @@ struct EventSettings {
   double progress_seconds = 2.0;
   /// Called at every critical state, the model holding that state (before the bond fails).
   std::function<void(const Model&, const EventPoint&)> on_event;
+  /// Called after every event, the model's bonds changed by it: a non-empty return ends the run
+  /// with that text as EventsResult::stop (an experiment's own end, such as a crack length).
+  std::function<std::string(const Model&, const EventPoint&)> stop_after;
   /// Checkpoints: after every `checkpoint_every` events (0 = never), on_checkpoint gets the model
   /// (its bonds after the event's bond failed) and the run's state, from which run_events
   /// continues (EventsState). Neither changes the run.

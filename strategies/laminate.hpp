@@ -26,7 +26,8 @@
 namespace plydem {
 
 /// A layup string, bottom ply first: "[0/90/0]", "[0/30/45]s" (symmetric), "[45/-45]s",
-/// "[0/90]2s" (the group twice, then mirrored), "[0/±45/90]s" ("±45" and "+-45" stand for 45/-45).
+/// "[0/90]2s" (the group twice, then mirrored), "[0/±45/90]s" ("±45" and "+-45" stand for 45/-45),
+/// "[0/90_2]s" (a count after '_' repeats the ply: 0/90/90/90/90/0), "[0_16]".
 /// Returns the ply angles in radians. Throws plydem::Error naming the malformed part.
 std::vector<double> parse_layup(const std::string& layup);
 

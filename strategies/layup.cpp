@@ -88,7 +88,26 @@ std::vector<double> parse_layup(const std::string& text) {
     const std::string token =
         body.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
     if (token.empty()) throw Error(fmt::format("layup '{}' has an empty ply between '/'", text));
-    for (double angle : parse_ply(token, text)) group.push_back(angle);
+    // A subscript count: "90_2" is 90/90 ("±45_2" is 45/-45/45/-45).
+    std::string ply = token;
+    int count = 1;
+    if (const std::size_t under = token.find('_'); under != std::string::npos) {
+      ply = token.substr(0, under);
+      const std::string digits = token.substr(under + 1);
+      std::size_t used = 0;
+      try {
+        count = std::stoi(digits, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (digits.empty() || used != digits.size() || count < 1 || count > 100) {
+        throw Error(fmt::format("layup '{}': '{}' is not a ply angle with a count (1..100) "
+                                "after '_', e.g. 90_2",
+                                text, token));
+      }
+    }
+    const std::vector<double> plies = parse_ply(ply, text);
+    for (int c = 0; c < count; ++c) group.insert(group.end(), plies.begin(), plies.end());
     if (slash == std::string::npos) break;
     start = slash + 1;
   }

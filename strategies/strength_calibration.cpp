@@ -631,6 +631,34 @@ StrengthCalibration calibrate_strengths(const Strategy& strategy, const Calibrat
   return calibrate(strategy, calibration, material, ply_angle, thickness, options, true);
 }
 
+void set_interface_bond_strength(Bonds& bonds, int b, double area,
+                                 const InterfaceStrength& interface) {
+  require(b >= 0 && b < bonds.size() && bonds.is_interface(b),
+          fmt::format("set_interface_bond_strength: bond {} is not an interface bond", b));
+  require(std::isfinite(area) && area > 0,
+          fmt::format("interface bond {}: its interface area must be positive, got {}", b, area));
+  const double radius = bonds.strength_radius(b);
+  require(radius > 0, fmt::format("interface bond {} has no section radius", b));
+  const double section = std::numbers::pi * radius * radius;
+  bonds.tensile_strength(b) = interface.normal > 0 ? interface.normal * area / section : kInf;
+  bonds.cohesion(b) = interface.shear > 0 ? interface.shear * area / section : kInf;
+  bonds.friction_coefficient(b) = 0;
+  // kappa_u = G area / E_peak with E_peak = (strength area)^2 / (2 k) in pure mode I (k_n) or
+  // II (k_s); one ductility per bond: the smaller of the two given.
+  double ductility = kInf;
+  if (interface.GIc > 0 && interface.normal > 0 && bonds.normal_stiffness(b) > 0) {
+    const double force = interface.normal * area;
+    ductility = std::min(
+        ductility, interface.GIc * area / (0.5 * force * force / bonds.normal_stiffness(b)));
+  }
+  if (interface.GIIc > 0 && interface.shear > 0 && bonds.shear_stiffness(b) > 0) {
+    const double force = interface.shear * area;
+    ductility = std::min(
+        ductility, interface.GIIc * area / (0.5 * force * force / bonds.shear_stiffness(b)));
+  }
+  bonds.ductility(b) = ductility < kInf ? std::max(1.0, ductility) : 1.0;
+}
+
 void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
                            const InterfaceStrength& interface, double weibull_modulus,
                            std::uint64_t seed) {
@@ -687,23 +715,7 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
       if (!interface.given()) continue;
       const double area = 0.5 * (p.volume(i) / ply_thickness / interface_count[i] +
                                  p.volume(j) / ply_thickness / interface_count[j]);
-      const double section = std::numbers::pi * radius * radius;
-      bonds.tensile_strength(b) = interface.normal * area / section;
-      bonds.cohesion(b) = interface.shear * area / section;
-      // kappa_u = G area / E_peak with E_peak = (strength area)^2 / (2 k) in pure mode I (k_n) or
-      // II (k_s); one ductility per bond: the smaller of the two given.
-      double ductility = kInf;
-      if (interface.GIc > 0 && bonds.normal_stiffness(b) > 0) {
-        const double force = interface.normal * area;
-        ductility = std::min(
-            ductility, interface.GIc * area / (0.5 * force * force / bonds.normal_stiffness(b)));
-      }
-      if (interface.GIIc > 0 && bonds.shear_stiffness(b) > 0) {
-        const double force = interface.shear * area;
-        ductility = std::min(
-            ductility, interface.GIIc * area / (0.5 * force * force / bonds.shear_stiffness(b)));
-      }
-      if (ductility < kInf) bonds.ductility(b) = std::max(1.0, ductility);
+      set_interface_bond_strength(bonds, b, area, interface);
       continue;
     }
     const int k = p.ply(i);

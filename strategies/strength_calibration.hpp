@@ -138,6 +138,16 @@ StrengthCalibration calibrate_strengths(const Strategy& strategy, const Calibrat
                                         const Material& material, double ply_angle,
                                         double thickness, const StrengthOptions& options = {});
 
+/// The strength fields of interface bond `b` (BondKind::kInterface, its strength_radius set) that
+/// stands for `area` [m^2] of interface: it breaks when F_n / area reaches interface.normal or
+/// |F_s| / area reaches interface.shear (section strengths normal area / (pi R^2) and shear
+/// area / (pi R^2); a strength not given (0) is +inf), no friction, and ductility G area / E_peak
+/// from GIc (pure mode I, E_peak = (normal area)^2 / (2 k_n)) and GIIc (mode II, with k_s), the
+/// smaller of those given (1, brittle, if neither). Throws plydem::Error for a bond that is not an
+/// interface bond, a non-positive area or radius.
+void set_interface_bond_strength(Bonds& bonds, int b, double area,
+                                 const InterfaceStrength& interface);
+
 /// Writes the strength fields of every bond of a built specimen: in-ply bonds of ply p from
 /// plies[p] by their Bonds::family, scaled by their stiffness weight (k_n of the bond over its
 /// family's bulk k_n, as boundary cells scale the stiffness: an edge bond is as utilised as a bulk

@@ -36,6 +36,13 @@ TEST_CASE("layup strings expand as composites engineers write them") {
   CHECK(degrees(parse_layup("[0/±45/90]")) == std::vector<double>{0, 45, -45, 90});
   CHECK(degrees(parse_layup(" [ 0 / +-30 ] ")) == std::vector<double>{0, 30, -30});
   CHECK(format_layup(parse_layup("[0/30/45]s")) == "[0/30/45/45/30/0]");
+  CHECK(degrees(parse_layup("[0/90_2]s")) == std::vector<double>{0, 90, 90, 90, 90, 0});
+  CHECK(degrees(parse_layup("[0_3]")) == std::vector<double>{0, 0, 0});
+  CHECK(degrees(parse_layup("[±45_2]")) == std::vector<double>{45, -45, 45, -45});
+  CHECK_THROWS_WITH_AS(parse_layup("[0/90_]"), doctest::Contains("count (1..100) after '_'"),
+                       Error);
+  CHECK_THROWS_WITH_AS(parse_layup("[0/90_0]"), doctest::Contains("'90_0'"), Error);
+  CHECK_THROWS_WITH_AS(parse_layup("[0/90_2x]"), doctest::Contains("'90_2x'"), Error);
   CHECK_THROWS_WITH_AS(parse_layup("0/90"), doctest::Contains("not of the form"), Error);
   CHECK_THROWS_WITH_AS(parse_layup("[0//90]"), doctest::Contains("empty ply"), Error);
   CHECK_THROWS_WITH_AS(parse_layup("[0/abc]"), doctest::Contains("'abc' is not a ply angle"),
