@@ -101,9 +101,10 @@ std::vector<double> parse_layup(const std::string& text) {
         used = 0;
       }
       if (digits.empty() || used != digits.size() || count < 1 || count > 100) {
-        throw Error(fmt::format("layup '{}': '{}' is not a ply angle with a count (1..100) "
-                                "after '_', e.g. 90_2",
-                                text, token));
+        throw Error(
+            fmt::format("layup '{}': '{}' is not a ply angle with a count (1..100) "
+                        "after '_', e.g. 90_2",
+                        text, token));
       }
     }
     const std::vector<double> plies = parse_ply(ply, text);

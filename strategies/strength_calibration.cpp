@@ -648,13 +648,13 @@ void set_interface_bond_strength(Bonds& bonds, int b, double area,
   double ductility = kInf;
   if (interface.GIc > 0 && interface.normal > 0 && bonds.normal_stiffness(b) > 0) {
     const double force = interface.normal * area;
-    ductility = std::min(
-        ductility, interface.GIc * area / (0.5 * force * force / bonds.normal_stiffness(b)));
+    ductility = std::min(ductility,
+                         interface.GIc * area / (0.5 * force * force / bonds.normal_stiffness(b)));
   }
   if (interface.GIIc > 0 && interface.shear > 0 && bonds.shear_stiffness(b) > 0) {
     const double force = interface.shear * area;
-    ductility = std::min(
-        ductility, interface.GIIc * area / (0.5 * force * force / bonds.shear_stiffness(b)));
+    ductility = std::min(ductility,
+                         interface.GIIc * area / (0.5 * force * force / bonds.shear_stiffness(b)));
   }
   bonds.ductility(b) = ductility < kInf ? std::max(1.0, ductility) : 1.0;
 }

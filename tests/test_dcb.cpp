@@ -43,8 +43,7 @@ struct Reference {
 };
 Reference corrected_beam_theory(const Material& m, double b, double h, double a, double G) {
   const double gamma = 1.18 * std::sqrt(m.E1 * m.E2) / m.G12;
-  const double chi =
-      std::sqrt(m.E1 / (11 * m.G12)) * (3 - 2 * std::pow(gamma / (1 + gamma), 2));
+  const double chi = std::sqrt(m.E1 / (11 * m.G12)) * (3 - 2 * std::pow(gamma / (1 + gamma), 2));
   const double ae = a + chi * h;
   return {8 * std::pow(ae, 3) / (m.E1 * b * std::pow(h, 3)),
           std::sqrt(G * m.E1 * b * b * std::pow(h, 3) / (12 * ae * ae))};
@@ -181,8 +180,7 @@ TEST_CASE("the DCB refuses what its side view cannot represent, naming it") {
 }
 
 TEST_CASE("plydem run dcb.toml --quick writes the contract's rows") {
-  const fs::path config =
-      fs::path(PLYDEM_TEST_DATA_DIR) / ".." / ".." / "experiments" / "dcb.toml";
+  const fs::path config = fs::path(PLYDEM_TEST_DATA_DIR) / ".." / ".." / "experiments" / "dcb.toml";
   const fs::path dir = fs::temp_directory_path() / "plydem_test_dcb_run";
   fs::remove_all(dir);
   RunOptions options;

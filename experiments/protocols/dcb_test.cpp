@@ -33,8 +33,8 @@ void require_size(double value, const char* what) {
 
 // One row of particles facing the interface, sorted by x.
 std::vector<int> facing_row(const Particles& p, int first, int last, bool top, double diameter) {
-  double edge = top ? -std::numeric_limits<double>::infinity()
-                    : std::numeric_limits<double>::infinity();
+  double edge =
+      top ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
   for (int i = first; i < last; ++i) {
     const double y = p.reference_position(i, 1);
     edge = top ? std::max(edge, y) : std::min(edge, y);
@@ -43,9 +43,8 @@ std::vector<int> facing_row(const Particles& p, int first, int last, bool top, d
   for (int i = first; i < last; ++i) {
     if (std::abs(p.reference_position(i, 1) - edge) <= 0.25 * diameter) row.push_back(i);
   }
-  std::sort(row.begin(), row.end(), [&](int a, int b) {
-    return p.reference_position(a, 0) < p.reference_position(b, 0);
-  });
+  std::sort(row.begin(), row.end(),
+            [&](int a, int b) { return p.reference_position(a, 0) < p.reference_position(b, 0); });
   return row;
 }
 
@@ -178,17 +177,17 @@ DcbResult run_dcb(const DcbSettings& s, const std::function<void(const EventProg
                       "joins them column by column (use the square strategy)",
                       below.size(), above.size()));
   for (std::size_t c = 0; c < below.size(); ++c) {
-    require(std::abs(p.reference_position(below[c], 0) - p.reference_position(above[c], 0)) <=
-                0.05 * d,
-            fmt::format("dcb: the {} strategy's rows facing the mid-plane are not above each other "
-                        "(column {} is {:g} mm apart); the side-view DCB joins them column by "
-                        "column (use the square strategy)",
-                        s.strategy, c + 1,
-                        std::abs(p.reference_position(below[c], 0) -
-                                 p.reference_position(above[c], 0)) /
-                            kMm));
+    require(
+        std::abs(p.reference_position(below[c], 0) - p.reference_position(above[c], 0)) <= 0.05 * d,
+        fmt::format(
+            "dcb: the {} strategy's rows facing the mid-plane are not above each other "
+            "(column {} is {:g} mm apart); the side-view DCB joins them column by "
+            "column (use the square strategy)",
+            s.strategy, c + 1,
+            std::abs(p.reference_position(below[c], 0) - p.reference_position(above[c], 0)) / kMm));
   }
-  const double gap = p.reference_position(above.front(), 1) - p.reference_position(below.front(), 1);
+  const double gap =
+      p.reference_position(above.front(), 1) - p.reference_position(below.front(), 1);
   require(gap > 0.5 * d, fmt::format("dcb: the arms' facing rows are {:g} mm apart, closer than "
                                      "half a particle diameter",
                                      gap / kMm));
@@ -242,10 +241,10 @@ DcbResult run_dcb(const DcbSettings& s, const std::function<void(const EventProg
     front.push_back({p.reference_position(bonds.first(b), 0) - 0.5 * spacing, b});
   }
   r.interface_ductility = bonds.ductility(first_interface);
-  model.description = fmt::format(
-      "side-view DCB of {}: two arms of {} ({} rows of {:g} mm), {} interface bonds",
-      format_layup(s.layup), lower.model.description, static_cast<int>(std::round(h / d)), d / kMm,
-      between.size());
+  model.description =
+      fmt::format("side-view DCB of {}: two arms of {} ({} rows of {:g} mm), {} interface bonds",
+                  format_layup(s.layup), lower.model.description,
+                  static_cast<int>(std::round(h / d)), d / kMm, between.size());
   model.check_consistency();
   r.particles = n;
   r.bonds = bonds.size();

@@ -63,12 +63,12 @@ struct DcbSettings {
   /// Ply angles, bottom to top [rad]: every ply at 0 (a unidirectional laminate), an even number
   /// of them; the delamination is on the mid-plane.
   std::vector<double> layup = std::vector<double>(16, 0.0);
-  double ply_thickness = 0.2e-3;       ///< [m]
-  double length = 80e-3;               ///< L, along the fibres [m]
-  double width = 20e-3;                ///< b [m]
-  double crack = 30e-3;                ///< a0, the starter delamination from the load line [m]
-  double particle_diameter = 0.2e-3;   ///< [m]
-  double max_crack = 50e-3;            ///< stop when the crack reaches this length [m]
+  double ply_thickness = 0.2e-3;      ///< [m]
+  double length = 80e-3;              ///< L, along the fibres [m]
+  double width = 20e-3;               ///< b [m]
+  double crack = 30e-3;               ///< a0, the starter delamination from the load line [m]
+  double particle_diameter = 0.2e-3;  ///< [m]
+  double max_crack = 50e-3;           ///< stop when the crack reaches this length [m]
   /// Normal and shear stiffness of the interface bonds per unit area [N/m^3]; 0 = E2 / g and
   /// G12 / g (see the file comment). lateral_radius is not used.
   InterfaceStiffness interface;
@@ -125,8 +125,8 @@ struct DcbResult {
   double width = 0, arm_thickness = 0, length = 0;  ///< b, h, L [m]
   double initial_crack = 0;  ///< a0 as built (to the first bonded share of interface) [m]
   double particle_diameter = 0;
-  InterfaceStiffness interface;           ///< as used (defaults resolved)
-  InterfaceStrength interface_strength;   ///< as used
+  InterfaceStiffness interface;          ///< as used (defaults resolved)
+  InterfaceStrength interface_strength;  ///< as used
   int particles = 0, bonds = 0, interface_bonds = 0;
   double interface_ductility = 1;  ///< kappa_u of the interface bonds
 
@@ -166,7 +166,7 @@ DcbResult run_dcb(const DcbSettings& settings,
 /// (C = opening / load) gives the crack length correction Delta and the flexural modulus
 /// 8 / (b h^3 m^3), and each state G_I = 3 P delta / (2 b (a + |Delta|)), averaged.
 struct DcbReduction {
-  int points = 0;  ///< propagation states used (fewer than 3: nothing reduced)
+  int points = 0;               ///< propagation states used (fewer than 3: nothing reduced)
   double delta = 0;             ///< [m]
   double flexural_modulus = 0;  ///< [Pa]
   double GIc = 0;               ///< mean G_I over the points [J/m^2]

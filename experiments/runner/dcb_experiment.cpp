@@ -20,6 +20,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "experiments/output/crack_report.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/dcb_test.hpp"
@@ -134,13 +135,14 @@ class DcbExperiment : public Experiment {
   static ExperimentOutput output(const DcbResult& r, const DcbSettings& s, const fs::path& dir,
                                  const std::string& case_name) {
     ExperimentOutput out;
-    out.title = fmt::format("Double cantilever beam: {} {} ({})", r.material.name, case_name,
-                            r.strategy);
+    out.title =
+        fmt::format("Double cantilever beam: {} {} ({})", r.material.name, case_name, r.strategy);
     const DcbBeamTheory& t = r.theory;
     const DcbReduction mbt = reduce_dcb_curve(r);
     auto row = [&](const std::string& quantity, const std::string& source, double value,
                    const std::string& unit) {
-      if (std::isfinite(value)) out.rows.push_back({"dcb", case_name, quantity, source, value, unit});
+      if (std::isfinite(value))
+        out.rows.push_back({"dcb", case_name, quantity, source, value, unit});
     };
     row("propagation_load", "dem", r.propagation_load, "N");
     row("propagation_load", "beam theory", t.propagation_load, "N");
@@ -182,8 +184,8 @@ class DcbExperiment : public Experiment {
       const int steps = 60;
       for (int k = 0; k <= steps; ++k) {
         const double length = r.initial_crack + (s.max_crack - r.initial_crack) * k / steps;
-        const DcbBeamTheory at = dcb_beam_theory(r.material, r.width, r.arm_thickness, length,
-                                                 r.interface_strength.GIc);
+        const DcbBeamTheory at =
+            dcb_beam_theory(r.material, r.width, r.arm_thickness, length, r.interface_strength.GIc);
         const double load = corrected ? at.corrected_propagation_load : at.propagation_load;
         const double compliance = corrected ? at.corrected_compliance : at.compliance;
         p.x.push_back(load * compliance / kMm);
@@ -203,10 +205,10 @@ class DcbExperiment : public Experiment {
                                 r.interface_strength.GIc),
                     "opening delta [mm]", "load P [N]", axes);
     PlotAxes left;
-    const Figure crack_figure = plot_curves(crack_curves, dir, stem + "_crack_length",
-                                            fmt::format("DCB {}: crack length against opening",
-                                                        case_name),
-                                            "opening delta [mm]", "crack length a [mm]", left);
+    const Figure crack_figure =
+        plot_curves(crack_curves, dir, stem + "_crack_length",
+                    fmt::format("DCB {}: crack length against opening", case_name),
+                    "opening delta [mm]", "crack length a [mm]", left);
     const double window = 4.0 * r.arm_thickness;
     const double x0 = r.model->particles.reference_position.col(0).minCoeff();
     const Figure crack_map = plot_bond_states(
@@ -227,6 +229,10 @@ class DcbExperiment : public Experiment {
     }
     out.files.push_back(fs::path("vtu") / "dcb.pvd");
     for (const std::string& file : series.files()) out.files.push_back(fs::path("vtu") / file);
+
+    const CrackReport cracks =
+        crack_report(*r.model, r.breaks, {}, dir, stem, fmt::format("DCB {}: cracks", case_name));
+    out.files.insert(out.files.end(), cracks.files.begin(), cracks.files.end());
 
     std::string& md = out.report_markdown;
     md += fmt::format(
@@ -254,12 +260,11 @@ class DcbExperiment : public Experiment {
                      relative(r.propagation_load, t.propagation_load),
                      fmt::format("{:.4g}", t.corrected_propagation_load),
                      relative(r.propagation_load, t.corrected_propagation_load)});
-    md += table_row({"initial compliance C (mm/N)",
-                     fmt::format("{:.5g}", r.initial_compliance / kMm),
-                     fmt::format("{:.5g}", t.compliance / kMm),
-                     relative(r.initial_compliance, t.compliance),
-                     fmt::format("{:.5g}", t.corrected_compliance / kMm),
-                     relative(r.initial_compliance, t.corrected_compliance)});
+    md += table_row(
+        {"initial compliance C (mm/N)", fmt::format("{:.5g}", r.initial_compliance / kMm),
+         fmt::format("{:.5g}", t.compliance / kMm), relative(r.initial_compliance, t.compliance),
+         fmt::format("{:.5g}", t.corrected_compliance / kMm),
+         relative(r.initial_compliance, t.corrected_compliance)});
     md += fmt::format(
         "\nThe DEM's propagation load is its peak load (at crack length {:.4g} mm, opening "
         "{:.4g} mm). Beam theory: C = 8 a^3 / (E1 b h^3), P = (b h / a) sqrt(GIc E1 h / 12); the "
@@ -274,13 +279,14 @@ class DcbExperiment : public Experiment {
           "chi h = {:.4g} mm) and a flexural modulus of {:.4g} GPa (E1 {:.4g}); G_I = 3 P delta / "
           "(2 b (a + |Delta|)) averages {:.4g} J/m^2 against the interface's GIc {:g} ({}). The "
           "energy released per crack area grown is {:.4g} J/m^2.\n\n",
-          mbt.points, mbt.delta / kMm, t.chi * r.arm_thickness / kMm,
-          mbt.flexural_modulus * 1e-9, r.material.E1 * 1e-9, mbt.GIc, r.interface_strength.GIc,
+          mbt.points, mbt.delta / kMm, t.chi * r.arm_thickness / kMm, mbt.flexural_modulus * 1e-9,
+          r.material.E1 * 1e-9, mbt.GIc, r.interface_strength.GIc,
           relative(mbt.GIc, r.interface_strength.GIc), r.released_per_area);
     }
     md += figure_markdown(load_figure, "Load against opening: DEM beside beam theory") + "\n";
     md += figure_markdown(crack_figure, "Crack length against opening") + "\n";
     md += figure_markdown(crack_map, "The delamination at the end of the run") + "\n";
+    md += cracks.markdown;
     return out;
   }
 };

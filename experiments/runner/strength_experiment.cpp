@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "experiments/output/crack_report.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/strength_report.hpp"
 #include "experiments/runner/coupon_config.hpp"
@@ -168,6 +169,17 @@ ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_di
   out.files.insert(out.files.end(), vtu.begin(), vtu.end());
   md += fmt::format("ParaView: `{}` ({} states; bond cell data `state`, `damage`).\n\n",
                     vtu.front().generic_string(), (vtu.size() - 1) / 2);
+  const CrackReport crack_summary = crack_report(*r.model, r.breaks, r.strain, out_dir, stem,
+                                                 fmt::format("{}: cracks", case_name));
+  out.files.insert(out.files.end(), crack_summary.files.begin(), crack_summary.files.end());
+  md += crack_summary.markdown;
+  row("cracks", dem, static_cast<double>(crack_summary.cracks.size()), "1");
+  for (const CrackCount& n : crack_summary.counts) {
+    const std::string where = n.interface ? fmt::format("interface {}/{}", n.ply + 1, n.ply + 2)
+                                          : fmt::format("ply {}", n.ply + 1);
+    row(fmt::format("cracks {}", where), dem, n.cracks, "1");
+    row(fmt::format("crack density {}", where), dem, n.density * kMm, "1/mm");
+  }
   return out;
 }
 

@@ -1,0 +1,154 @@
+#include "solvers/cracks.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <numeric>
+
+#include "contacts/cell_list.hpp"
+#include "core/error.hpp"
+
+namespace plydem {
+
+namespace {
+
+// Union-find with path halving.
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+
+}  // namespace
+
+std::string Crack::mode() const {
+  if (shear == 0) return "tension";
+  if (tension == 0) return "shear";
+  return "mixed";
+}
+
+std::vector<Crack> find_cracks(const Model& model, const std::vector<BondBreak>& breaks,
+                               double link_distance) {
+  const Bonds& bonds = model.bonds;
+  const Particles& p = model.particles;
+  if (!(link_distance > 0)) link_distance = 1.5 * 2.0 * p.radius.maxCoeff();
+  require(std::isfinite(link_distance) && link_distance > 0,
+          fmt::format("find_cracks: the link distance must be positive, got {}", link_distance));
+  const int n = static_cast<int>(breaks.size());
+  std::vector<Crack> cracks;
+  if (n == 0) return cracks;
+  // Each break's crack group: (interface?, ply or interface index).
+  std::vector<std::pair<bool, int>> group(n);
+  PositionArray position(n, 3);
+  for (int k = 0; k < n; ++k) {
+    const int b = breaks[k].bond;
+    require(b >= 0 && b < bonds.size(),
+            fmt::format("find_cracks: break {} names bond {}, but the model has {} bonds", k, b,
+                        bonds.size()));
+    const bool interface = bonds.is_interface(b);
+    group[k] = {interface, interface ? bonds.family(b) : p.ply(bonds.first(b))};
+    position.row(k) = breaks[k].position.transpose().array();
+  }
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  const Eigen::ArrayXd half = Eigen::ArrayXd::Constant(n, 0.5 * link_distance);
+  for (const auto& [i, j] : find_contact_pairs(position, half, 1.0)) {
+    if (group[i] != group[j]) continue;
+    const int ri = find_root(parent, i), rj = find_root(parent, j);
+    if (ri != rj) parent[std::max(ri, rj)] = std::min(ri, rj);
+  }
+  // Members of each crack, in order of their first break (the breaks are in solver order).
+  std::map<int, std::vector<int>> members;
+  std::vector<int> order;
+  for (int k = 0; k < n; ++k) {
+    const int root = find_root(parent, k);
+    if (members[root].empty()) order.push_back(root);
+    members[root].push_back(k);
+  }
+  const double diameter = 2.0 * p.radius.maxCoeff();
+  for (int root : order) {
+    const std::vector<int>& m = members[root];
+    Crack c;
+    c.id = static_cast<int>(cracks.size());
+    c.interface = group[root].first;
+    c.ply = group[root].second;
+    c.bonds = static_cast<int>(m.size());
+    c.first_at = std::numeric_limits<double>::infinity();
+    for (int k : m) {
+      c.centroid += breaks[k].position;
+      if (breaks[k].mode == BondState::kBrokenShear)
+        ++c.shear;
+      else
+        ++c.tension;
+      if (breaks[k].at < c.first_at) {
+        c.first_at = breaks[k].at;
+        c.first_load = breaks[k].load;
+      }
+    }
+    c.centroid /= static_cast<double>(m.size());
+    Eigen::Vector2d axis;
+    if (m.size() == 1) {
+      const Eigen::Vector3d branch = bonds.normal.row(breaks[m.front()].bond).transpose();
+      axis = Eigen::Vector2d(-branch.y(), branch.x());
+      if (axis.norm() < 1e-12) axis = Eigen::Vector2d(1, 0);  // a bond along z
+      axis.normalize();
+    } else {
+      Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
+      for (int k : m) {
+        const Eigen::Vector2d r = (breaks[k].position - c.centroid).head<2>();
+        covariance += r * r.transpose();
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
+      axis = eigen.eigenvectors().col(1);
+    }
+    if (axis.y() < 0 || (axis.y() == 0 && axis.x() < 0)) axis = -axis;
+    c.angle = std::atan2(axis.y(), axis.x());
+    if (c.angle >= std::numbers::pi) c.angle -= std::numbers::pi;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k : m) {
+      const double t = axis.dot((breaks[k].position - c.centroid).head<2>());
+      lo = std::min(lo, t);
+      hi = std::max(hi, t);
+    }
+    const Eigen::Vector3d along(axis.x(), axis.y(), 0.0);
+    c.start = c.centroid + lo * along;
+    c.end = c.centroid + hi * along;
+    c.length = hi - lo + diameter;
+    cracks.push_back(c);
+  }
+  return cracks;
+}
+
+double crack_density(const std::vector<Crack>& cracks, int ply, double x_begin, double x_end) {
+  require(std::isfinite(x_begin) && std::isfinite(x_end) && x_end > x_begin,
+          fmt::format("crack_density: the stretch [{}, {}] m is empty", x_begin, x_end));
+  int count = 0;
+  for (const Crack& c : cracks) {
+    if (!c.interface && c.ply == ply && c.centroid.x() >= x_begin && c.centroid.x() <= x_end)
+      ++count;
+  }
+  return count / (x_end - x_begin);
+}
+
+std::string cracks_csv(const std::vector<Crack>& cracks) {
+  std::string out =
+      "id,kind,ply,x_mm,y_mm,z_mm,length_mm,angle_deg,bonds,tension,shear,mode,first_event,"
+      "first_load\n";
+  for (const Crack& c : cracks) {
+    out += fmt::format("{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.4g},{},{},{},{},{:g},{:.10g}\n",
+                       c.id, c.interface ? "interface" : "ply", c.ply, c.centroid.x() * 1e3,
+                       c.centroid.y() * 1e3, c.centroid.z() * 1e3, c.length * 1e3,
+                       c.angle * 180.0 / std::numbers::pi, c.bonds, c.tension, c.shear, c.mode(),
+                       c.first_at, c.first_load);
+  }
+  return out;
+}
+
+}  // namespace plydem
