@@ -661,7 +661,7 @@ void set_interface_bond_strength(Bonds& bonds, int b, double area,
 
 void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
                            const InterfaceStrength& interface, double weibull_modulus,
-                           std::uint64_t seed) {
+                           std::uint64_t seed, const std::vector<bool>& scattered_plies) {
   interface.validate();
   require(std::isfinite(weibull_modulus) && weibull_modulus >= 0,
           fmt::format("the Weibull modulus must be finite and >= 0 (0 = no scatter), got {}",
@@ -723,6 +723,9 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
             fmt::format("assign_bond_strengths: bond {} belongs to ply {}, but the specimen has {} "
                         "plies",
                         b, k + 1, ply_count));
+    if (!scattered_plies.empty() &&
+        !(k < static_cast<int>(scattered_plies.size()) && scattered_plies[k]))
+      scatter = 1.0;
     const int f = bonds.family(b);
     require(f >= 0 && f < static_cast<int>(plies[k].families.size()),
             fmt::format("assign_bond_strengths: bond {} has family {}, but ply {} has {} families",

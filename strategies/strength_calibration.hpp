@@ -166,9 +166,11 @@ void set_interface_bond_strength(Bonds& bonds, int b, double area,
 ///    or |F_s| / a reaches `shear`: section strengths normal a / (pi R^2), shear a / (pi R^2), no
 ///    friction; no scatter; ductility G a / E_peak from GIc (pure mode I, E_peak = (normal a)^2 /
 ///    (2 k_n)) and GIIc (mode II, with k_s), the smaller of those given.
+///  - `scattered_plies`: the plies whose bonds get the scatter (index = ply; empty = every ply);
+///    the others keep their calibrated strengths (every row still draws).
 ///  - The specimen must be intact (no damaged or broken bond).
 void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
                            const InterfaceStrength& interface = {}, double weibull_modulus = 0,
-                           std::uint64_t seed = 1);
+                           std::uint64_t seed = 1, const std::vector<bool>& scattered_plies = {});
 
 }  // namespace plydem

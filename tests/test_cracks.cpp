@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/transverse_cracking.hpp"
 #include "solvers/cracks.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
@@ -146,4 +147,26 @@ TEST_CASE("cracks of a laminate stay in their ply, delaminations on their interf
   CHECK(cracks[2].first_at == 3);
   CHECK(crack_density(cracks, 0, x0, x0 + 0.9 * kMm) == doctest::Approx(1 / (0.9 * kMm)));
   CHECK(crack_density(cracks, 1, x0, x0 + 1 * kMm) == doctest::Approx(1 / (1 * kMm)));
+}
+
+TEST_CASE("the shear-lag stiffness of a cracked cross-ply and its ply-discount limit") {
+  const Material m = load_material("eglass-my750");
+  const double b = 0.2e-3, d = 0.4e-3;  // [0/90_2]s of 0.2 mm plies
+  // Written out (Garrett & Bailey 1977) at 1 crack per mm: s = 0.5 mm.
+  const double G23 = m.E2 / (2 * (1 + m.nu23));
+  const double lambda = std::sqrt(G23 * (b * m.E1 + d * m.E2) / (b * d * d * m.E1 * m.E2));
+  const double s = 0.5e-3;
+  const double by_hand = 1 / (1 + d * m.E2 / (b * m.E1) * std::tanh(lambda * s) / (lambda * s));
+  CHECK(shear_lag_stiffness_ratio(m, b, d, 1e3) == doctest::Approx(by_hand).epsilon(1e-12));
+  CHECK(shear_lag_stiffness_ratio(m, b, d, 0) == 1);
+  // Dense cracks: the 90° layer carries nothing, E = b E1 / (b + d) over E0 = (b E1 + d E2) /
+  // (b + d).
+  const double discount = b * m.E1 / (b * m.E1 + d * m.E2);
+  CHECK(ply_discount_stiffness_ratio(m, b, d) == doctest::Approx(discount).epsilon(1e-14));
+  CHECK(shear_lag_stiffness_ratio(m, b, d, 1e9) == doctest::Approx(discount).epsilon(1e-6));
+  // More cracks, less stiffness.
+  CHECK(shear_lag_stiffness_ratio(m, b, d, 2e3) < shear_lag_stiffness_ratio(m, b, d, 1e3));
+  CHECK_THROWS_WITH_AS(shear_lag_stiffness_ratio(m, 0, d, 1e3), doctest::Contains("positive"),
+                       Error);
+  CHECK_THROWS_WITH_AS(shear_lag_stiffness_ratio(m, b, d, -1), doctest::Contains("density"), Error);
 }

@@ -164,7 +164,13 @@ void StrengthSettings::validate() const {
             fmt::format("the Weibull modulus must be finite and >= 0 (0 = no scatter), got {}",
                         *weibull_modulus));
   }
-  require(std::isfinite(grip_length) && grip_length >= 0, "grip length must be >= 0");
+  const int ply_count = layup.empty() ? 1 : static_cast<int>(layup.size());
+  for (int k : scatter_plies) {
+    require(k >= 0 && k < ply_count,
+            fmt::format("the scattered ply {} does not exist: the coupon has {} plies (0 to {})", k,
+                        ply_count, ply_count - 1));
+  }
+  require(grip_length >= 0 && std::isfinite(grip_length), "grip length must be >= 0");
   require(std::isfinite(gauge_fraction) && gauge_fraction > 0 && gauge_fraction < 1,
           fmt::format("gauge fraction must lie in (0, 1), got {}", gauge_fraction));
   require(std::isfinite(edge_band_diameters) && edge_band_diameters >= 0,
@@ -191,6 +197,11 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
   h.add("interface_strength.GIc", exact(s.interface_strength.GIc));
   h.add("interface_strength.GIIc", exact(s.interface_strength.GIIc));
   h.add("weibull_modulus", exact(s.effective_weibull_modulus()));
+  if (!s.scatter_plies.empty()) {
+    std::string plies;
+    for (int k : s.scatter_plies) plies += fmt::format("{}{}", plies.empty() ? "" : ",", k);
+    h.add("scatter_plies", plies);
+  }
   h.add("seed", fmt::format("{}", s.seed));
   h.add("friction", exact(s.strength_options.friction_coefficient));
   h.add("softening", s.strength_options.softening ? "true" : "false");
@@ -307,8 +318,10 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
                       specimen.ply_calibrations.size(), plies.size()));
   // Without scatter first: the edge consistency below compares the strengths as calibrated.
   const bool consistent_edges = s.consistent_edges && s.grips == StrengthGrips::kUniform;
+  std::vector<bool> scattered_plies(s.scatter_plies.empty() ? 0 : plies.size(), false);
+  for (int k : s.scatter_plies) scattered_plies[static_cast<std::size_t>(k)] = true;
   assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
-                        consistent_edges ? 0.0 : result.weibull_modulus, s.seed);
+                        consistent_edges ? 0.0 : result.weibull_modulus, s.seed, scattered_plies);
 
   // Theory, and the calibrated bulk's own first failure under the same load.
   for (FailureCriterion criterion : all_criteria()) {
@@ -389,7 +402,7 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
     if (result.weibull_modulus > 0) {
       Specimen scattered{std::move(*model), specimen_calibrations, 0.0};
       assign_bond_strengths(scattered, result.ply_strengths, s.interface_strength,
-                            result.weibull_modulus, s.seed);
+                            result.weibull_modulus, s.seed, scattered_plies);
       *model = std::move(scattered.model);
     }
     raise_strengths(model->bonds, factors);

@@ -92,6 +92,10 @@ struct StrengthSettings {
   /// (LaminaStrength::weibull_modulus), 0 = no scatter.
   std::optional<double> weibull_modulus;
   std::uint64_t seed = 1;  ///< random stream of the scatter (the same seed, the same strengths)
+  /// The plies (0-based, bottom to top) whose bonds get the scatter; empty = every ply. A
+  /// cross-ply's transverse cracking: the 90° plies only, the 0° plies at their calibrated
+  /// strengths.
+  std::vector<int> scatter_plies;
   StrengthOptions strength_options;  ///< friction coefficient, softening
   double grip_length = 0;            ///< [m]; 0 = two particle diameters
   double gauge_fraction = 0.5;       ///< central fraction of the length used as gauge section

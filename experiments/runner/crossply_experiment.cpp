@@ -1,0 +1,318 @@
+// The cross-ply experiment kind (`plydem run experiments/crossply.toml`, kind `crossply`):
+// [0_m/90_n]s laminates pulled in tension (the strength test, experiments/protocols/
+// strength_test.hpp, with strength scatter) until they fail; per laminate the strength test's own
+// section (stress-strain, cracks, crack density against strain), the first-ply failure beside
+// CLT's closed form, and the laminate's secant stiffness against the 90° layer's crack density
+// beside the shear-lag model and the ply-discount limit (core/transverse_cracking.hpp). Config
+// keys (README, "Transverse cracking of cross-plies"):
+//
+//   experiment = "crossply"
+//   material = "eglass-my750"   strategy = "square"   strategy_options = []
+//   layups = ["[0/90]s", "[0/90_2]s", "[0/90_4]s"]
+//   weibull_modulus = 10        seed = 1      scatter = "90" (or "all")
+//   [coupon] length_mm, width_mm, thickness_mm (per ply), diameter_mm, grip_mm
+//   [quick]  the same sizes, and layups
+//   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa)
+//   [events] max_events, stop_fraction, max_update_rank
+//   [output] vtu_series
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "core/transverse_cracking.hpp"
+#include "experiments/output/figures.hpp"
+#include "experiments/protocols/strength_test.hpp"
+#include "experiments/runner/coupon_config.hpp"
+#include "experiments/runner/experiment.hpp"
+#include "experiments/runner/strength_experiment.hpp"
+#include "solvers/cracks.hpp"
+#include "strategies/laminate.hpp"
+#include "strategies/registry.hpp"
+
+namespace plydem {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kMm = 1e-3;
+constexpr double kMPa = 1e-6;
+constexpr double kDegree = std::numbers::pi / 180.0;
+constexpr std::size_t kStiffnessSamples = 100;
+
+std::string file_stem(std::string text) {
+  for (char& ch : text) {
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_') ch = '_';
+  }
+  return text;
+}
+
+bool at_angle(double angle, double degrees) {
+  const double turns = (angle - degrees * kDegree) / std::numbers::pi;
+  return std::abs(turns - std::round(turns)) < 1e-9;
+}
+
+// The 0° sublaminate's plies (m, each side) and the 90° layer's (2n, in the middle) of a
+// [0_m/90_n]s layup; throws naming the layup otherwise.
+std::pair<int, int> crossply_counts(const std::vector<double>& layup, const std::string& text) {
+  const int plies = static_cast<int>(layup.size());
+  int m = 0;
+  while (m < plies && at_angle(layup[m], 0)) ++m;
+  int ninety = 0;
+  while (m + ninety < plies && at_angle(layup[m + ninety], 90)) ++ninety;
+  const bool ok =
+      m > 0 && ninety > 0 && ninety % 2 == 0 && 2 * m + ninety == plies &&
+      std::all_of(layup.begin() + m + ninety, layup.end(), [](double a) { return at_angle(a, 0); });
+  require(ok, fmt::format("crossply: layup '{}' is not a cross-ply [0_m/90_n]s (0° plies outside, "
+                          "an even number of 90° plies in the middle)",
+                          text));
+  return {m, ninety / 2};
+}
+
+// The fraction of the coupon's width a crack must span to count as a transverse crack.
+constexpr double kSpanningFraction = 0.8;
+
+// The 90° plies' mean density of transverse cracks (at least kSpanningFraction of the width
+// long) over [x_begin, x_end], at the breaks so far.
+double ninety_density(const Model& model, const std::vector<BondBreak>& breaks,
+                      const std::vector<int>& ninety, double x_begin, double x_end, double width) {
+  std::vector<Crack> cracks = find_cracks(model, breaks);
+  std::erase_if(cracks, [&](const Crack& c) { return c.length < kSpanningFraction * width; });
+  double sum = 0;
+  for (int ply : ninety) sum += crack_density(cracks, ply, x_begin, x_end);
+  return sum / static_cast<double>(ninety.size());
+}
+
+std::string table_row(const std::vector<std::string>& cells) {
+  std::string line = "|";
+  for (const std::string& cell : cells) line += fmt::format(" {} |", cell);
+  return line + "\n";
+}
+
+class CrossplyExperiment : public Experiment {
+ public:
+  ExperimentOutput run(const ExperimentConfig& c, const ExperimentContext& context) const override {
+    c.require_known_keys({"experiment",
+                          "description",
+                          "material",
+                          "strategy",
+                          "strategy_options",
+                          "layups",
+                          "weibull_modulus",
+                          "seed",
+                          "scatter",
+                          "coupon.length_mm",
+                          "coupon.width_mm",
+                          "coupon.thickness_mm",
+                          "coupon.diameter_mm",
+                          "coupon.grip_mm",
+                          "quick.length_mm",
+                          "quick.width_mm",
+                          "quick.thickness_mm",
+                          "quick.diameter_mm",
+                          "quick.layups",
+                          "interface.normal",
+                          "interface.shear",
+                          "interface.strength_normal",
+                          "interface.strength_shear",
+                          "events.max_events",
+                          "events.stop_fraction",
+                          "events.max_update_rank",
+                          "output.vtu_series"});
+    const std::string name = c.name();
+    const std::string origin = c.path().string();
+    StrengthSettings base;
+    base.force = context.force;
+    base.strategy = c.string("strategy", base.strategy);
+    base.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
+                                                   fmt::format("{}: strategy_options", origin));
+    base.coupon = coupon_from_config(c, context.quick);
+    base.grip_length = c.number("coupon.grip_mm", 0) * kMm;
+    base.interface.normal = c.number("interface.normal", 0);
+    base.interface.shear = c.number("interface.shear", 0);
+    base.interface_strength.normal = c.number("interface.strength_normal", 0);
+    base.interface_strength.shear = c.number("interface.strength_shear", 0);
+    base.weibull_modulus = c.number("weibull_modulus", 10);
+    base.seed = static_cast<std::uint64_t>(c.integer("seed", 1));
+    const std::string scatter = c.string("scatter", "90");
+    require(scatter == "90" || scatter == "all",
+            fmt::format("{}: scatter must be \"90\" (the 90° plies only) or \"all\", got \"{}\"",
+                        origin, scatter));
+    const bool scatter_ninety = scatter == "90";
+    base.events.max_events = c.integer("events.max_events", base.events.max_events);
+    base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
+    base.events.max_update_rank =
+        static_cast<int>(c.integer("events.max_update_rank", base.events.max_update_rank));
+    base.record_snapshots = c.boolean("output.vtu_series", false);
+    std::vector<std::string> layups = c.strings("layups", {"[0/90]s", "[0/90_2]s", "[0/90_4]s"});
+    if (context.quick) layups = c.strings("quick.layups", layups);
+    require(!layups.empty(), fmt::format("{}: layups is empty", origin));
+    std::vector<std::pair<int, int>> counts;
+    for (const std::string& text : layups) {
+      try {
+        counts.push_back(crossply_counts(parse_layup(text), text));
+      } catch (const Error& e) {
+        throw Error(fmt::format("{}: {}", origin, e.what()));
+      }
+    }
+    require_strengths(base.coupon.material, fmt::format("{} (kind crossply)", origin));
+
+    const std::unique_ptr<Strategy> strategy = default_registry().create(base.strategy);
+    for (const auto& [option, value] : base.strategy_options) strategy->set_option(option, value);
+    SpecimenBuilder builder(*strategy);
+    const Material& material = base.coupon.material;
+    const double t = base.coupon.thickness;
+
+    ExperimentOutput out;
+    out.title =
+        fmt::format("Transverse cracking of cross-plies: {} ({})", material.name, base.strategy);
+    std::string table =
+        table_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
+                   "DEM vs it", "strength (MPa)", "strain at peak (%)",
+                   "90° crack density at "
+                   "the end (1/mm)",
+                   "E/E0 DEM", "E/E0 shear lag", "E/E0 ply discount", "events"}) +
+        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    std::string sections;
+    std::vector<Curve> curves;
+    for (std::size_t k = 0; k < layups.size(); ++k) {
+      const std::string& text = layups[k];
+      const auto [m, n] = counts[k];
+      StrengthSettings s = base;
+      s.layup = parse_layup(text);
+      if (scatter_ninety)
+        for (int p = m; p < m + 2 * n; ++p) s.scatter_plies.push_back(p);
+      s.validate();
+      spdlog::info("{}: {} in tension to failure", name, text);
+      StrengthTest test(s);
+      test.on_progress([&](const EventProgress& p) {
+        spdlog::info("{}: {} events, {} broken, peak {:.4g} N, {:.0f} s", text, p.events, p.broken,
+                     p.peak_reaction, p.elapsed_seconds);
+      });
+      const StrengthResult r = test.run(builder);
+      const std::string stem = file_stem(fmt::format("{}_{}", name, text));
+      const ExperimentOutput one = strength_output(r, context.out_dir, name, text, stem);
+      out.rows.insert(out.rows.end(), one.rows.begin(), one.rows.end());
+      out.files.insert(out.files.end(), one.files.begin(), one.files.end());
+      sections += one.report_markdown;
+
+      // Secant stiffness (the path unloads to the origin) against the 90° crack density, over
+      // the free length between the grips.
+      const Model& model = *r.model;
+      const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * s.coupon.particle_diameter;
+      const double x_begin = model.particles.reference_position.col(0).minCoeff() + grip;
+      const double x_end = model.particles.reference_position.col(0).maxCoeff() - grip;
+      std::vector<int> ninety;
+      for (int p = m; p < m + 2 * n; ++p) ninety.push_back(p);
+      const double b = m * t, d = n * t;
+      const std::size_t events = r.strain.size() - 1;
+      Curve dem{fmt::format("DEM {}", text), {}, {}, true};
+      const double e0 = r.stress[1] / r.strain[1];
+      std::vector<BondBreak> so_far;
+      std::size_t next = 0;
+      double last_density = 0, last_ratio = 1;
+      std::size_t last_event = 0;
+      for (std::size_t j = 1; j <= kStiffnessSamples; ++j) {
+        const std::size_t e = std::max<std::size_t>(1, events * j / kStiffnessSamples);
+        if (e == last_event) continue;
+        last_event = e;
+        while (next < r.breaks.size() && r.breaks[next].at < static_cast<double>(e))
+          so_far.push_back(r.breaks[next++]);
+        // At critical state e the bonds broken before it are gone: its secant is theirs.
+        if (r.strain[e] <= 0) continue;
+        const double density =
+            ninety_density(model, so_far, ninety, x_begin, x_end, s.coupon.width);
+        const double ratio = r.stress[e] / r.strain[e] / e0;
+        dem.x.push_back(density * kMm);
+        dem.y.push_back(ratio);
+        // Up to the peak: after it the 0° plies break and the laminate is failing.
+        if (static_cast<long>(e) <= r.peak + 1) {
+          last_density = density;
+          last_ratio = ratio;
+        }
+      }
+      curves.push_back(dem);
+      Curve lag{fmt::format("shear lag {}", text), {}, {}, false};
+      const double top = std::max(2.0 * last_density, 1.0 / (2.0 * t * (m + n)));
+      for (int j = 0; j <= 60; ++j) {
+        const double density = top * j / 60;
+        lag.x.push_back(density * kMm);
+        lag.y.push_back(shear_lag_stiffness_ratio(material, b, d, density));
+      }
+      curves.push_back(lag);
+      const double discount = ply_discount_stiffness_ratio(material, b, d);
+      curves.push_back(
+          {fmt::format("ply discount {}", text), {0, top * kMm}, {discount, discount}, false});
+      const double lag_ratio = shear_lag_stiffness_ratio(material, b, d, last_density);
+      double fpf = NAN;
+      for (const CriterionStrength& cs : r.theory)
+        if (cs.criterion == FailureCriterion::kMaxStress && cs.strength) fpf = *cs.strength;
+      table += table_row({text, fmt::format("{:.2f}", r.first_failure_stress * kMPa),
+                          fmt::format("{:.2f}", fpf * kMPa),
+                          fmt::format("{:+.2f}%", 100 * (r.first_failure_stress / fpf - 1)),
+                          fmt::format("{:.1f}", r.strength * kMPa),
+                          fmt::format("{:.3f}", r.strain_at_peak * 100),
+                          fmt::format("{:.3g}", last_density * kMm),
+                          fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
+                          fmt::format("{:.3f}", discount), fmt::format("{}", r.events)});
+      auto row = [&](const std::string& quantity, const std::string& source, double value,
+                     const std::string& unit) {
+        if (std::isfinite(value)) out.rows.push_back({name, text, quantity, source, value, unit});
+      };
+      row("first ply failure stress", "clt max-stress", fpf * kMPa, "MPa");
+      row("crack density 90 at peak", fmt::format("dem {}", r.strategy), last_density * kMm,
+          "1/mm");
+      row("stiffness ratio at peak", fmt::format("dem {}", r.strategy), last_ratio, "1");
+      row("stiffness ratio at peak", "shear lag", lag_ratio, "1");
+      row("stiffness ratio", "ply discount", discount, "1");
+    }
+    PlotAxes axes;
+    axes.key = "right top";
+    const Figure figure = plot_curves(
+        curves, context.out_dir, fmt::format("{}_stiffness", file_stem(name)),
+        fmt::format("{}: secant stiffness against the 90° crack density", material.name),
+        "cracks per mm in the 90° layer", "E / E0", axes);
+    out.files.insert(out.files.end(), figure.files.begin(), figure.files.end());
+
+    std::string& md = out.report_markdown;
+    md += fmt::format(
+        "Cross-ply laminates of {} on {:g} × {:g} mm coupons, {:g} mm plies, {:g} mm particles, "
+        "strategy {}, Weibull strength scatter m = {:g} (seed {}) in {}, uniform grips, events "
+        "(sequentially linear: each point a critical state, the path unloading to the origin, so "
+        "stress / strain there is the damaged laminate's secant stiffness). {}\n\n",
+        material.name, base.coupon.length / kMm, base.coupon.width / kMm, t / kMm,
+        base.coupon.particle_diameter / kMm, base.strategy, base.effective_weibull_modulus(),
+        base.seed,
+        scatter_ninety ? "the 90° plies (the 0° plies at their calibrated strengths)" : "every ply",
+        base.interface_strength.given()
+            ? "The interfaces break at the strengths given."
+            : "The interfaces do not break (no interface strengths given).");
+    md += fmt::format(
+        "## Summary\n\n*First failure* is the first break, beside the closed-form first-ply "
+        "failure of CLT (max-stress on each ply's stress under the mean sigma_x); the crack "
+        "density is the 90° plies' mean number of transverse cracks (broken-bond cracks at least "
+        "{:.0f}% of the width long) per mm between the grips at the peak; E/E0 is the "
+        "secant stiffness there over the intact one, beside the shear-lag model (Garrett & "
+        "Bailey 1977) at the same density and the ply-discount limit "
+        "(core/transverse_cracking.hpp). CalculiX of the laminate with the same cracks cut in is "
+        "not run in this build.\n\n{}\n{}\n",
+        100 * kSpanningFraction, table,
+        figure_markdown(figure, "Secant stiffness against crack density"));
+    md += "## Each laminate\n\n" + sections;
+    return out;
+  }
+};
+
+}  // namespace
+
+void register_crossply_experiment(ExperimentRegistry& registry) {
+  registry.add("crossply",
+               "cross-ply laminates in tension to failure: first-ply failure, transverse crack "
+               "density and stiffness beside shear lag and ply discount",
+               [] { return std::make_unique<CrossplyExperiment>(); });
+}
+
+}  // namespace plydem

@@ -1,0 +1,86 @@
+// `plydem run experiments/crossply.toml --quick`: a cross-ply pulled to failure with strength
+// scatter writes its table, the closed forms beside the DEM, the cracks and the stiffness figure.
+#include <doctest/doctest.h>
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/material.hpp"
+#include "core/transverse_cracking.hpp"
+#include "experiments/runner/run_experiment.hpp"
+
+using namespace plydem;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string read(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// results.csv rows without quoted fields: "case|quantity|source" -> value.
+std::map<std::string, double> rows_of(const fs::path& csv) {
+  std::map<std::string, double> rows;
+  std::istringstream in(read(csv));
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    if (line.find('"') != std::string::npos) continue;
+    std::vector<std::string> f;
+    std::stringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) f.push_back(field);
+    if (f.size() == 6) rows[fmt::format("{}|{}|{}", f[1], f[2], f[3])] = std::stod(f[4]);
+  }
+  return rows;
+}
+
+}  // namespace
+
+TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiffness") {
+  const fs::path dir = fs::temp_directory_path() / "plydem_test_crossply";
+  fs::remove_all(dir);
+  RunOptions options;
+  options.config = fs::path(PLYDEM_TEST_DATA_DIR) / ".." / ".." / "experiments" / "crossply.toml";
+  options.out_dir = dir;
+  options.quick = true;
+  run_experiment(options);
+  const std::map<std::string, double> rows = rows_of(dir / "results.csv");
+  const Material m = load_material("eglass-my750");
+  // The closed forms as the run states them, computed here: ply discount of [0/90]s (b = d = t).
+  REQUIRE(rows.count("[0/90]s|stiffness ratio|ply discount") == 1);
+  CHECK(rows.at("[0/90]s|stiffness ratio|ply discount") ==
+        doctest::Approx(m.E1 / (m.E1 + m.E2)).epsilon(1e-9));
+  REQUIRE(rows.count("[0/90]s|crack density 90 at peak|dem square") == 1);
+  const double density = rows.at("[0/90]s|crack density 90 at peak|dem square");
+  CHECK(rows.at("[0/90]s|stiffness ratio at peak|shear lag") ==
+        doctest::Approx(shear_lag_stiffness_ratio(m, 0.2e-3, 0.2e-3, density * 1e3)).epsilon(1e-9));
+  // The cracked laminate is softer than the intact one and stiffer than its 0° plies alone.
+  const double ratio = rows.at("[0/90]s|stiffness ratio at peak|dem square");
+  CHECK(ratio < 1.0);
+  CHECK(ratio > m.E1 / (m.E1 + m.E2) - 0.05);
+  CHECK(rows.count("[0/90]s|first ply failure stress|clt max-stress") == 1);
+  CHECK(rows.count("[0/90]s|cracks ply 2|dem square") == 1);  // the 90° plies crack
+  const std::string report = read(dir / "report.md");
+  CHECK(report.find("## Summary") != std::string::npos);
+  CHECK(report.find("| [0/90]s |") != std::string::npos);
+  CHECK(fs::exists(dir / "crossply__0_90_s_cracks.csv"));
+}
+
+TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming it") {
+  const fs::path dir = fs::temp_directory_path() / "plydem_test_crossply_bad";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "bad.toml") << "experiment = \"crossply\"\nlayups = [\"[0/45]s\"]\n";
+  RunOptions options;
+  options.config = dir / "bad.toml";
+  options.out_dir = dir / "out";
+  CHECK_THROWS_WITH_AS(run_experiment(options),
+                       doctest::Contains("'[0/45]s' is not a cross-ply [0_m/90_n]s"), Error);
+}
