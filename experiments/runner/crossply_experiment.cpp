@@ -172,9 +172,8 @@ class CrossplyExperiment : public Experiment {
     std::string table =
         table_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
                    "DEM vs it", "strength (MPa)", "strain at peak (%)",
-                   "90° crack density at "
-                   "the end (1/mm)",
-                   "E/E0 DEM", "E/E0 shear lag", "E/E0 ply discount", "events"}) +
+                   "90° transverse cracks per mm at the peak", "E/E0 DEM", "E/E0 shear lag",
+                   "E/E0 ply discount", "events"}) +
         "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     std::string sections;
     std::vector<Curve> curves;
