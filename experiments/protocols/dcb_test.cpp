@@ -284,10 +284,20 @@ DcbResult run_dcb(const DcbSettings& s, const std::function<void(const EventProg
   double peak = -std::numeric_limits<double>::infinity();
   std::shared_ptr<const Model> peak_state;
   long peak_event = 0;
+  double peak_load = -std::numeric_limits<double>::infinity();
   events.on_event = [&](const Model& state, const EventPoint& point) {
     r.opening.push_back(point.load_factor * kUnitOpening);
     r.load.push_back(point.reaction);
     r.crack.push_back(crack_length(state.bonds));
+    if (point.reaction > peak_load) {
+      peak_load = point.reaction;
+      int softened = 0;
+      for (const Front& f : front) {
+        const double damage = state.bonds.damage(f.bond);
+        if (damage > 0 && damage < 1) ++softened;
+      }
+      r.cohesive_zone_at_peak = softened * spacing;
+    }
     if (!s.record_snapshots) return;
     const long e = point.event;
     if (e == 1 || (e & (e - 1)) == 0) {

@@ -137,7 +137,10 @@ struct DcbResult {
   double propagation_load = 0;    ///< the peak load [N]
   double opening_at_peak = 0;     ///< [m]
   double crack_at_peak = 0;       ///< [m]
-  double final_crack = 0;         ///< [m]
+  /// The cohesive zone at the peak: the interface bonds ahead of the tip that have softened but
+  /// still hold, times their column spacing [m].
+  double cohesive_zone_at_peak = 0;
+  double final_crack = 0;  ///< [m]
   /// Energy released by the interface bonds (EventsResult::dissipated_energy) over the crack area
   /// grown, b (final - initial crack) [J/m^2]: GIc when the cohesive zone at the end holds as
   /// much energy as the one at the start.

@@ -160,6 +160,7 @@ class DcbExperiment : public Experiment {
     row("energy_released_per_crack_area", "dem", r.released_per_area, "J/m^2");
     row("initial_crack", "dem", r.initial_crack, "m");
     row("crack_at_peak", "dem", r.crack_at_peak, "m");
+    row("cohesive_zone_at_peak", "dem", r.cohesive_zone_at_peak, "m");
     row("final_crack", "dem", r.final_crack, "m");
     row("opening_at_peak", "dem", r.opening_at_peak, "m");
     row("events", "dem", static_cast<double>(r.events), "1");
@@ -267,11 +268,13 @@ class DcbExperiment : public Experiment {
          relative(r.initial_compliance, t.corrected_compliance)});
     md += fmt::format(
         "\nThe DEM's propagation load is its peak load (at crack length {:.4g} mm, opening "
-        "{:.4g} mm). Beam theory: C = 8 a^3 / (E1 b h^3), P = (b h / a) sqrt(GIc E1 h / 12); the "
+        "{:.4g} mm; {:.3g} mm of softened interface bonds ahead of the tip, the cohesive zone "
+        "that shields it). Beam theory: C = 8 a^3 / (E1 b h^3), P = (b h / a) sqrt(GIc E1 h / 12); "
+        "the "
         "corrected theory uses a + chi h with chi = {:.4g} (Hashemi, Kinloch & Williams 1990), "
         "for the root rotation and the uncracked part's elastic foundation. Both are linear, as "
         "the model is.\n\n",
-        r.crack_at_peak / kMm, r.opening_at_peak / kMm, t.chi);
+        r.crack_at_peak / kMm, r.opening_at_peak / kMm, r.cohesive_zone_at_peak / kMm, t.chi);
     if (mbt.points >= 3) {
       md += fmt::format(
           "The DEM curve reduced as an experiment is (ASTM D5528, modified beam theory, {} "
