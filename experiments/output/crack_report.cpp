@@ -23,12 +23,12 @@ void write_file(const fs::path& path, const std::string& text) {
   if (!file) throw Error(fmt::format("cannot write {}", path.string()));
 }
 
-std::string place(bool interface, int ply) {
+}  // namespace
+
+std::string crack_place(bool interface, int ply) {
   return interface ? fmt::format("interface {}/{}", ply + 1, ply + 2)
                    : fmt::format("ply {}", ply + 1);
 }
-
-}  // namespace
 
 CrackReport crack_report(const Model& model, const std::vector<BondBreak>& breaks,
                          const std::vector<double>& strain, const fs::path& out_dir,
@@ -81,7 +81,7 @@ CrackReport crack_report(const Model& model, const std::vector<BondBreak>& break
     for (const Crack& c : r.cracks)
       if (c.interface == n.interface && c.ply == n.ply) longest = std::max(longest, c.length);
     md += fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.4g} | {} / {} / {} |\n",
-                      place(n.interface, n.ply), n.cracks, n.length / kMm, longest / kMm,
+                      crack_place(n.interface, n.ply), n.cracks, n.length / kMm, longest / kMm,
                       n.density * kMm, n.tension, n.shear, n.mixed);
   }
   md += "\n";
@@ -99,10 +99,10 @@ CrackReport crack_report(const Model& model, const std::vector<BondBreak>& break
     if (samples.empty() || samples.back() != e) samples.push_back(e);
   }
   std::string table = "strain";
-  for (int ply : plies) table += fmt::format(",{}_per_mm", place(false, ply));
+  for (int ply : plies) table += fmt::format(",{}_per_mm", crack_place(false, ply));
   table += "\n";
   std::vector<Curve> curves;
-  for (int ply : plies) curves.push_back({place(false, ply), {0.0}, {0.0}, true});
+  for (int ply : plies) curves.push_back({crack_place(false, ply), {0.0}, {0.0}, true});
   std::vector<BondBreak> so_far;
   std::size_t next = 0;
   for (std::size_t e : samples) {

@@ -24,6 +24,9 @@ struct CrackCount {
   int tension = 0, shear = 0, mixed = 0;  ///< cracks by mode
 };
 
+/// "ply k" (numbered from 1) or "interface k/k+1": where a crack count belongs, for reports.
+std::string crack_place(bool interface, int ply);
+
 struct CrackReport {
   std::vector<Crack> cracks;
   std::vector<CrackCount> counts;            ///< plies with cracks first (by ply), then interfaces

@@ -28,6 +28,7 @@
 #include "experiments/protocols/strength_test.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
+#include "experiments/runner/report_text.hpp"
 #include "experiments/runner/strength_experiment.hpp"
 #include "solvers/cracks.hpp"
 #include "strategies/laminate.hpp"
@@ -42,13 +43,6 @@ constexpr double kMm = 1e-3;
 constexpr double kMPa = 1e-6;
 constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr std::size_t kStiffnessSamples = 100;
-
-std::string file_stem(std::string text) {
-  for (char& ch : text) {
-    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_') ch = '_';
-  }
-  return text;
-}
 
 bool at_angle(double angle, double degrees) {
   const double turns = (angle - degrees * kDegree) / std::numbers::pi;
@@ -84,12 +78,6 @@ double ninety_density(const Model& model, const std::vector<BondBreak>& breaks,
   double sum = 0;
   for (int ply : ninety) sum += crack_density(cracks, ply, x_begin, x_end);
   return sum / static_cast<double>(ninety.size());
-}
-
-std::string table_row(const std::vector<std::string>& cells) {
-  std::string line = "|";
-  for (const std::string& cell : cells) line += fmt::format(" {} |", cell);
-  return line + "\n";
 }
 
 class CrossplyExperiment : public Experiment {
@@ -170,10 +158,10 @@ class CrossplyExperiment : public Experiment {
     out.title =
         fmt::format("Transverse cracking of cross-plies: {} ({})", material.name, base.strategy);
     std::string table =
-        table_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
-                   "DEM vs it", "strength (MPa)", "strain at peak (%)",
-                   "90° transverse cracks per mm at the peak", "E/E0 DEM", "E/E0 shear lag",
-                   "E/E0 ply discount", "events"}) +
+        markdown_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
+                      "DEM vs it", "strength (MPa)", "strain at peak (%)",
+                      "90° transverse cracks per mm at the peak", "E/E0 DEM", "E/E0 shear lag",
+                      "E/E0 ply discount", "events"}) +
         "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     std::string sections;
     std::vector<Curve> curves;
@@ -249,14 +237,14 @@ class CrossplyExperiment : public Experiment {
       double fpf = NAN;
       for (const CriterionStrength& cs : r.theory)
         if (cs.criterion == FailureCriterion::kMaxStress && cs.strength) fpf = *cs.strength;
-      table += table_row({text, fmt::format("{:.2f}", r.first_failure_stress * kMPa),
-                          fmt::format("{:.2f}", fpf * kMPa),
-                          fmt::format("{:+.2f}%", 100 * (r.first_failure_stress / fpf - 1)),
-                          fmt::format("{:.1f}", r.strength * kMPa),
-                          fmt::format("{:.3f}", r.strain_at_peak * 100),
-                          fmt::format("{:.3g}", last_density * kMm),
-                          fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
-                          fmt::format("{:.3f}", discount), fmt::format("{}", r.events)});
+      table += markdown_row({text, fmt::format("{:.2f}", r.first_failure_stress * kMPa),
+                             fmt::format("{:.2f}", fpf * kMPa),
+                             fmt::format("{:+.2f}%", 100 * (r.first_failure_stress / fpf - 1)),
+                             fmt::format("{:.1f}", r.strength * kMPa),
+                             fmt::format("{:.3f}", r.strain_at_peak * 100),
+                             fmt::format("{:.3g}", last_density * kMm),
+                             fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
+                             fmt::format("{:.3f}", discount), fmt::format("{}", r.events)});
       auto row = [&](const std::string& quantity, const std::string& source, double value,
                      const std::string& unit) {
         if (std::isfinite(value)) out.rows.push_back({name, text, quantity, source, value, unit});

@@ -26,6 +26,7 @@
 #include "experiments/protocols/dcb_test.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
+#include "experiments/runner/report_text.hpp"
 #include "strategies/laminate.hpp"
 
 namespace plydem {
@@ -34,17 +35,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kMm = 1e-3;
-
-std::string table_row(const std::vector<std::string>& cells) {
-  std::string line = "|";
-  for (const std::string& cell : cells) line += fmt::format(" {} |", cell);
-  return line + "\n";
-}
-
-std::string relative(double value, double reference) {
-  if (!std::isfinite(value) || !std::isfinite(reference) || reference == 0) return "–";
-  return fmt::format("{:+.2f}%", 100.0 * (value / reference - 1.0));
-}
 
 }  // namespace
 
@@ -253,19 +243,20 @@ class DcbExperiment : public Experiment {
         r.interface_strength.normal * 1e-6, r.interface_strength.shear * 1e-6, r.interface.normal,
         r.interface.shear, r.interface_strength.GIc, r.interface_ductility, r.initial_crack / kMm,
         r.stop, r.events, r.factorizations, r.wall_seconds);
-    md += table_row({"quantity", "DEM", "beam theory", "DEM vs it", "corrected beam theory",
-                     "DEM vs it"}) +
+    md += markdown_row({"quantity", "DEM", "beam theory", "DEM vs it", "corrected beam theory",
+                        "DEM vs it"}) +
           "|---|--:|--:|--:|--:|--:|\n";
-    md += table_row({"propagation load P (N)", fmt::format("{:.4g}", r.propagation_load),
-                     fmt::format("{:.4g}", t.propagation_load),
-                     relative(r.propagation_load, t.propagation_load),
-                     fmt::format("{:.4g}", t.corrected_propagation_load),
-                     relative(r.propagation_load, t.corrected_propagation_load)});
-    md += table_row(
-        {"initial compliance C (mm/N)", fmt::format("{:.5g}", r.initial_compliance / kMm),
-         fmt::format("{:.5g}", t.compliance / kMm), relative(r.initial_compliance, t.compliance),
-         fmt::format("{:.5g}", t.corrected_compliance / kMm),
-         relative(r.initial_compliance, t.corrected_compliance)});
+    md += markdown_row({"propagation load P (N)", fmt::format("{:.4g}", r.propagation_load),
+                        fmt::format("{:.4g}", t.propagation_load),
+                        percent_change(r.propagation_load, t.propagation_load),
+                        fmt::format("{:.4g}", t.corrected_propagation_load),
+                        percent_change(r.propagation_load, t.corrected_propagation_load)});
+    md += markdown_row({"initial compliance C (mm/N)",
+                        fmt::format("{:.5g}", r.initial_compliance / kMm),
+                        fmt::format("{:.5g}", t.compliance / kMm),
+                        percent_change(r.initial_compliance, t.compliance),
+                        fmt::format("{:.5g}", t.corrected_compliance / kMm),
+                        percent_change(r.initial_compliance, t.corrected_compliance)});
     md += fmt::format(
         "\nThe DEM's propagation load is its peak load (at crack length {:.4g} mm, opening "
         "{:.4g} mm; {:.3g} mm of softened interface bonds ahead of the tip, the cohesive zone "
@@ -284,7 +275,7 @@ class DcbExperiment : public Experiment {
           "energy released per crack area grown is {:.4g} J/m^2.\n\n",
           mbt.points, mbt.delta / kMm, t.chi * r.arm_thickness / kMm, mbt.flexural_modulus * 1e-9,
           r.material.E1 * 1e-9, mbt.GIc, r.interface_strength.GIc,
-          relative(mbt.GIc, r.interface_strength.GIc), r.released_per_area);
+          percent_change(mbt.GIc, r.interface_strength.GIc), r.released_per_area);
     }
     md += figure_markdown(load_figure, "Load against opening: DEM beside beam theory") + "\n";
     md += figure_markdown(crack_figure, "Crack length against opening") + "\n";

@@ -17,6 +17,7 @@
 #include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "experiments/runner/coupon_config.hpp"
+#include "experiments/runner/report_text.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
@@ -118,11 +119,6 @@ std::optional<Values> paper_values(const ExperimentConfig& c, const std::string&
   return v;
 }
 
-std::string relative(double value, double reference) {
-  if (!std::isfinite(value) || !std::isfinite(reference) || reference == 0) return "–";
-  return fmt::format("{:+.2f}%", 100.0 * (value / reference - 1.0));
-}
-
 bool off_by(double value, double reference, double tolerance) {
   return std::isfinite(value) && std::isfinite(reference) &&
          std::abs(value / reference - 1.0) > tolerance;
@@ -149,11 +145,11 @@ std::string constants_line(const std::string& label, const Values& v, const Valu
     return text;
   };
   return fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", label,
-                     cell(v.Ex, clt.Ex, "{:.3f}", 1e-9), relative(v.Ex, clt.Ex),
-                     cell(v.Ey, clt.Ey, "{:.3f}", 1e-9), relative(v.Ey, clt.Ey),
-                     cell(v.nu_xy, clt.nu_xy, "{:.4f}", 1), relative(v.nu_xy, clt.nu_xy),
-                     cell(v.nu_yx, clt.nu_yx, "{:.4f}", 1), relative(v.nu_yx, clt.nu_yx),
-                     cell(v.Gxy, clt.Gxy, "{:.3f}", 1e-9), relative(v.Gxy, clt.Gxy),
+                     cell(v.Ex, clt.Ex, "{:.3f}", 1e-9), percent_change(v.Ex, clt.Ex),
+                     cell(v.Ey, clt.Ey, "{:.3f}", 1e-9), percent_change(v.Ey, clt.Ey),
+                     cell(v.nu_xy, clt.nu_xy, "{:.4f}", 1), percent_change(v.nu_xy, clt.nu_xy),
+                     cell(v.nu_yx, clt.nu_yx, "{:.4f}", 1), percent_change(v.nu_yx, clt.nu_yx),
+                     cell(v.Gxy, clt.Gxy, "{:.3f}", 1e-9), percent_change(v.Gxy, clt.Gxy),
                      number_cell(v.coupling, "{:+.4f}", 1));
 }
 
@@ -182,13 +178,6 @@ std::string paper_theory_note() {
 }
 
 // ---- DEM models: solved state, VTU, bond figure ------------------------------------------------
-
-std::string file_stem(std::string text) {
-  for (char& ch : text) {
-    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_') ch = '_';
-  }
-  return text;
-}
 
 // Writes vtu/STEM.pvd (+ particles and bonds .vtu) and STEM_bonds.png; returns the report lines.
 std::string write_model(const Model& model, const fs::path& out_dir, const std::string& stem,
@@ -221,12 +210,6 @@ Curve pull_curve(const std::string& label, const PullResult& pull) {
 
 Curve theory_line(const std::string& label, double modulus, double max_strain) {
   return {label, {0.0, max_strain * 100}, {0.0, modulus * max_strain * 1e-6}, false};
-}
-
-std::string table_row(const std::vector<std::string>& cells) {
-  std::string line = "|";
-  for (const std::string& cell : cells) line += fmt::format(" {} |", cell);
-  return fmt::format("{}\n", line);
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -279,9 +262,9 @@ class LaminaStrategiesExperiment : public Experiment {
       add_rows(out.rows, name, "lamina", "experiment", *experiment);
     }
     std::string times =
-        table_row({"strategy", "particles", "bonds", "static test (s)",
-                   fmt::format("{} explicit cycles (s)", paper_cycles), "quasi-static explicit (s)",
-                   "quasi-static cycles", "paper time (min)"});
+        markdown_row({"strategy", "particles", "bonds", "static test (s)",
+                      fmt::format("{} explicit cycles (s)", paper_cycles),
+                      "quasi-static explicit (s)", "quasi-static cycles", "paper time (min)"});
     times += "|---|---|---|---|---|---|---|---|\n";
     std::string explicit_moduli;
     std::string figures;
@@ -305,7 +288,7 @@ class LaminaStrategiesExperiment : public Experiment {
       if (!default_registry().contains(strategy_name)) {
         moduli += message_line(fmt::format("DEM {}", strategy_name), "not registered");
         paper_line();
-        times += table_row({strategy_name, "not registered", "", "", "", "", "", paper_time});
+        times += markdown_row({strategy_name, "not registered", "", "", "", "", "", paper_time});
         continue;
       }
       spdlog::info("{}: strategy {}", name, strategy_name);
@@ -355,10 +338,10 @@ class LaminaStrategiesExperiment : public Experiment {
                             fmt::format("time for {} explicit cycles", paper_cycles), fixed_source,
                             fixed_seconds, "s"});
         if (run_cycles == paper_cycles) {
-          explicit_moduli += table_row(
+          explicit_moduli += markdown_row(
               {strategy_name, number_cell(fixed.modulus, "{:.3f}", 1e-9),
-               relative(fixed.modulus, clt.Ex), number_cell(fixed.poisson, "{:.4f}", 1),
-               relative(fixed.poisson, clt.nu_xy), fmt::format("{:.3g}", fixed.final_ratio),
+               percent_change(fixed.modulus, clt.Ex), number_cell(fixed.poisson, "{:.4f}", 1),
+               percent_change(fixed.poisson, clt.nu_xy), fmt::format("{:.3g}", fixed.final_ratio),
                fmt::format("{:.3g}", fixed.loading_transits)});
           out.rows.push_back({name, strategy_name, "Ex (fixed cycles)",
                               fmt::format("dem {} explicit", strategy_name), fixed.modulus * 1e-9,
@@ -385,7 +368,7 @@ class LaminaStrategiesExperiment : public Experiment {
         out.rows.push_back({name, strategy_name, "cycles to quasi-static",
                             fmt::format("dem {} explicit", strategy_name),
                             static_cast<double>(staged.cycles), "1"});
-        times += table_row(
+        times += markdown_row(
             {strategy_name, fmt::format("{}", r.along_x.particles),
              fmt::format("{}", r.along_x.bonds), fmt::format("{:.2f}", static_seconds),
              run_cycles == paper_cycles
@@ -404,7 +387,7 @@ class LaminaStrategiesExperiment : public Experiment {
         moduli += message_line(fmt::format("DEM {}", strategy_name),
                                fmt::format("refused: {}", e.what()));
         paper_line();
-        times += table_row(
+        times += markdown_row(
             {strategy_name, fmt::format("refused: {}", e.what()), "", "", "", "", "", paper_time});
       }
     }
@@ -445,8 +428,8 @@ class LaminaStrategiesExperiment : public Experiment {
           "measured stress.\n\n",
           paper_cycles, kQuasiStaticTransits);
       md += fmt::format("{}|---|---|---|---|---|---|---|\n{}\n",
-                        table_row({"strategy", "Ex (GPa)", "rel. err.", "νxy", "rel. err.",
-                                   "final unbalanced-force ratio", "loading wave transits"}),
+                        markdown_row({"strategy", "Ex (GPa)", "rel. err.", "νxy", "rel. err.",
+                                      "final unbalanced-force ratio", "loading wave transits"}),
                         explicit_moduli);
     }
     md += fmt::format("## Figures\n\n{}\n{}",

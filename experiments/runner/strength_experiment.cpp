@@ -11,6 +11,7 @@
 #include "experiments/output/figures.hpp"
 #include "experiments/output/strength_report.hpp"
 #include "experiments/runner/coupon_config.hpp"
+#include "experiments/runner/report_text.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
 
@@ -23,26 +24,8 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr double kMPa = 1e-6;
 constexpr double kMm = 1e-3;
 
-std::string file_stem(std::string text) {
-  for (char& ch : text) {
-    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_') ch = '_';
-  }
-  return text;
-}
-
-std::string table_row(const std::vector<std::string>& cells) {
-  std::string line = "|";
-  for (const std::string& cell : cells) line += fmt::format(" {} |", cell);
-  return line + "\n";
-}
-
 std::string mpa_cell(double pascals) {
   return std::isfinite(pascals) ? fmt::format("{:.2f}", pascals * kMPa) : "–";
-}
-
-std::string relative(double value, double reference) {
-  if (!std::isfinite(value) || !std::isfinite(reference) || reference == 0) return "–";
-  return fmt::format("{:+.2f}%", 100.0 * (value / reference - 1.0));
 }
 
 const char* source_name(FailureCriterion c) {
@@ -111,43 +94,47 @@ ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_di
 
   std::string& md = out.report_markdown;
   md += fmt::format("### {}\n\n", case_name);
-  md += table_row({"quantity", "DEM", "unit"}) + "|---|---|---|\n";
-  md += table_row({"strength (peak stress)", mpa_cell(r.strength), "MPa"});
-  md += table_row({"strain at peak", fmt::format("{:.4f}", r.strain_at_peak * 100), "%"});
-  md += table_row({"first-failure stress", mpa_cell(r.first_failure_stress), "MPa"});
-  md += table_row({"calibrated bulk's first failure (no edges, no scatter)",
-                   mpa_cell(r.model_first_failure), "MPa"});
-  md += table_row({"events (stopped: " + r.stop + ")", fmt::format("{}", r.events), ""});
-  md += table_row({"energy released by breaking", fmt::format("{:.4g}", r.dissipated_energy), "J"});
+  md += markdown_row({"quantity", "DEM", "unit"}) + "|---|---|---|\n";
+  md += markdown_row({"strength (peak stress)", mpa_cell(r.strength), "MPa"});
+  md += markdown_row({"strain at peak", fmt::format("{:.4f}", r.strain_at_peak * 100), "%"});
+  md += markdown_row({"first-failure stress", mpa_cell(r.first_failure_stress), "MPa"});
+  md += markdown_row({"calibrated bulk's first failure (no edges, no scatter)",
+                      mpa_cell(r.model_first_failure), "MPa"});
+  md += markdown_row({"events (stopped: " + r.stop + ")", fmt::format("{}", r.events), ""});
+  md += markdown_row(
+      {"energy released by breaking", fmt::format("{:.4g}", r.dissipated_energy), "J"});
   md += "\n";
-  md += table_row({r.layup.empty() ? "criterion" : "criterion (first-ply failure, CLT)",
-                   "strength (MPa)",
-                   fmt::format("DEM {} relative to it", criteria_compared_name(r))});
+  md += markdown_row({r.layup.empty() ? "criterion" : "criterion (first-ply failure, CLT)",
+                      "strength (MPa)",
+                      fmt::format("DEM {} relative to it", criteria_compared_name(r))});
   md += "|---|---|---|\n";
   for (const CriterionStrength& t : r.theory) {
-    md += table_row({criterion_label(t.criterion),
-                     t.strength ? mpa_cell(*t.strength) : fmt::format("– ({})", t.missing),
-                     t.strength ? relative(criteria_compared_stress(r), *t.strength) : "–"});
+    md +=
+        markdown_row({criterion_label(t.criterion),
+                      t.strength ? mpa_cell(*t.strength) : fmt::format("– ({})", t.missing),
+                      t.strength ? percent_change(criteria_compared_stress(r), *t.strength) : "–"});
   }
   md += "\n";
-  md += table_row({"broken bonds (family)", "tension", "shear"});
+  md += markdown_row({"broken bonds (family)", "tension", "shear"});
   md += "|---|---|---|\n";
   for (const BrokenBonds& b : r.broken)
-    md += table_row({b.family, fmt::format("{}", b.tension), fmt::format("{}", b.shear)});
-  md += table_row({"all", fmt::format("{}", r.broken_tension), fmt::format("{}", r.broken_shear)});
+    md += markdown_row({b.family, fmt::format("{}", b.tension), fmt::format("{}", b.shear)});
+  md +=
+      markdown_row({"all", fmt::format("{}", r.broken_tension), fmt::format("{}", r.broken_shear)});
   if (!r.ply_strengths.empty()) {
     const StrengthCalibration& c = r.ply_strengths.front();
     md += fmt::format(
         "\nStrength calibration of the {}ply at {:g}°: the model's first failure under each "
         "target's loading (bulk, no scatter) beside the target.\n\n",
         r.layup.empty() ? "" : "bottom ", c.ply_angle / kDegree);
-    md += table_row({"target", "lamina (MPa)", "model first failure (MPa)", "calibrated",
-                     "breaks first"}) +
+    md += markdown_row({"target", "lamina (MPa)", "model first failure (MPa)", "calibrated",
+                        "breaks first"}) +
           "|---|---|---|---|---|\n";
     for (const StrengthTarget& t : c.targets) {
-      md += table_row({t.name, t.target > 0 ? mpa_cell(t.target) : "not given", mpa_cell(t.model),
-                       t.calibrated ? "yes" : "reported only",
-                       t.family.empty() ? "–" : fmt::format("family {} ({})", t.family, t.mode)});
+      md +=
+          markdown_row({t.name, t.target > 0 ? mpa_cell(t.target) : "not given", mpa_cell(t.model),
+                        t.calibrated ? "yes" : "reported only",
+                        t.family.empty() ? "–" : fmt::format("family {} ({})", t.family, t.mode)});
     }
   }
   md += "\n";
@@ -175,8 +162,7 @@ ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_di
   md += crack_summary.markdown;
   row("cracks", dem, static_cast<double>(crack_summary.cracks.size()), "1");
   for (const CrackCount& n : crack_summary.counts) {
-    const std::string where = n.interface ? fmt::format("interface {}/{}", n.ply + 1, n.ply + 2)
-                                          : fmt::format("ply {}", n.ply + 1);
+    const std::string where = crack_place(n.interface, n.ply);
     row(fmt::format("cracks {}", where), dem, n.cracks, "1");
     row(fmt::format("crack density {}", where), dem, n.density * kMm, "1/mm");
   }
@@ -302,10 +288,10 @@ class StrengthExperiment : public Experiment {
     out.title = fmt::format("Strength against angle: the {} {} ({})", base.coupon.material.name,
                             specimen, base.strategy);
     std::string table =
-        table_row({"angle", "DEM strength (MPa)", "first failure (MPa)", "bulk first failure (MPa)",
-                   "strain at peak (%)", "broken T / S", "events", "max-stress", "Tsai-Hill",
-                   "Tsai-Wu", "Hashin",
-                   base.layup.empty() ? "DEM vs Tsai-Wu" : "first failure vs Tsai-Wu (FPF)"}) +
+        markdown_row({"angle", "DEM strength (MPa)", "first failure (MPa)",
+                      "bulk first failure (MPa)", "strain at peak (%)", "broken T / S", "events",
+                      "max-stress", "Tsai-Hill", "Tsai-Wu", "Hashin",
+                      base.layup.empty() ? "DEM vs Tsai-Wu" : "first failure vs Tsai-Wu (FPF)"}) +
         "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     std::string sections;
     Curve dem_points{fmt::format("DEM {} strength", base.strategy), {}, {}, true};
@@ -337,8 +323,8 @@ class StrengthExperiment : public Experiment {
           cells.push_back(t.strength ? mpa_cell(*t.strength) : "–");
           if (t.criterion == FailureCriterion::kTsaiWu && t.strength) tsai_wu = *t.strength;
         }
-        cells.push_back(relative(criteria_compared_stress(r), tsai_wu));
-        table += table_row(cells);
+        cells.push_back(percent_change(criteria_compared_stress(r), tsai_wu));
+        table += markdown_row(cells);
         dem_points.x.push_back(angle_deg);
         dem_points.y.push_back(r.strength * kMPa);
         dem_first.x.push_back(angle_deg);
@@ -349,8 +335,9 @@ class StrengthExperiment : public Experiment {
         out.files.insert(out.files.end(), one.files.begin(), one.files.end());
         sections += one.report_markdown;
       } catch (const Error& e) {
-        table += table_row({fmt::format("{:g}°", angle_deg), fmt::format("refused: {}", e.what()),
-                            "", "", "", "", "", "", "", "", "", ""});
+        table +=
+            markdown_row({fmt::format("{:g}°", angle_deg), fmt::format("refused: {}", e.what()), "",
+                          "", "", "", "", "", "", "", "", ""});
       }
     }
 
