@@ -12,8 +12,11 @@
 #include "core/material.hpp"
 #include "core/transverse_cracking.hpp"
 #include "experiments/runner/run_experiment.hpp"
+#include "support/results_csv.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -25,27 +28,18 @@ std::string read(const fs::path& path) {
   return s.str();
 }
 
-// results.csv rows without quoted fields: "case|quantity|source" -> value.
+// results.csv as "case|quantity|source" -> value.
 std::map<std::string, double> rows_of(const fs::path& csv) {
   std::map<std::string, double> rows;
-  std::istringstream in(read(csv));
-  std::string line;
-  std::getline(in, line);
-  while (std::getline(in, line)) {
-    if (line.find('"') != std::string::npos) continue;
-    std::vector<std::string> f;
-    std::stringstream fields(line);
-    for (std::string field; std::getline(fields, field, ',');) f.push_back(field);
-    if (f.size() == 6) rows[fmt::format("{}|{}|{}", f[1], f[2], f[3])] = std::stod(f[4]);
-  }
+  for (const std::vector<std::string>& f : results_csv_rows(csv))
+    rows[fmt::format("{}|{}|{}", f[1], f[2], f[3])] = std::stod(f[4]);
   return rows;
 }
 
 }  // namespace
 
 TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiffness") {
-  const fs::path dir = fs::temp_directory_path() / "plydem_test_crossply";
-  fs::remove_all(dir);
+  const fs::path dir = fresh_directory("crossply");
   RunOptions options;
   options.config = fs::path(PLYDEM_TEST_DATA_DIR) / ".." / ".." / "experiments" / "crossply.toml";
   options.out_dir = dir;
@@ -74,9 +68,7 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
 }
 
 TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming it") {
-  const fs::path dir = fs::temp_directory_path() / "plydem_test_crossply_bad";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_directory("crossply_bad");
   std::ofstream(dir / "bad.toml") << "experiment = \"crossply\"\nlayups = [\"[0/45]s\"]\n";
   RunOptions options;
   options.config = dir / "bad.toml";

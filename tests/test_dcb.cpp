@@ -8,14 +8,16 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 
 #include "core/error.hpp"
 #include "experiments/protocols/dcb_test.hpp"
 #include "experiments/runner/run_experiment.hpp"
 #include "strategies/laminate.hpp"
+#include "support/results_csv.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
+using namespace plydem::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -187,27 +189,15 @@ TEST_CASE("the DCB refuses what its side view cannot represent, naming it") {
 
 TEST_CASE("plydem run dcb.toml --quick writes the contract's rows") {
   const fs::path config = fs::path(PLYDEM_TEST_DATA_DIR) / ".." / ".." / "experiments" / "dcb.toml";
-  const fs::path dir = fs::temp_directory_path() / "plydem_test_dcb_run";
-  fs::remove_all(dir);
+  const fs::path dir = fresh_directory("dcb_run");
   RunOptions options;
   options.config = config;
   options.out_dir = dir;
   options.quick = true;
   const RunSummary summary = run_experiment(options);
-  std::ifstream csv(dir / "results.csv");
   std::map<std::string, double> rows;
-  std::string line;
-  std::getline(csv, line);
-  CHECK(line == "experiment,case,quantity,source,value,unit");
-  while (std::getline(csv, line)) {
-    // The sources with a comma are quoted; the contract's rows have none.
-    if (line.find('"') != std::string::npos) continue;
-    std::vector<std::string> f;
-    std::stringstream in(line);
-    for (std::string field; std::getline(in, field, ',');) f.push_back(field);
-    REQUIRE(f.size() == 6);
+  for (const std::vector<std::string>& f : results_csv_rows(dir / "results.csv"))
     rows[fmt::format("{},{},{},{},{}", f[0], f[1], f[2], f[3], f[5])] = std::stod(f[4]);
-  }
   for (const char* source : {"dem", "beam theory", "corrected beam theory"}) {
     INFO(source);
     CHECK(rows.count(fmt::format("dcb,[0_8],propagation_load,{},N", source)) == 1);
@@ -227,9 +217,7 @@ TEST_CASE("plydem run dcb.toml --quick writes the contract's rows") {
 }
 
 TEST_CASE("a DCB config with a misspelt key fails before anything runs") {
-  const fs::path dir = fs::temp_directory_path() / "plydem_test_dcb_bad";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_directory("dcb_bad");
   std::ofstream(dir / "bad.toml") << "experiment = \"dcb\"\n[coupon]\ncrack_length_mm = 20\n";
   RunOptions options;
   options.config = dir / "bad.toml";

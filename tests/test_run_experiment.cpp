@@ -17,6 +17,7 @@
 #include "core/error.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/runner/run_experiment.hpp"
+#include "support/results_csv.hpp"
 #include "support/test_support.hpp"
 
 using namespace plydem;
@@ -41,27 +42,9 @@ ConstantsByHand clt(const std::vector<double>& degrees) {
 
 // results.csv as (case, quantity, source) -> value, checking the header and the field count.
 std::map<std::string, double> parse_results(const fs::path& path) {
-  std::ifstream in(path);
-  std::string line;
-  REQUIRE(std::getline(in, line));
-  CHECK(line == "experiment,case,quantity,source,value,unit");
   std::map<std::string, double> values;
-  while (std::getline(in, line)) {
-    std::vector<std::string> fields;
-    std::string field;
-    bool quoted = false;
-    for (char ch : line) {
-      if (ch == '"')
-        quoted = !quoted;
-      else if (ch == ',' && !quoted)
-        fields.push_back(std::exchange(field, ""));
-      else
-        field += ch;
-    }
-    fields.push_back(field);
-    REQUIRE(fields.size() == 6);
-    values[fmt::format("{}|{}|{}", fields[1], fields[2], fields[3])] = std::stod(fields[4]);
-  }
+  for (const std::vector<std::string>& f : results_csv_rows(path))
+    values[fmt::format("{}|{}|{}", f[1], f[2], f[3])] = std::stod(f[4]);
   return values;
 }
 
