@@ -151,4 +151,42 @@ std::string cracks_csv(const std::vector<Crack>& cracks) {
   return out;
 }
 
+std::vector<BondBreak> cut_transverse_crack(Model& model, double x, int first_ply, int last_ply) {
+  const Particles& p = model.particles;
+  Bonds& bonds = model.bonds;
+  const int plies = p.size() > 0 ? p.ply.maxCoeff() + 1 : 0;
+  require(
+      first_ply >= 0 && first_ply <= last_ply && last_ply < plies,
+      fmt::format("a crack cut through plies {} .. {} (0 = bottom): the model has plies 0 .. {}",
+                  first_ply, last_ply, plies - 1));
+  require(std::isfinite(x), "a crack cut's x is not a finite number");
+  auto cracked = [&](int i) { return p.ply(i) >= first_ply && p.ply(i) <= last_ply; };
+  for (int i = 0; i < p.size(); ++i) {
+    if (!cracked(i)) continue;
+    require(std::abs(p.reference_position(i, 0) - x) > 1e-9 * p.radius(i),
+            fmt::format("a crack cut at x = {} mm runs through the centre of particle {}: put "
+                        "the plane between particles",
+                        x * 1e3, i));
+  }
+  std::vector<BondBreak> breaks;
+  for (int b = 0; b < bonds.size(); ++b) {
+    const int i = bonds.first(b), j = bonds.second(b);
+    if (bonds.is_broken(b) || !cracked(i) || !cracked(j)) continue;
+    if ((p.reference_position(i, 0) - x) * (p.reference_position(j, 0) - x) >= 0) continue;
+    bonds.normal_stiffness(b) = bonds.shear_stiffness(b) = 0;
+    bonds.bending_stiffness(b) = bonds.twisting_stiffness(b) = 0;
+    bonds.damage(b) = 1;
+    bonds.state(b) = static_cast<int>(BondState::kBrokenTension);
+    BondBreak cut;
+    cut.bond = b;
+    cut.position = p.reference_position.row(i).matrix().transpose() +
+                   bonds.lever_first(b) * bonds.normal.row(b).matrix().transpose();
+    breaks.push_back(cut);
+  }
+  require(!breaks.empty(),
+          fmt::format("a crack cut at x = {} mm through plies {} .. {} crosses no intact bond",
+                      x * 1e3, first_ply, last_ply));
+  return breaks;
+}
+
 }  // namespace plydem

@@ -57,6 +57,17 @@ std::vector<Crack> find_cracks(const Model& model, const std::vector<BondBreak>&
 /// [x_begin, x_end], per unit length [1/m]. Throws plydem::Error if x_end <= x_begin.
 double crack_density(const std::vector<Crack>& cracks, int ply, double x_begin, double x_end);
 
+/// Cuts a transverse crack into a laminate model by hand, the way a crack would leave it: every
+/// intact bond that crosses the plane x = `x` (its two ends on either side of it in the reference
+/// configuration) and joins two particles of the plies first_ply .. last_ply (their in-ply bonds,
+/// and the interface bonds between two of them) is broken: state kBrokenTension, damage 1, every
+/// stiffness 0. The interface bonds to a ply outside that range stay, so the crack ends at the
+/// plies that bound it, as a cross-ply's transverse crack ends at its 0° plies. Returns the breaks
+/// as a solver logs them (event 0, load 0), for find_cracks. Throws plydem::Error for plies the
+/// model does not have, an x on a particle centre of those plies (the plane must run between
+/// particles), or a plane that crosses no bond of them.
+std::vector<BondBreak> cut_transverse_crack(Model& model, double x, int first_ply, int last_ply);
+
 /// The cracks as CSV, one row each: id, kind (ply or interface), ply, x_mm, y_mm, z_mm,
 /// length_mm, angle_deg, bonds, tension, shear, mode, first_event, first_load.
 std::string cracks_csv(const std::vector<Crack>& cracks);

@@ -82,15 +82,33 @@ int ceil_count(double span, double size) {
   return std::max(1, static_cast<int>(n));
 }
 
-PlaneMesh rectangle_mesh(double length, double width, double element_size, int order) {
-  const int nx = ceil_count(length, element_size);
+// The node x of a rectangle `length` long, elements at most `element_size` long, with a node at
+// each of `stations` (sorted, inside (0, length)): each stretch between stations meshed uniformly.
+// Order 2 adds the mid-edge x between.
+std::vector<double> node_columns(double length, const std::vector<double>& stations,
+                                 double element_size, int order) {
+  std::vector<double> ends{0.0};
+  ends.insert(ends.end(), stations.begin(), stations.end());
+  ends.push_back(length);
+  std::vector<double> x{0.0};
+  for (std::size_t k = 0; k + 1 < ends.size(); ++k) {
+    const double a = ends[k], span = ends[k + 1] - a;
+    const int n = order * ceil_count(span, element_size);
+    for (int i = 1; i <= n; ++i) x.push_back(i == n ? ends[k + 1] : a + span * fraction(i, n));
+  }
+  return x;
+}
+
+PlaneMesh rectangle_mesh(double length, double width, double element_size, int order,
+                         const std::vector<double>& stations) {
+  const std::vector<double> x = node_columns(length, stations, element_size, order);
   const int ny = ceil_count(width, element_size);
   PlaneMesh mesh;
   mesh.order = order;
-  Eigen::ArrayXXi ids(order * nx + 1, order * ny + 1);
-  for (int i = 0; i <= order * nx; ++i)
+  Eigen::ArrayXXi ids(static_cast<Eigen::Index>(x.size()), order * ny + 1);
+  for (std::size_t i = 0; i < x.size(); ++i)
     for (int j = 0; j <= order * ny; ++j)
-      ids(i, j) = mesh.add({length * fraction(i, order * nx), width * fraction(j, order * ny)});
+      ids(static_cast<Eigen::Index>(i), j) = mesh.add({x[i], width * fraction(j, order * ny)});
   mesh.add_cells(ids);
   return mesh;
 }
@@ -496,6 +514,24 @@ void FemSpecimen::validate() const {
             fmt::format("the hole ({} mm) must be narrower than 0.9 x the plate's width ({} mm)",
                         hole_diameter * 1e3, width * 1e3));
   }
+  const int last = static_cast<int>(plies.size()) - 1;
+  for (std::size_t k = 0; k < cracks.size(); ++k) {
+    const FemTransverseCrack& c = cracks[k];
+    const std::string which = fmt::format("FEM crack {} (at x = {} mm)", k + 1, c.x * 1e3);
+    require(hole_diameter == 0, which + ": a specimen with a hole cannot also have cracks");
+    require(
+        std::isfinite(c.x) && c.x > 1e-9 * length && c.x < length * (1 - 1e-9),
+        fmt::format("{}: must lie inside the specimen's length (0, {} mm)", which, length * 1e3));
+    require(c.first_ply >= 0 && c.first_ply <= c.last_ply && c.last_ply <= last,
+            fmt::format("{}: plies {} .. {} (from the bottom, 1-based) are not plies 1 .. {} of "
+                        "the specimen, lowest first",
+                        which, c.first_ply + 1, c.last_ply + 1, last + 1));
+    require(!(c.first_ply == 0 && c.last_ply == last),
+            which + ": cuts every ply, which parts the specimen in two");
+    for (std::size_t j = 0; j < k; ++j)
+      require(std::abs(cracks[j].x - c.x) > 1e-9 * length,
+              fmt::format("{}: lies at the x of crack {}; give one crack per x", which, j + 1));
+  }
 }
 
 void FemMeshSettings::validate() const {
@@ -568,8 +604,13 @@ FemMesh build_fem_mesh(const FemSpecimen& specimen, const FemMeshSettings& setti
                       "larger element size",
                       estimate, kMaxElements));
   }
+  std::vector<FemTransverseCrack> cracks = specimen.cracks;
+  std::sort(cracks.begin(), cracks.end(),
+            [](const FemTransverseCrack& a, const FemTransverseCrack& b) { return a.x < b.x; });
+  std::vector<double> stations;
+  for (const FemTransverseCrack& c : cracks) stations.push_back(c.x);
   const PlaneMesh plane = hole ? hole_plate_mesh(L, W, D, element_size, hole_element_size, order)
-                               : rectangle_mesh(L, W, element_size, order);
+                               : rectangle_mesh(L, W, element_size, order, stations);
 
   // Node levels through the thickness: `order` per element layer.
   const int per_ply = settings.elements_per_ply;
@@ -598,10 +639,35 @@ FemMesh build_fem_mesh(const FemSpecimen& specimen, const FemMeshSettings& setti
   FemMesh mesh;
   mesh.element = settings.element;
   const int plane_nodes = static_cast<int>(plane.node.size());
+  const int levels = static_cast<int>(z.size());
   std::vector<int> node_of(static_cast<std::size_t>(plane_nodes) * z.size(), -1);
   std::vector<Eigen::Vector3d> position;
   auto node = [&](int p, int level) {
     int& id = node_of[static_cast<std::size_t>(level) * plane_nodes + p];
+    if (id < 0) {
+      id = static_cast<int>(position.size());
+      position.emplace_back(plane.node[p].x(), plane.node[p].y(), z[level]);
+    }
+    return id;
+  };
+  // Cracks: the plane nodes on each crack's plane, and the node levels its faces own (those
+  // strictly inside its plies, and a top or bottom face it reaches). The elements on the crack's
+  // +x side take twins of those nodes, so the two faces part.
+  std::vector<int> crack_of(plane_nodes, -1);
+  std::vector<std::vector<bool>> crack_level(cracks.size(), std::vector<bool>(levels, false));
+  for (std::size_t k = 0; k < cracks.size(); ++k) {
+    const FemTransverseCrack& c = cracks[k];
+    for (int p = 0; p < plane_nodes; ++p)
+      if (std::abs(plane.node[p].x() - c.x) <= 1e-9 * L) crack_of[p] = static_cast<int>(k);
+    const int bottom = order * per_ply * c.first_ply, top = order * per_ply * (c.last_ply + 1);
+    for (int l = bottom; l <= top; ++l)
+      crack_level[k][l] = (l > bottom || c.first_ply == 0) && (l < top || c.last_ply == plies - 1);
+  }
+  std::vector<int> twin_of(node_of.size(), -1);
+  auto element_node = [&](int p, int level, double centre_x) {
+    const int k = crack_of[p];
+    if (k < 0 || !crack_level[k][level] || centre_x < cracks[k].x) return node(p, level);
+    int& id = twin_of[static_cast<std::size_t>(level) * plane_nodes + p];
     if (id < 0) {
       id = static_cast<int>(position.size());
       position.emplace_back(plane.node[p].x(), plane.node[p].y(), z[level]);
@@ -615,15 +681,18 @@ FemMesh build_fem_mesh(const FemSpecimen& specimen, const FemMeshSettings& setti
   for (int layer = 0; layer < layers; ++layer) {  // ply by ply: each ply's elements contiguous
     const int bottom = order * layer, top = order * (layer + 1);
     for (const auto& q : plane.quad) {
+      double centre_x = 0;
+      for (int c = 0; c < 4; ++c) centre_x += 0.25 * plane.node[q[c]].x();
+      auto at = [&](int p, int level) { return element_node(p, level, centre_x); };
       for (int c = 0; c < 4; ++c) {
-        mesh.element_nodes(e, c) = node(q[c], bottom);
-        mesh.element_nodes(e, 4 + c) = node(q[c], top);
+        mesh.element_nodes(e, c) = at(q[c], bottom);
+        mesh.element_nodes(e, 4 + c) = at(q[c], top);
       }
       if (order == 2) {
         for (int c = 0; c < 4; ++c) {
-          mesh.element_nodes(e, 8 + c) = node(q[4 + c], bottom);
-          mesh.element_nodes(e, 12 + c) = node(q[4 + c], top);
-          mesh.element_nodes(e, 16 + c) = node(q[c], bottom + 1);
+          mesh.element_nodes(e, 8 + c) = at(q[4 + c], bottom);
+          mesh.element_nodes(e, 12 + c) = at(q[4 + c], top);
+          mesh.element_nodes(e, 16 + c) = at(q[c], bottom + 1);
         }
       }
       mesh.element_ply(e) = layer / per_ply;
@@ -650,7 +719,6 @@ FemMesh build_fem_mesh(const FemSpecimen& specimen, const FemMeshSettings& setti
       mesh.plane_quad(static_cast<Eigen::Index>(k), c) = corner_index[plane.quad[k][c]];
   // Every level: the corner nodes of C3D20R elements also carry the vertical mid-edge nodes.
   mesh.level_z = z;
-  const int levels = static_cast<int>(z.size());
   mesh.level_node.resize(corners, levels);
   for (int p = 0; p < plane_nodes; ++p) {
     if (corner_index[p] < 0) continue;

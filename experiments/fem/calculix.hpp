@@ -60,18 +60,36 @@ enum class FemElement { kC3D8I, kC3D20R };
 /// "C3D8I" or "C3D20R".
 const char* fem_element_name(FemElement element);
 
-/// The specimen: a laminate cut as an L x W rectangle, optionally with a central circular hole.
+/// A transverse crack cut into a FEM specimen: the plane x = `x` across the full width, through
+/// the plies first_ply .. last_ply (0 = the bottom one). The mesh has a node plane there and the
+/// elements on its two sides do not share the nodes inside the cracked plies, so the crack's faces
+/// are free (and may not touch: the problem is linear, for a crack that opens). The plies outside
+/// stay whole: the crack ends at the interfaces that bound it, sharing their nodes (its tips), or
+/// at the laminate's top or bottom face. The cross-ply's transverse crack, for example, runs
+/// through the 90° layer and ends at the 0° plies.
+struct FemTransverseCrack {
+  double x = 0;       ///< [m], inside (0, L)
+  int first_ply = 0;  ///< the lowest cracked ply (0 = bottom)
+  int last_ply = 0;   ///< the highest cracked ply, >= first_ply
+};
+
+/// The specimen: a laminate cut as an L x W rectangle, optionally with a central circular hole or
+/// with transverse cracks.
 struct FemSpecimen {
   std::vector<Ply> plies;    ///< bottom (z = -h/2) to top
   double length = 10e-3;     ///< L, along x [m]
   double width = 2e-3;       ///< W, along y [m]
   double hole_diameter = 0;  ///< D [m]; 0 = no hole. A hole needs L >= W and D < W.
+  /// Transverse cracks (not with a hole), at distinct x; none may cut every ply (that parts the
+  /// specimen in two).
+  std::vector<FemTransverseCrack> cracks{};
 
   /// h, the sum of the ply thicknesses [m].
   double thickness() const;
   /// Throws plydem::Error naming the first problem: no plies, an invalid ply material, a
-  /// non-finite angle, a non-positive ply thickness, a non-positive or non-finite size, or a hole
-  /// that does not fit.
+  /// non-finite angle, a non-positive ply thickness, a non-positive or non-finite size, a hole
+  /// that does not fit, or a crack outside the specimen, through plies it does not have, through
+  /// every ply, at the x of another, or beside a hole.
   void validate() const;
 };
 
@@ -138,7 +156,10 @@ CalculixAvailability calculix_availability(const std::string& executable = "ccx"
 /// In plane, a quadrilateral mesh: a rectangular grid for a plain coupon; with a hole, an O-grid
 /// around the hole (rings blended linearly from the hole's circle to the W x W square around it,
 /// graded geometrically from the hole element size to the outer one) joined node to node to
-/// rectangular grids on either side. The quadrilateral mesh is extruded through the plies.
+/// rectangular grids on either side. The quadrilateral mesh is extruded through the plies. A
+/// specimen's transverse cracks get node columns at their x (each stretch between them meshed
+/// uniformly) and twin nodes for the elements on their +x side (FemTransverseCrack); the corner
+/// grid holds the -x side's nodes there.
 /// Quadratic elements take their mid-edge nodes from the same mapping, so they lie on the hole's
 /// circle. The "corner grid" (plane_position, plane_quad, level_z, level_node) is the mesh's
 /// element corners in plane, on every node level through the thickness (C3D20R: the elements'
@@ -240,6 +261,8 @@ struct FemSolution {
   int degrees_of_freedom = 0;   ///< 3 per node
   double end_displacement = 0;  ///< total grip travel [m]
   /// The x-force the grips carry, 0.5 (RF_right - RF_left) from the reaction totals [N].
+  /// reaction_force / end_displacement is the specimen's axial stiffness between the grips [N/m]:
+  /// the measure for a cracked specimen, whose mid-plane (the strain fit below) may be cut.
   double reaction_force = 0;
   /// reaction_force / (W h): the mean axial stress of the full cross-section [Pa].
   double gross_stress = 0;
