@@ -46,6 +46,7 @@ BondParameters bond_parameters(const Bonds& bonds, int b) {
   params.shear_stiffness = bonds.shear_stiffness(b);
   params.bending_stiffness = bonds.bending_stiffness(b);
   params.twisting_stiffness = bonds.twisting_stiffness(b);
+  params.out_of_plane_shear_ratio = bonds.out_of_plane_shear_ratio(b);
   return params;
 }
 

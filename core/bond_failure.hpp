@@ -84,7 +84,7 @@ inline BondStresses bond_stresses(const BondParameters& b, double radius,
   const double du_n = n.dot(du);
   const Eigen::Vector3d dtheta = theta_j - theta_i;
   const double dtheta_n = n.dot(dtheta);
-  return section_stresses(b.normal_stiffness * du_n, b.shear_stiffness * (du - du_n * n).norm(),
+  return section_stresses(b.normal_stiffness * du_n, shear_force(b, du - du_n * n).norm(),
                           b.bending_stiffness * (dtheta - dtheta_n * n).norm(),
                           b.twisting_stiffness * std::abs(dtheta_n), radius);
 }

@@ -267,6 +267,11 @@ void Model::check_consistency() const {
                         "produced an unstable lattice",
                         k, s));
     }
+    if (!(std::isfinite(b.out_of_plane_shear_ratio(k)) && b.out_of_plane_shear_ratio(k) >= 0))
+      throw Error(
+          fmt::format("bond {} has an out-of-plane shear ratio of {} (k_z / k_s must be "
+                      "finite and >= 0)",
+                      k, b.out_of_plane_shear_ratio(k)));
     if (!(std::isfinite(b.length(k)) && b.length(k) > 0))
       throw Error(fmt::format("bond {} has a non-positive length", k));
     if (!(std::abs(b.normal.row(k).matrix().norm() - 1.0) < 1e-12))

@@ -135,10 +135,13 @@ struct Bonds {
   Eigen::ArrayXd shear_stiffness;     ///< k_s [N/m]
   Eigen::ArrayXd bending_stiffness;   ///< k_b [N m/rad]
   Eigen::ArrayXd twisting_stiffness;  ///< k_t [N m/rad]
-  Vector3Array normal;                ///< unit branch vector first -> second, reference
-  Eigen::ArrayXd length;              ///< reference centre distance [m]
-  Eigen::ArrayXd lever_first;         ///< [m]
-  Eigen::ArrayXd lever_second;        ///< [m]
+  /// r = k_z / k_s: the shear stiffness along the layer normal over k_s (core/parallel_bond.hpp,
+  /// "Out-of-plane shear"); 1 = isotropic shear, what every strategy builds.
+  Eigen::ArrayXd out_of_plane_shear_ratio;
+  Vector3Array normal;          ///< unit branch vector first -> second, reference
+  Eigen::ArrayXd length;        ///< reference centre distance [m]
+  Eigen::ArrayXd lever_first;   ///< [m]
+  Eigen::ArrayXd lever_second;  ///< [m]
   /// For an in-ply bond, its bond family in the packing (for reports and plots); for an
   /// interface bond, the interface: k for the one above ply k (both >= 0).
   Eigen::ArrayXi family;
@@ -165,6 +168,7 @@ struct Bonds {
     f(FieldInfo{"shear_stiffness"}, &Bonds::shear_stiffness);
     f(FieldInfo{"bending_stiffness"}, &Bonds::bending_stiffness);
     f(FieldInfo{"twisting_stiffness"}, &Bonds::twisting_stiffness);
+    f(FieldInfo{"out_of_plane_shear_ratio", false, 1.0}, &Bonds::out_of_plane_shear_ratio);
     f(FieldInfo{"normal"}, &Bonds::normal);
     f(FieldInfo{"length"}, &Bonds::length);
     f(FieldInfo{"lever_first"}, &Bonds::lever_first);

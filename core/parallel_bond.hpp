@@ -14,6 +14,15 @@
 /// plus the moments of F about each centre. This is the exact gradient of the bond energy
 ///   E = 1/2 du.(k_n nn + k_s (I - nn)).du + 1/2 dtheta.(k_t nn + k_b (I - nn)).dtheta,
 /// which the energy test of the integrator relies on.
+///
+/// Out-of-plane shear. A bond may carry its shear along the layer normal with a stiffness of its
+/// own, k_z = r k_s (r = out_of_plane_shear_ratio; 1, isotropic shear, for every bond a strategy
+/// builds): with z the unit part of e_z perpendicular to n (none for a bond along z, where r does
+/// nothing), k_s (I - nn) above becomes k_s (I - nn) + (r - 1) k_s z z. A ply built as one particle
+/// layer has no other transverse shear: particle spin relieves the interface bonds' shear, so the
+/// layer's in-plane bonds carry the ply's G13 and G23 this way (strategies/laminate.hpp,
+/// InterfaceStiffness::transverse_shear). Because k_z scales with k_s, damage and breaking, which
+/// scale or zero k_s, act on it too.
 
 #include <Eigen/Dense>
 
@@ -30,7 +39,36 @@ struct BondParameters {
   double shear_stiffness = 0;
   double bending_stiffness = 0;
   double twisting_stiffness = 0;
+  double out_of_plane_shear_ratio = 1;  ///< r = k_z / k_s (see the file comment)
 };
+
+/// z of the file comment: the unit part of e_z perpendicular to `n`; zero for a bond along z.
+inline Eigen::Vector3d out_of_plane_direction(const Eigen::Vector3d& n) {
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ() - n.z() * n;
+  const double length = z.norm();
+  return length > 1e-12 ? Eigen::Vector3d(z / length) : Eigen::Vector3d::Zero();
+}
+
+/// The shear stiffness tensor k_s (I - nn) + (r - 1) k_s z z of bond `b`.
+inline Eigen::Matrix3d shear_stiffness_tensor(const BondParameters& b) {
+  const Eigen::Vector3d& n = b.normal;
+  Eigen::Matrix3d d = b.shear_stiffness * (Eigen::Matrix3d::Identity() - n * n.transpose());
+  if (b.out_of_plane_shear_ratio != 1) {
+    const Eigen::Vector3d z = out_of_plane_direction(n);
+    d += (b.out_of_plane_shear_ratio - 1) * b.shear_stiffness * z * z.transpose();
+  }
+  return d;
+}
+
+/// The shear force of bond `b` at tangential relative displacement `du_s` (du - (n.du) n).
+inline Eigen::Vector3d shear_force(const BondParameters& b, const Eigen::Vector3d& du_s) {
+  Eigen::Vector3d f = b.shear_stiffness * du_s;
+  if (b.out_of_plane_shear_ratio != 1) {
+    const Eigen::Vector3d z = out_of_plane_direction(b.normal);
+    f += ((b.out_of_plane_shear_ratio - 1) * b.shear_stiffness * z.dot(du_s)) * z;
+  }
+  return f;
+}
 
 /// What one bond does to its two particles.
 struct BondResponse {
@@ -60,7 +98,8 @@ inline BondResponse parallel_bond_response(const BondParameters& b, const Eigen:
   const double dtheta_n = n.dot(dtheta);
   const Eigen::Vector3d dtheta_s = dtheta - dtheta_n * n;
 
-  const Eigen::Vector3d force = b.normal_stiffness * du_n * n + b.shear_stiffness * du_s;
+  const Eigen::Vector3d f_s = shear_force(b, du_s);
+  const Eigen::Vector3d force = b.normal_stiffness * du_n * n + f_s;
   const Eigen::Vector3d moment =
       b.twisting_stiffness * dtheta_n * n + b.bending_stiffness * dtheta_s;
   const Eigen::Vector3d n_cross_f = n.cross(force);
@@ -68,7 +107,7 @@ inline BondResponse parallel_bond_response(const BondParameters& b, const Eigen:
   r.force_on_first = force;
   r.torque_on_first = b.lever_first * n_cross_f + moment;
   r.torque_on_second = b.lever_second * n_cross_f - moment;
-  r.energy = 0.5 * (b.normal_stiffness * du_n * du_n + b.shear_stiffness * du_s.squaredNorm() +
+  r.energy = 0.5 * (b.normal_stiffness * du_n * du_n + f_s.dot(du_s) +
                     b.twisting_stiffness * dtheta_n * dtheta_n +
                     b.bending_stiffness * dtheta_s.squaredNorm());
   return r;
@@ -89,7 +128,7 @@ inline Matrix12d parallel_bond_stiffness(const BondParameters& b) {
   Eigen::Matrix<double, 3, 12> B_theta;
   B_theta << Eigen::Matrix3d::Zero(), -Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero(),
       Eigen::Matrix3d::Identity();
-  const Eigen::Matrix3d D_u = b.normal_stiffness * nn + b.shear_stiffness * shear_projector;
+  const Eigen::Matrix3d D_u = b.normal_stiffness * nn + shear_stiffness_tensor(b);
   const Eigen::Matrix3d D_theta = b.twisting_stiffness * nn + b.bending_stiffness * shear_projector;
   return B_u.transpose() * D_u * B_u + B_theta.transpose() * D_theta * B_theta;
 }

@@ -345,7 +345,14 @@ void def_coupon_settings(py::class_<Settings>& cls) {
       .def_property(
           "interface_shear", [](const Settings& s) { return s.interface.shear; },
           [](Settings& s, double v) { s.interface.shear = v; },
-          "interface shear stiffness per unit area [N/m^3]; 0 = 10 G12/t")
+          "interface shear stiffness per unit area [N/m^3]; 0 = 10 G12/t (100 G12/t with "
+          "interface_transverse_shear)")
+      .def_property(
+          "interface_transverse_shear",
+          [](const Settings& s) { return s.interface.transverse_shear; },
+          [](Settings& s, bool v) { s.interface.transverse_shear = v; },
+          "the plies carry the laminate's transverse shear G13, G23 (strategies/laminate.hpp); "
+          "static and events solvers only")
       .def_readwrite("grip_length", &Settings::grip_length, "[m]; 0 = two diameters")
       .def_readwrite("gauge_fraction", &Settings::gauge_fraction,
                      "central fraction of the length measured")

@@ -363,6 +363,14 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     : model_(model), settings_(settings) {
   validate(settings);
   model.check_consistency();
+  for (int b = 0; b < model.bonds.size(); ++b)
+    require(model.bonds.out_of_plane_shear_ratio(b) == 1,
+            fmt::format("bond {} carries its out-of-plane shear with a stiffness of its own (k_z / "
+                        "k_s = {:.4g}: plies that carry the laminate's transverse shear, "
+                        "InterfaceStiffness::transverse_shear), which the explicit kernels do not "
+                        "have yet: run this model with the static or events solver, or build it "
+                        "without transverse shear in the plies",
+                        b, model.bonds.out_of_plane_shear_ratio(b)));
   // The bonds' intact stiffnesses (the arrays hold 1 - damage times them; unknown, 0, for a bond
   // that came broken), and what the model asks of the kernel.
   const Bonds& bonds = model.bonds;

@@ -26,7 +26,7 @@ void InterfaceStiffness::validate() const {
 InterfaceStiffness InterfaceStiffness::resolved(const Material& material, double thickness) const {
   InterfaceStiffness r = *this;
   if (r.normal == 0) r.normal = 10 * material.E2 / thickness;
-  if (r.shear == 0) r.shear = 10 * material.G12 / thickness;
+  if (r.shear == 0) r.shear = (transverse_shear ? 100 : 10) * material.G12 / thickness;
   return r;
 }
 
@@ -37,6 +37,83 @@ std::vector<Ply> laminate_plies(const LaminateSpec& spec) {
   }
   return plies;
 }
+
+namespace {
+
+// InterfaceStiffness::transverse_shear: the out-of-plane shear ratio of ply k's in-ply bonds (see
+// the header), so that the ply carries t diag(G13, G23) in its axes.
+void set_ply_transverse_shear(Specimen& specimen, int k, const Material& material, double angle,
+                              double thickness, const std::string& strategy) {
+  Model& model = specimen.model;
+  const Particles& p = model.particles;
+  Bonds& bonds = model.bonds;
+  const std::vector<FamilyCalibration>& families = specimen.ply_calibrations[k].families;
+  struct Term {
+    int bond;
+    double weight;  // w_b
+    Eigen::Vector2d direction;
+  };
+  std::vector<Term> terms;
+  double area = 0;
+  for (int i = 0; i < p.size(); ++i)
+    if (p.ply(i) == k) area += p.volume(i) / thickness;
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_interface(b) || p.ply(bonds.first(b)) != k) continue;
+    const Eigen::Vector3d n = bonds.normal.row(b).transpose();
+    require(std::abs(n.z()) < 1e-9,
+            fmt::format("transverse shear in the plies needs plies of one particle layer (every "
+                        "in-ply bond in the ply's plane), but strategy {} bonds ply {} out of its "
+                        "plane (bond {}); build this laminate without interface transverse_shear, "
+                        "or with hex2d or square",
+                        strategy, k + 1, b));
+    const int f = bonds.family(b);
+    require(f >= 0 && f < static_cast<int>(families.size()),
+            fmt::format("transverse shear: bond {} of ply {} has family {} of {}", b, k + 1, f,
+                        families.size()));
+    const double bulk = families[f].stiffness.shear;
+    if (bulk <= 0 || bonds.shear_stiffness(b) <= 0) continue;
+    terms.push_back({b, bonds.shear_stiffness(b) / bulk, Eigen::Vector2d(n.x(), n.y())});
+  }
+  require(!terms.empty(),
+          fmt::format("transverse shear in the plies: strategy {} gives ply {} no bond with a "
+                      "shear stiffness to carry it",
+                      strategy, k + 1));
+  // sum_b w_b (d^T Q d) d d^T = A t G_t, Q = [[q0, q2], [q2, q1]]: three equations (xx, yy, xy).
+  const double c = std::cos(angle), s = std::sin(angle);
+  Eigen::Matrix2d rotation;
+  rotation << c, -s, s, c;
+  const Eigen::Matrix2d target = area * thickness * rotation *
+                                 Eigen::Vector2d(material.G12, material.G23()).asDiagonal() *
+                                 rotation.transpose();
+  auto components = [](const Eigen::Vector2d& d) {
+    return Eigen::Vector3d(d.x() * d.x(), d.y() * d.y(), 2 * d.x() * d.y());
+  };
+  Eigen::Matrix3d system = Eigen::Matrix3d::Zero();
+  for (const Term& t : terms) {
+    const Eigen::Vector3d q = components(t.direction);  // d^T Q d = q . (q0, q1, q2)
+    const Eigen::Vector3d e(t.direction.x() * t.direction.x(), t.direction.y() * t.direction.y(),
+                            t.direction.x() * t.direction.y());  // (xx, yy, xy) of d d^T
+    system += t.weight * e * q.transpose();
+  }
+  const Eigen::Vector3d rhs(target(0, 0), target(1, 1), target(0, 1));
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(system);
+  require(lu.rank() == 3,
+          fmt::format("transverse shear in the plies: the in-ply bonds of ply {} (strategy {}) "
+                      "span too few directions to carry both G13 and G23",
+                      k + 1, strategy));
+  const Eigen::Vector3d qv = lu.solve(rhs);
+  for (const Term& t : terms) {
+    const double q = components(t.direction).dot(qv);
+    require(q >= 0, fmt::format("transverse shear in the plies: ply {} (strategy {}) would need a "
+                                "negative out-of-plane shear stiffness along bond {}",
+                                k + 1, strategy, t.bond));
+    const double length = bonds.length(t.bond);
+    const double k_z = t.weight * q / (length * length);
+    bonds.out_of_plane_shear_ratio(t.bond) = k_z / bonds.shear_stiffness(t.bond);
+  }
+}
+
+}  // namespace
 
 Specimen build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
   SpecimenBuilder builder(strategy);
@@ -153,6 +230,10 @@ Specimen build_laminate(SpecimenBuilder& builder, const LaminateSpec& spec) {
     set_bond_geometry(p, between, c);
   }
   b.append(between);
+  if (interface.transverse_shear)
+    for (int k = 0; k < plies; ++k)
+      set_ply_transverse_shear(specimen, k, spec.coupon.material, spec.ply_angles[k], t,
+                               builder.strategy().description());
   model.check_consistency();
   specimen.build_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

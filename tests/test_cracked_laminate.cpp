@@ -5,13 +5,16 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <numbers>
 
+#include "contacts/bond_kernel.hpp"
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/protocols/coupon.hpp"
 #include "solvers/cracks.hpp"
+#include "solvers/explicit_integrator.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
@@ -121,6 +124,78 @@ TEST_CASE("a crack cut by hand breaks the 90° layer's bonds across its plane, a
                        Error);
 }
 
+TEST_CASE("plies with transverse shear: a uniform transverse shear holds G13 and G23's energy") {
+  const Material m = load_material("eglass-my750");
+  for (const char* name : {"square", "hex2d"}) {
+    for (const double degrees : {0.0, 30.0, 90.0}) {
+      CAPTURE(name);
+      CAPTURE(degrees);
+      LaminateSpec spec;
+      spec.coupon.material = m;
+      spec.coupon.length = 1.0e-3;
+      spec.coupon.width = 0.6e-3;
+      spec.coupon.thickness = kPly;
+      spec.coupon.particle_diameter = kDiameter;
+      spec.ply_angles = {degrees * std::numbers::pi / 180, 0.0};
+      spec.interface.transverse_shear = true;
+      const std::unique_ptr<Strategy> strategy = default_registry().create(name);
+      Model model = build_laminate(*strategy, spec).model;
+      // Ply 0 alone (no interface bonds), sheared out of plane: w = gamma . (x, y), no spin.
+      std::vector<int> ply;
+      double area = 0;
+      for (int i = 0; i < model.particles.size(); ++i)
+        if (model.particles.ply(i) == 0) {
+          ply.push_back(i);
+          area += model.particles.volume(i) / kPly;
+        }
+      Model layer = select_particles(model, ply);
+      const Eigen::Vector2d gamma(1e-3, -0.4e-3);
+      layer.particles.displacement.setZero();
+      layer.particles.rotation.setZero();
+      for (int i = 0; i < layer.particles.size(); ++i)
+        layer.particles.displacement(i, 2) =
+            gamma.dot(layer.particles.reference_position.row(i).head<2>().matrix().transpose());
+      // The ply's transverse shear energy, by hand: 1/2 A t gamma . G gamma, G in ply axes
+      // diag(G13 = G12, G23 = E2 / (2 (1 + nu23))).
+      const double a = degrees * std::numbers::pi / 180;
+      const Eigen::Vector2d along(std::cos(a), std::sin(a)), across(-std::sin(a), std::cos(a));
+      const double g23 = m.E2 / (2 * (1 + m.nu23));
+      const double expected =
+          0.5 * area * kPly *
+          (m.G12 * std::pow(along.dot(gamma), 2) + g23 * std::pow(across.dot(gamma), 2));
+      CHECK(bond_strain_energy(layer.particles, layer.bonds) ==
+            doctest::Approx(expected).epsilon(1e-9));
+      // A rigid rotation about y costs nothing, the out-of-plane shear included.
+      layer.particles.displacement.setZero();
+      for (int i = 0; i < layer.particles.size(); ++i) {
+        layer.particles.displacement(i, 2) = -1e-3 * layer.particles.reference_position(i, 0);
+        layer.particles.displacement(i, 0) = 1e-3 * layer.particles.reference_position(i, 2);
+        layer.particles.rotation(i, 1) = 1e-3;
+      }
+      CHECK(bond_strain_energy(layer.particles, layer.bonds) < 1e-12 * expected);
+    }
+  }
+}
+
+TEST_CASE("plies with transverse shear: the explicit kernels and multi-layer plies refuse them") {
+  InterfaceStiffness layerwise;
+  layerwise.transverse_shear = true;
+  CrossPly c = crossply(1e-3, 0.5e-3, layerwise);
+  CHECK_THROWS_WITH_AS(ExplicitIntegrator(c.model, ExplicitSettings{}),
+                       doctest::Contains("the explicit kernels do not have yet"), Error);
+  LaminateSpec spec;
+  spec.coupon.material = load_material("eglass-my750");
+  spec.coupon.length = 0.6e-3;
+  spec.coupon.width = 0.4e-3;
+  spec.coupon.thickness = kPly;
+  spec.coupon.particle_diameter = kDiameter;
+  spec.ply_angles = {0.0, 0.0};
+  spec.interface = layerwise;
+  const std::unique_ptr<Strategy> hcp = default_registry().create("hcp");
+  CHECK_THROWS_WITH_AS(build_laminate(*hcp, spec),
+                       doctest::Contains("needs plies of one particle layer"), Error);
+}
+
 TEST_CASE(
     "a FEM crack splits the nodes of the cracked plies on its plane, and bad cracks are refused") {
   const Material m = load_material("eglass-my750");
@@ -166,22 +241,21 @@ TEST_CASE(
   CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("are not plies 1 .. 6"), Error);
 }
 
-// The issue asks for 3%. Measured here (0.1 mm particles, FEM C3D8I 0.05 mm, 2 per ply; a FEM
-// at 0.025 mm, 4 per ply, moves K/K0 by -0.5% and -1.1%): intact K +1.6%; 1 crack K/K0 0.831 DEM
-// against 0.890 FEM (K -5.1%), 3 cracks 0.683 against 0.747 (K -7.1%). The DEM loses too much
-// stiffness per crack because its plies are single particle layers whose transverse shear comes
-// only from the in-plane bonds' shear springs (k_s, calibrated for the membrane, about 0.4 of
-// G t / 3): particle spin relieves the interface shear that carries load around a crack. A
-// prototype with the in-plane bonds' out-of-plane shear set to the ply's G t / 3 and stiff
-// interfaces met FEM within 0.6% (README, "Transverse cracking"; the closing note of this stop).
-// Until the bond law has that stiffness, this test holds the model to what it gives: intact within
-// 2.5% of FEM and cracked within 8.5%, with more cracks less stiff.
-TEST_CASE("[0/90_2]s with cracks cut by hand: stiffness beside CalculiX of the same cracks") {
+// Measured here (0.1 mm particles; FEM C3D8I 0.05 mm, 2 per ply; a FEM at 0.025 mm, 4 per ply,
+// moves K/K0 by -0.5% and -1.1%): with transverse shear in the plies, intact K +1.7%, 1 crack
+// K/K0 0.875 DEM against 0.890 FEM (K -0.0%), 3 cracks 0.721 against 0.747 (K -1.8%). Without it
+// (the negative control, the library's default interface): K -5.1% and -7.1%, the plies' missing
+// transverse shear (strategies/laminate.hpp, "Transverse shear in the plies").
+TEST_CASE("[0/90_2]s with cracks cut by hand: stiffness within 3% of CalculiX of the same cracks") {
   if (!have_ccx()) return;
   const double length = 4e-3, width = 1e-3;
   const Material m = load_material("eglass-my750");
-  CrossPly c = crossply(length, width, {});
-  const double dem0 = dem_stiffness(c.model);
+  InterfaceStiffness layerwise;
+  layerwise.transverse_shear = true;
+  const CrossPly c = crossply(length, width, layerwise);
+  const CrossPly control = crossply(length, width, {});
+  REQUIRE(c.grips.span == control.grips.span);
+  const double dem0 = dem_stiffness(c.model), control0 = dem_stiffness(control.model);
   FemSpecimen s;
   for (double a : parse_layup("[0/90_2]s")) s.plies.push_back({m, a, kPly});
   s.length = c.grips.span;
@@ -191,23 +265,31 @@ TEST_CASE("[0/90_2]s with cracks cut by hand: stiffness beside CalculiX of the s
   settings.mesh.elements_per_ply = 2;
   const FemSolution fem0 = run_calculix(s, settings);
   const double f0 = fem0.reaction_force / fem0.end_displacement;
-  MESSAGE(fmt::format("intact: DEM {:.4g} N/m, FEM {:.4g} N/m ({:+.2f}%)", dem0, f0,
-                      100 * (dem0 / f0 - 1)));
+  MESSAGE(
+      fmt::format("intact: DEM {:.4g} N/m ({:+.2f}%), without transverse shear {:+.2f}%, "
+                  "FEM {:.4g} N/m",
+                  dem0, 100 * (dem0 / f0 - 1), 100 * (control0 / f0 - 1), f0));
   CHECK(std::abs(dem0 / f0 - 1) < 0.025);
   double previous = 1, previous_dem = 1;
   for (const int n : {1, 3}) {
-    Model cracked = c.model;
+    Model cracked = c.model, cracked_control = control.model;
     FemSpecimen sc = s;
     for (double x : crack_planes(c.grips, n)) {
       cut_transverse_crack(cracked, x, 1, 4);
+      cut_transverse_crack(cracked_control, x, 1, 4);
       sc.cracks.push_back({x - c.grips.x_min, 1, 4});
     }
-    const double dem = dem_stiffness(cracked);
+    const double dem = dem_stiffness(cracked), without = dem_stiffness(cracked_control);
     const FemSolution fem = run_calculix(sc, settings);
     const double f = fem.reaction_force / fem.end_displacement;
-    MESSAGE(fmt::format("{} cracks: K/K0 DEM {:.4f}, FEM {:.4f}; K DEM/FEM - 1 = {:+.2f}%", n,
-                        dem / dem0, f / f0, 100 * (dem / f - 1)));
-    CHECK(std::abs(dem / f - 1) < 0.085);
+    MESSAGE(fmt::format(
+        "{} cracks: K/K0 DEM {:.4f}, without transverse shear {:.4f}, FEM {:.4f}; "
+        "K DEM/FEM - 1 = {:+.2f}%, without {:+.2f}%",
+        n, dem / dem0, without / control0, f / f0, 100 * (dem / f - 1), 100 * (without / f - 1)));
+    CHECK(std::abs(dem / f - 1) < 0.03);
+    // The negative control: without the plies' transverse shear the cracked laminate is too soft
+    // by more than the 3% the issue allows.
+    CHECK(without / f - 1 < -0.03);
     // More cracks, less stiffness, in both models.
     CHECK(f / f0 < previous);
     CHECK(dem / dem0 < previous_dem);

@@ -51,6 +51,7 @@ struct CouponOptions {
   std::string grips = "free";
   std::string layup;
   double interface_normal = 0, interface_shear = 0;
+  bool interface_transverse_shear = false;
   std::string linear_solver = "auto";
   std::vector<std::string> strategy_options;
   bool json = false;
@@ -160,6 +161,12 @@ void add_coupon_options(CLI::App& app, CouponOptions& o, const std::string& grip
                  "shear stiffness per unit area of the interface bonds between plies [N/m^3]; 0 = "
                  "10 G12/t; the paper used 1e13")
       ->capture_default_str();
+  app.add_flag("--interface-transverse-shear", o.interface_transverse_shear,
+               "the plies carry the laminate's transverse shear (G13, G23) in their in-plane "
+               "bonds, the interface bonds are a stiff penalty (shear default 100 G12/t): "
+               "interlaminar load transfer around cracks as in a layerwise plate theory; "
+               "single-layer strategies (square, hex2d), static and events solvers only (see "
+               "strategies/laminate.hpp)");
   app.add_option("--grips", o.grips, grips_help)
       ->check(CLI::IsMember(grips))
       ->capture_default_str();
@@ -203,7 +210,7 @@ void refuse_given(const CLI::App& app, const std::vector<std::string>& names,
 
 void refuse_inapplicable(const CLI::App& app, const CouponOptions& o) {
   if (o.layup.empty()) {
-    refuse_given(app, {"--interface-normal", "--interface-shear"},
+    refuse_given(app, {"--interface-normal", "--interface-shear", "--interface-transverse-shear"},
                  "interface bonds join the plies of a laminate, and one ply has no interface "
                  "(give --layup)");
   }
@@ -365,6 +372,7 @@ void set_coupon(const CouponOptions& o, Settings& s) {
   }
   s.interface.normal = o.interface_normal;
   s.interface.shear = o.interface_shear;
+  s.interface.transverse_shear = o.interface_transverse_shear;
   s.grip_length = o.grip_mm * mm;
   s.gauge_fraction = o.gauge_fraction;
   s.linear_solver = plydem::parse_linear_solver(o.linear_solver);

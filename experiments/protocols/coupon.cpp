@@ -178,6 +178,7 @@ void add_coupon_settings(CheckpointHeader& header, const std::string& strategy,
   header.add("interface.normal", exact(interface.normal));
   header.add("interface.shear", exact(interface.shear));
   header.add("interface.lateral_radius", exact(interface.lateral_radius));
+  if (interface.transverse_shear) header.add("interface.transverse_shear", "true");
   header.add("grip_length", exact(grip_length));
   header.add("gauge_fraction", exact(gauge_fraction));
 }
