@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/transverse_cracking.hpp"
+#include "experiments/fem/calculix.hpp"
 #include "experiments/runner/run_experiment.hpp"
 #include "support/results_csv.hpp"
 #include "support/test_support.hpp"
@@ -65,6 +66,20 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
   CHECK(report.find("## Summary") != std::string::npos);
   CHECK(report.find("| [0/90]s |") != std::string::npos);
   CHECK(fs::exists(dir / "crossply__0_90_s_cracks.csv"));
+  // CalculiX of the same laminate with the peak's transverse cracks cut in: softer than intact,
+  // stiffer than the ply-discount limit (the cracks are a finite number, not every section).
+  REQUIRE(rows.count("[0/90]s|stiffness ratio at peak between grips|dem square") == 1);
+  if (calculix_availability().available) {
+    REQUIRE(rows.count("[0/90]s|cracks cut in calculix|calculix same cracks") == 1);
+    CHECK(rows.at("[0/90]s|cracks cut in calculix|calculix same cracks") >= 1);
+    const double fem =
+        rows.at("[0/90]s|stiffness ratio at peak between grips|calculix same cracks");
+    CHECK(fem < 1.0);
+    CHECK(fem > m.E1 / (m.E1 + m.E2));
+    CHECK(report.find("E/E0 CalculiX, same cracks") != std::string::npos);
+  } else {
+    CHECK(report.find("CalculiX not run") != std::string::npos);
+  }
 }
 
 TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming it") {

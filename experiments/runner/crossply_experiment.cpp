@@ -3,8 +3,10 @@
 // strength_test.hpp, with strength scatter) until they fail; per laminate the strength test's own
 // section (stress-strain, cracks, crack density against strain), the first-ply failure beside
 // CLT's closed form, and the laminate's secant stiffness against the 90° layer's crack density
-// beside the shear-lag model and the ply-discount limit (core/transverse_cracking.hpp). Config
-// keys (README, "Transverse cracking of cross-plies"):
+// beside the shear-lag model and the ply-discount limit (core/transverse_cracking.hpp) and
+// beside CalculiX of the same laminate with the same transverse cracks cut in (the DEM's cracks
+// across at least 80% of the width at the peak). Config keys (README, "Transverse cracking of
+// cross-plies"):
 //
 //   experiment = "crossply"
 //   material = "eglass-my750"   strategy = "square"   strategy_options = []
@@ -12,7 +14,9 @@
 //   weibull_modulus = 10        seed = 1      scatter = "90" (or "all")
 //   [coupon] length_mm, width_mm, thickness_mm (per ply), diameter_mm, grip_mm
 //   [quick]  the same sizes, and layups
-//   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa)
+//   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa),
+//               transverse_shear = true (the plies carry G13, G23: strategies/laminate.hpp)
+//   [fem] element_mm (0 = half a particle diameter), elements_per_ply = 2, threads = 1
 //   [events] max_events, stop_fraction, max_update_rank
 //   [output] vtu_series
 #include <fmt/format.h>
@@ -24,6 +28,7 @@
 
 #include "core/error.hpp"
 #include "core/transverse_cracking.hpp"
+#include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/protocols/strength_test.hpp"
 #include "experiments/runner/coupon_config.hpp"
@@ -80,6 +85,60 @@ double ninety_density(const Model& model, const std::vector<BondBreak>& breaks,
   return sum / static_cast<double>(ninety.size());
 }
 
+// CalculiX of the cross-ply with the DEM's transverse cracks cut in: its axial stiffness between
+// the grips over the intact laminate's.
+struct FemCrackedStiffness {
+  std::string skipped;  ///< why it did not run ("" when it did)
+  int cracks = 0;       ///< FEM cracks cut
+  double ratio = 1;     ///< K cracked / K intact
+  double seconds = 0;   ///< ccx's wall time, both runs
+};
+
+// The 90° plies' transverse cracks (at least kSpanningFraction of the width, centroid between
+// x_begin and x_end), gathered across the plies: cracks of different 90° plies whose centroids lie
+// within 1.5 particle diameters of the first of them are one FEM crack, at their mean x, through
+// the plies from the lowest to the highest of them.
+FemCrackedStiffness fem_cracked_stiffness(const Model& model, const std::vector<BondBreak>& breaks,
+                                          const std::vector<int>& ninety, const FemSpecimen& intact,
+                                          double x_begin, double diameter,
+                                          const FemSettings& settings) {
+  FemCrackedStiffness out;
+  std::vector<Crack> cracks = find_cracks(model, breaks);
+  const double x_end = x_begin + intact.length;
+  std::erase_if(cracks, [&](const Crack& c) {
+    return c.interface || std::find(ninety.begin(), ninety.end(), c.ply) == ninety.end() ||
+           c.length < kSpanningFraction * intact.width || c.centroid.x() <= x_begin + diameter ||
+           c.centroid.x() >= x_end - diameter;
+  });
+  if (cracks.empty()) {
+    out.skipped = "no transverse crack at the peak";
+    return out;
+  }
+  std::sort(cracks.begin(), cracks.end(),
+            [](const Crack& a, const Crack& b) { return a.centroid.x() < b.centroid.x(); });
+  FemSpecimen cracked = intact;
+  for (std::size_t k = 0; k < cracks.size();) {
+    std::size_t j = k;
+    double sum = 0;
+    int low = cracks[k].ply, high = cracks[k].ply;
+    while (j < cracks.size() && cracks[j].centroid.x() - cracks[k].centroid.x() <= 1.5 * diameter) {
+      sum += cracks[j].centroid.x();
+      low = std::min(low, cracks[j].ply);
+      high = std::max(high, cracks[j].ply);
+      ++j;
+    }
+    cracked.cracks.push_back({sum / static_cast<double>(j - k) - x_begin, low, high});
+    k = j;
+  }
+  out.cracks = static_cast<int>(cracked.cracks.size());
+  const FemSolution whole = run_calculix(intact, settings);
+  const FemSolution cut = run_calculix(cracked, settings);
+  out.ratio =
+      (cut.reaction_force / cut.end_displacement) / (whole.reaction_force / whole.end_displacement);
+  out.seconds = whole.solver_seconds + cut.solver_seconds;
+  return out;
+}
+
 class CrossplyExperiment : public Experiment {
  public:
   ExperimentOutput run(const ExperimentConfig& c, const ExperimentContext& context) const override {
@@ -106,6 +165,10 @@ class CrossplyExperiment : public Experiment {
                           "interface.shear",
                           "interface.strength_normal",
                           "interface.strength_shear",
+                          "interface.transverse_shear",
+                          "fem.element_mm",
+                          "fem.elements_per_ply",
+                          "fem.threads",
                           "events.max_events",
                           "events.stop_fraction",
                           "events.max_update_rank",
@@ -121,6 +184,14 @@ class CrossplyExperiment : public Experiment {
     base.grip_length = c.number("coupon.grip_mm", 0) * kMm;
     base.interface.normal = c.number("interface.normal", 0);
     base.interface.shear = c.number("interface.shear", 0);
+    base.interface.transverse_shear = c.boolean("interface.transverse_shear", true);
+    FemSettings fem;
+    fem.mesh.element_size = c.number("fem.element_mm", 0) * kMm;
+    fem.mesh.elements_per_ply = static_cast<int>(c.integer("fem.elements_per_ply", 2));
+    fem.threads = static_cast<int>(c.integer("fem.threads", 1));
+    if (fem.mesh.element_size == 0) fem.mesh.element_size = 0.5 * base.coupon.particle_diameter;
+    fem.validate();
+    const CalculixAvailability ccx = calculix_availability();
     base.interface_strength.normal = c.number("interface.strength_normal", 0);
     base.interface_strength.shear = c.number("interface.strength_shear", 0);
     base.weibull_modulus = c.number("weibull_modulus", 10);
@@ -161,8 +232,10 @@ class CrossplyExperiment : public Experiment {
         markdown_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
                       "DEM vs it", "strength (MPa)", "strain at peak (%)",
                       "90° transverse cracks per mm at the peak", "E/E0 DEM", "E/E0 shear lag",
-                      "E/E0 ply discount", "events"}) +
-        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+                      "E/E0 ply discount", "E/E0 DEM between the grips",
+                      "E/E0 CalculiX, same cracks", "cracks cut in CalculiX", "events"}) +
+        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    std::string fem_notes;
     std::string sections;
     std::vector<Curve> curves;
     for (std::size_t k = 0; k < layups.size(); ++k) {
@@ -234,6 +307,29 @@ class CrossplyExperiment : public Experiment {
       curves.push_back(
           {fmt::format("ply discount {}", text), {0, top * kMm}, {discount, discount}, false});
       const double lag_ratio = shear_lag_stiffness_ratio(material, b, d, last_density);
+      // The same cracks in CalculiX, against the DEM's secant between the grips (nominal strain)
+      // at the same state.
+      FemCrackedStiffness fem_same;
+      double dem_grips = NAN;
+      if (r.peak >= 0 && static_cast<std::size_t>(r.peak) + 1 < r.stress.size()) {
+        const std::size_t e = static_cast<std::size_t>(r.peak) + 1;
+        dem_grips = (r.stress[e] / r.nominal_strain[e]) / (r.stress[1] / r.nominal_strain[1]);
+      }
+      if (!ccx.available) {
+        fem_same.skipped = ccx.message;
+      } else {
+        std::vector<BondBreak> at_peak;
+        for (const BondBreak& br : r.breaks)
+          if (br.at < static_cast<double>(r.peak + 1)) at_peak.push_back(br);
+        FemSpecimen specimen;
+        for (double angle : s.layup) specimen.plies.push_back({material, angle, t});
+        specimen.length = x_end - x_begin;
+        specimen.width = s.coupon.width;
+        spdlog::info("{}: {}: CalculiX with the peak's transverse cracks cut in", name, text);
+        fem_same = fem_cracked_stiffness(model, at_peak, ninety, specimen, x_begin,
+                                         s.coupon.particle_diameter, fem);
+      }
+      if (!fem_same.skipped.empty()) fem_notes += fmt::format("- {}: {}\n", text, fem_same.skipped);
       double fpf = NAN;
       for (const CriterionStrength& cs : r.theory)
         if (cs.criterion == FailureCriterion::kMaxStress && cs.strength) fpf = *cs.strength;
@@ -244,7 +340,9 @@ class CrossplyExperiment : public Experiment {
                              fmt::format("{:.3f}", r.strain_at_peak * 100),
                              fmt::format("{:.3g}", last_density * kMm),
                              fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
-                             fmt::format("{:.3f}", discount), fmt::format("{}", r.events)});
+                             fmt::format("{:.3f}", discount), fmt::format("{:.3f}", dem_grips),
+                             fem_same.skipped.empty() ? fmt::format("{:.3f}", fem_same.ratio) : "-",
+                             fmt::format("{}", fem_same.cracks), fmt::format("{}", r.events)});
       auto row = [&](const std::string& quantity, const std::string& source, double value,
                      const std::string& unit) {
         if (std::isfinite(value)) out.rows.push_back({name, text, quantity, source, value, unit});
@@ -255,6 +353,12 @@ class CrossplyExperiment : public Experiment {
       row("stiffness ratio at peak", fmt::format("dem {}", r.strategy), last_ratio, "1");
       row("stiffness ratio at peak", "shear lag", lag_ratio, "1");
       row("stiffness ratio", "ply discount", discount, "1");
+      row("stiffness ratio at peak between grips", fmt::format("dem {}", r.strategy), dem_grips,
+          "1");
+      if (fem_same.skipped.empty()) {
+        row("stiffness ratio at peak between grips", "calculix same cracks", fem_same.ratio, "1");
+        row("cracks cut in calculix", "calculix same cracks", fem_same.cracks, "1");
+      }
     }
     PlotAxes axes;
     axes.key = "right top";
@@ -284,9 +388,19 @@ class CrossplyExperiment : public Experiment {
         "{:.0f}% of the width long) per mm between the grips at the peak; E/E0 is the "
         "secant stiffness there over the intact one, beside the shear-lag model (Garrett & "
         "Bailey 1977) at the same density and the ply-discount limit "
-        "(core/transverse_cracking.hpp). CalculiX of the laminate with the same cracks cut in is "
-        "not run in this build.\n\n{}\n{}\n",
-        100 * kSpanningFraction, table,
+        "(core/transverse_cracking.hpp). *Between the grips* is the same secant with the grips' "
+        "separation as the strain, the measure CalculiX gives: its column is CalculiX of the same "
+        "laminate between the grips (C3D8I, {:g} mm elements, {} per ply, ends moved along x and "
+        "free laterally) with the DEM's transverse cracks at the peak cut in (traction-free, "
+        "cracks of different 90° plies within 1.5 diameters of each other one crack through "
+        "them), over the intact laminate's. {}\n\n{}{}\n{}\n",
+        100 * kSpanningFraction, fem.mesh.element_size / kMm, fem.mesh.elements_per_ply,
+        base.interface.transverse_shear
+            ? "The plies carry the laminate's transverse shear (G13, G23; interface "
+              "transverse_shear, strategies/laminate.hpp)."
+            : "The plies do not carry transverse shear (interface transverse_shear = false): the "
+              "DEM loses too much stiffness per crack (strategies/laminate.hpp).",
+        table, fem_notes.empty() ? "" : "\nCalculiX not run:\n\n" + fem_notes,
         figure_markdown(figure, "Secant stiffness against crack density"));
     md += "## Each laminate\n\n" + sections;
     return out;
