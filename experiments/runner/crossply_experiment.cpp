@@ -12,6 +12,7 @@
 //   material = "eglass-my750"   strategy = "square"   strategy_options = []
 //   layups = ["[0/90]s", "[0/90_2]s", "[0/90_4]s"]
 //   weibull_modulus = 10        seed = 1      scatter = "90" (or "all")
+//   softening = false (true: linear-softening bonds from the material's G_fibre, G_matrix)
 //   [coupon] length_mm, width_mm, thickness_mm (per ply), diameter_mm, grip_mm
 //   [quick]  the same sizes, and layups
 //   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa),
@@ -151,6 +152,7 @@ class CrossplyExperiment : public Experiment {
                           "weibull_modulus",
                           "seed",
                           "scatter",
+                          "softening",
                           "coupon.length_mm",
                           "coupon.width_mm",
                           "coupon.thickness_mm",
@@ -201,6 +203,7 @@ class CrossplyExperiment : public Experiment {
             fmt::format("{}: scatter must be \"90\" (the 90° plies only) or \"all\", got \"{}\"",
                         origin, scatter));
     const bool scatter_ninety = scatter == "90";
+    base.strength_options.softening = c.boolean("softening", false);
     base.events.max_events = c.integer("events.max_events", base.events.max_events);
     base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
     base.events.max_update_rank =
