@@ -137,6 +137,57 @@ double crack_density(const std::vector<Crack>& cracks, int ply, double x_begin, 
   return count / (x_end - x_begin);
 }
 
+std::vector<CrackPlane> transverse_crack_planes(const Model& model,
+                                                const std::vector<BondBreak>& breaks, int ply,
+                                                double min_extent) {
+  const Particles& p = model.particles;
+  const Bonds& bonds = model.bonds;
+  double x0 = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < p.size(); ++i)
+    if (p.ply(i) == ply) x0 = std::min(x0, p.reference_position(i, 0));
+  struct Band {
+    double x_sum = 0, y_min = std::numeric_limits<double>::infinity(),
+           y_max = -std::numeric_limits<double>::infinity(), diameter = 0;
+    int bonds = 0;
+  };
+  std::map<long, Band> bands;
+  for (const BondBreak& br : breaks) {
+    require(br.bond >= 0 && br.bond < bonds.size(),
+            fmt::format("transverse crack planes: break of bond {} of {}", br.bond, bonds.size()));
+    const int b = br.bond, i = bonds.first(b), j = bonds.second(b);
+    if (bonds.is_interface(b) || p.ply(i) != ply || p.ply(j) != ply) continue;
+    const double xi = p.reference_position(i, 0), xj = p.reference_position(j, 0);
+    const double d = p.radius(i) + p.radius(j);
+    if (std::abs(xi - xj) < 1e-6 * d) continue;  // along the plane: crosses none
+    const double mid = 0.5 * (xi + xj);
+    Band& band = bands[std::lround(2.0 * (mid - x0) / d)];
+    band.x_sum += mid;
+    band.y_min = std::min(band.y_min, br.position.y());
+    band.y_max = std::max(band.y_max, br.position.y());
+    band.diameter = std::max(band.diameter, d);
+    ++band.bonds;
+  }
+  std::map<long, int> crossing;
+  for (int b = 0; b < bonds.size(); ++b) {
+    const int i = bonds.first(b), j = bonds.second(b);
+    if (bonds.is_interface(b) || p.ply(i) != ply || p.ply(j) != ply) continue;
+    const double xi = p.reference_position(i, 0), xj = p.reference_position(j, 0);
+    const double d = p.radius(i) + p.radius(j);
+    if (std::abs(xi - xj) < 1e-6 * d) continue;
+    ++crossing[std::lround((xi + xj - 2.0 * x0) / d)];
+  }
+  std::vector<CrackPlane> planes;
+  for (const auto& [index, band] : bands) {
+    CrackPlane c;
+    c.position = band.x_sum / band.bonds;
+    c.extent = band.y_max - band.y_min + band.diameter;
+    c.bonds = band.bonds;
+    c.crossing = crossing[index];
+    if (c.extent >= min_extent) planes.push_back(c);
+  }
+  return planes;
+}
+
 std::string cracks_csv(const std::vector<Crack>& cracks) {
   std::string out =
       "id,kind,ply,x_mm,y_mm,z_mm,length_mm,angle_deg,bonds,tension,shear,mode,first_event,"

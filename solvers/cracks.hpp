@@ -68,6 +68,27 @@ double crack_density(const std::vector<Crack>& cracks, int ply, double x_begin, 
 /// particles), or a plane that crosses no bond of them.
 std::vector<BondBreak> cut_transverse_crack(Model& model, double x, int first_ply, int last_ply);
 
+/// A transverse crack plane x = position of one ply: the in-ply bonds broken across it.
+struct CrackPlane {
+  double position = 0;  ///< x of the plane: the mean of its broken bonds' midpoints [m]
+  double extent = 0;    ///< extent of their contact points along y, plus one diameter [m]
+  int bonds = 0;        ///< broken bonds across it
+  int crossing = 0;     ///< in-ply bonds of the ply across it, broken or not
+};
+
+/// The transverse crack planes of ply `ply`: its broken in-ply bonds (of `breaks`) that cross a
+/// plane x = const (their ends at different x, in the reference configuration) grouped by the
+/// band their midpoint lies in (band = round(2 (x_mid - x_0) / d), x_0 the ply's smallest particle
+/// x, d the bond's two radii: the gaps between particle columns of a lattice whose rows run along
+/// y, a 90° ply's, are the odd bands). Planes whose extent is at least `min_extent` are returned,
+/// by position, with the number of the ply's bonds that cross the same band (`crossing`: a crack
+/// that transmits nothing has bonds == crossing). Unlike find_cracks, neighbouring cracks one
+/// spacing apart stay apart: this is the count a saturated cross-ply needs. Throws plydem::Error
+/// for a break out of range.
+std::vector<CrackPlane> transverse_crack_planes(const Model& model,
+                                                const std::vector<BondBreak>& breaks, int ply,
+                                                double min_extent);
+
 /// The cracks as CSV, one row each: id, kind (ply or interface), ply, x_mm, y_mm, z_mm,
 /// length_mm, angle_deg, bonds, tension, shear, mode, first_event, first_load.
 std::string cracks_csv(const std::vector<Crack>& cracks);

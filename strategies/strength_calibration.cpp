@@ -659,9 +659,21 @@ void set_interface_bond_strength(Bonds& bonds, int b, double area,
   bonds.ductility(b) = ductility < kInf ? std::max(1.0, ductility) : 1.0;
 }
 
+namespace {
+
+// SplitMix64's finaliser: a well-mixed 64-bit hash, for draws that do not depend on any order.
+std::uint64_t mix64(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
 void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
                            const InterfaceStrength& interface, double weibull_modulus,
-                           std::uint64_t seed, const std::vector<bool>& scattered_plies) {
+                           std::uint64_t seed, const std::vector<bool>& scattered_plies,
+                           bool per_crack_site) {
   interface.validate();
   require(std::isfinite(weibull_modulus) && weibull_modulus >= 0,
           fmt::format("the Weibull modulus must be finite and >= 0 (0 = no scatter), got {}",
@@ -695,6 +707,30 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
   // bond's factor depends only on its row and the seed), U = (draw / 2^11 + 1/2) / 2^53 in (0, 1).
   std::mt19937_64 random(seed);
   const double weibull_mean = weibull_modulus > 0 ? std::tgamma(1.0 + 1.0 / weibull_modulus) : 1.0;
+  // Per crack site: each ply's lowest particle across its fibres, the origin of its bands.
+  std::vector<double> across_origin(ply_count, std::numeric_limits<double>::infinity());
+  auto across = [&](int k, const Eigen::Vector3d& x) {
+    const double a = plies[k].ply_angle;
+    return -std::sin(a) * x.x() + std::cos(a) * x.y();
+  };
+  if (per_crack_site && weibull_modulus > 0)
+    for (int i = 0; i < p.size(); ++i) {
+      const int k = p.ply(i);
+      if (k >= 0 && k < ply_count)
+        across_origin[k] =
+            std::min(across_origin[k], across(k, p.reference_position.row(i).transpose()));
+    }
+  auto site_scatter = [&](int k, int b) {
+    const Eigen::Vector3d mid = 0.5 * (p.reference_position.row(bonds.first(b)).transpose() +
+                                       p.reference_position.row(bonds.second(b)).transpose());
+    const double diameter = p.radius(bonds.first(b)) + p.radius(bonds.second(b));
+    const long band = std::lround(2.0 * (across(k, mid) - across_origin[k]) / diameter);
+    const std::uint64_t h =
+        mix64(seed ^ mix64(static_cast<std::uint64_t>(k) * 0x9e3779b97f4a7c15ULL +
+                           static_cast<std::uint64_t>(band)));
+    const double u = (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;
+    return std::pow(-std::log(u), 1.0 / weibull_modulus) / weibull_mean;
+  };
   for (int b = 0; b < bonds.size(); ++b) {
     double scatter = 1.0;
     if (weibull_modulus > 0) {
@@ -724,8 +760,11 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
                         "plies",
                         b, k + 1, ply_count));
     if (!scattered_plies.empty() &&
-        !(k < static_cast<int>(scattered_plies.size()) && scattered_plies[k]))
+        !(k < static_cast<int>(scattered_plies.size()) && scattered_plies[k])) {
       scatter = 1.0;
+    } else if (per_crack_site && weibull_modulus > 0) {
+      scatter = site_scatter(k, b);
+    }
     const int f = bonds.family(b);
     require(f >= 0 && f < static_cast<int>(plies[k].families.size()),
             fmt::format("assign_bond_strengths: bond {} has family {}, but ply {} has {} families",

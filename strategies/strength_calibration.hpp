@@ -168,9 +168,18 @@ void set_interface_bond_strength(Bonds& bonds, int b, double area,
 ///    (2 k_n)) and GIIc (mode II, with k_s), the smaller of those given.
 ///  - `scattered_plies`: the plies whose bonds get the scatter (index = ply; empty = every ply);
 ///    the others keep their calibrated strengths (every row still draws).
+///  - `per_crack_site`: the scatter is drawn per crack site instead of per bond: a ply's flaws
+///    run along its fibres, so every bond that crosses the same band between two particle rows
+///    along the fibre (its midpoint's distance across the fibre from the ply's lowest particle,
+///    in half diameters, rounded: the gaps between rows are the odd bands) shares one factor,
+///    (-ln U)^(1/m) / Gamma(1 + 1/m) with U from a hash of (seed, ply, band). A transverse crack
+///    then runs through its whole band, as a cross-ply's 90° cracks do, instead of damage spread
+///    over the weakest single bonds. Exact for rows along the fibre (square at 0° and 90°); for
+///    other lattices the bands are strips half a diameter wide along the fibre.
 ///  - The specimen must be intact (no damaged or broken bond).
 void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
                            const InterfaceStrength& interface = {}, double weibull_modulus = 0,
-                           std::uint64_t seed = 1, const std::vector<bool>& scattered_plies = {});
+                           std::uint64_t seed = 1, const std::vector<bool>& scattered_plies = {},
+                           bool per_crack_site = false);
 
 }  // namespace plydem

@@ -117,6 +117,29 @@ TEST_CASE("a crack cut by hand breaks the 90° layer's bonds across its plane, a
   CHECK(in_ply[5] == 0);
   for (int p = 1; p <= 4; ++p) CHECK(in_ply[p] == 1);
 
+  // As crack planes: one in each 90° ply at x, across the width; none in the 0° plies.
+  for (int p = 0; p < 6; ++p) {
+    const std::vector<CrackPlane> planes = transverse_crack_planes(m, cut, p, 0.4e-3);
+    REQUIRE(planes.size() == (p >= 1 && p <= 4 ? 1u : 0u));
+    if (planes.empty()) continue;
+    CHECK(planes[0].position == doctest::Approx(x).epsilon(1e-12));
+    CHECK(planes[0].extent == doctest::Approx(0.5e-3).epsilon(1e-9));
+    CHECK(planes[0].bonds == planes[0].crossing);  // every bond across it broken
+  }
+  // A second crack one spacing on: find_cracks joins the two into one object, the planes keep
+  // them apart.
+  std::vector<BondBreak> both = cut;
+  const std::vector<BondBreak> next = cut_transverse_crack(m, x + kDiameter, 1, 4);
+  both.insert(both.end(), next.begin(), next.end());
+  const std::vector<CrackPlane> two = transverse_crack_planes(m, both, 2, 0.4e-3);
+  REQUIRE(two.size() == 2);
+  CHECK(two[1].position - two[0].position == doctest::Approx(kDiameter).epsilon(1e-9));
+  int in_ply_two = 0;
+  for (const Crack& k : find_cracks(m, both)) in_ply_two += !k.interface && k.ply == 2;
+  CHECK(in_ply_two == 1);
+  // Planes shorter than asked for are left out.
+  CHECK(transverse_crack_planes(m, both, 2, 0.6e-3).empty());
+
   CHECK_THROWS_WITH_AS(cut_transverse_crack(m, c.grips.x_min + 3 * kDiameter, 1, 4),
                        doctest::Contains("runs through the centre of particle"), Error);
   CHECK_THROWS_WITH_AS(cut_transverse_crack(m, x, 2, 6), doctest::Contains("plies 0 .. 5"), Error);

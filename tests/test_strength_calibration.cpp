@@ -9,6 +9,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <numbers>
 
 #include "contacts/bond_kernel.hpp"
@@ -573,6 +574,54 @@ TEST_CASE("softening: ductility from the fracture energy over the bond's share o
     if (bonds.family(b) == 0 && bonds.normal_stiffness(b) == kx) bulk = b;
   REQUIRE(bulk >= 0);
   CHECK(bonds.ductility(bulk) == doctest::Approx(sc.families[0].ductility).epsilon(1e-12));
+}
+
+TEST_CASE("assign_bond_strengths per crack site: the bonds across one band share their factor") {
+  const Material m = test::eglass();
+  const auto s = strategy("square");
+  CouponSpec spec;
+  spec.material = m;
+  spec.length = 2e-3;
+  spec.width = 0.6e-3;
+  spec.ply_angle = std::numbers::pi / 2;  // rows of particles along the fibre, y
+  const Specimen built = s->build(spec);
+  const Calibration& cal = built.ply_calibrations.front();
+  const StrengthCalibration sc = calibrate_strengths(*s, cal, m, spec.ply_angle, spec.thickness);
+  const double modulus = 10;
+  for (const bool per_site : {true, false}) {
+    CAPTURE(per_site);
+    Specimen a = built;
+    assign_bond_strengths(a, {sc}, {}, modulus, 3, {}, per_site);
+    const Bonds& bonds = a.model.bonds;
+    const Particles& p = a.model.particles;
+    // Each bond's factor: its strength over the family's, over its stiffness weight. Bonds that
+    // cross a gap between columns (ends at different x) grouped by the gap.
+    std::map<long, std::vector<double>> gaps;
+    const double x0 = p.reference_position.col(0).minCoeff();
+    for (int b = 0; b < bonds.size(); ++b) {
+      const int i = bonds.first(b), j = bonds.second(b);
+      const double xi = p.reference_position(i, 0), xj = p.reference_position(j, 0);
+      if (std::abs(xi - xj) < 1e-12) continue;
+      const int f = bonds.family(b);
+      const double weight = bonds.normal_stiffness(b) / cal.families[f].stiffness.normal;
+      const double d = p.radius(i) + p.radius(j);
+      gaps[std::lround((xi + xj - 2 * x0) / d)].push_back(bonds.tensile_strength(b) /
+                                                          (sc.families[f].tensile * weight));
+    }
+    REQUIRE(gaps.size() > 10);
+    int shared = 0;
+    std::vector<double> first_of_gap;
+    for (const auto& [gap, factors] : gaps) {
+      REQUIRE(factors.size() > 3);
+      const auto [lo, hi] = std::minmax_element(factors.begin(), factors.end());
+      shared += *hi - *lo < 1e-12 * *hi;
+      first_of_gap.push_back(factors.front());
+    }
+    // Per site every gap's bonds share one factor and the gaps differ; per bond neither.
+    CHECK((shared == static_cast<int>(gaps.size())) == per_site);
+    const auto [lo, hi] = std::minmax_element(first_of_gap.begin(), first_of_gap.end());
+    CHECK(*hi / *lo > 1.05);
+  }
 }
 
 TEST_CASE("assign_bond_strengths: stiffness weights, scatter, interfaces, mismatches") {

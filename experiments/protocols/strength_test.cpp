@@ -202,6 +202,7 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
     for (int k : s.scatter_plies) plies += fmt::format("{}{}", plies.empty() ? "" : ",", k);
     h.add("scatter_plies", plies);
   }
+  if (s.scatter_per_crack_site) h.add("scatter_per", "crack site");
   h.add("seed", fmt::format("{}", s.seed));
   h.add("friction", exact(s.strength_options.friction_coefficient));
   h.add("softening", s.strength_options.softening ? "true" : "false");
@@ -321,7 +322,8 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   std::vector<bool> scattered_plies(s.scatter_plies.empty() ? 0 : plies.size(), false);
   for (int k : s.scatter_plies) scattered_plies[static_cast<std::size_t>(k)] = true;
   assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
-                        consistent_edges ? 0.0 : result.weibull_modulus, s.seed, scattered_plies);
+                        consistent_edges ? 0.0 : result.weibull_modulus, s.seed, scattered_plies,
+                        s.scatter_per_crack_site);
 
   // Theory, and the calibrated bulk's own first failure under the same load.
   for (FailureCriterion criterion : all_criteria()) {
@@ -402,7 +404,8 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
     if (result.weibull_modulus > 0) {
       Specimen scattered{std::move(*model), specimen_calibrations, 0.0};
       assign_bond_strengths(scattered, result.ply_strengths, s.interface_strength,
-                            result.weibull_modulus, s.seed, scattered_plies);
+                            result.weibull_modulus, s.seed, scattered_plies,
+                            s.scatter_per_crack_site);
       *model = std::move(scattered.model);
     }
     raise_strengths(model->bonds, factors);

@@ -96,6 +96,10 @@ struct StrengthSettings {
   /// cross-ply's transverse cracking: the 90° plies only, the 0° plies at their calibrated
   /// strengths.
   std::vector<int> scatter_plies;
+  /// Draw the scatter per crack site (a band between particle rows along the fibre, shared by the
+  /// bonds that cross it; assign_bond_strengths) instead of per bond: transverse cracks that run
+  /// through their band, as a cross-ply's 90° cracks do.
+  bool scatter_per_crack_site = false;
   StrengthOptions strength_options;  ///< friction coefficient, softening
   double grip_length = 0;            ///< [m]; 0 = two particle diameters
   double gauge_fraction = 0.5;       ///< central fraction of the length used as gauge section

@@ -13,6 +13,8 @@
 //   layups = ["[0/90]s", "[0/90_2]s", "[0/90_4]s"]
 //   weibull_modulus = 10        seed = 1      scatter = "90" (or "all")
 //   softening = false (true: linear-softening bonds from the material's G_fibre, G_matrix)
+//   scatter_per = "site" (one factor per crack site, StrengthSettings::scatter_per_crack_site) or
+//                 "bond"
 //   [coupon] length_mm, width_mm, thickness_mm (per ply), diameter_mm, grip_mm
 //   [quick]  the same sizes, and layups
 //   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa),
@@ -75,15 +77,34 @@ std::pair<int, int> crossply_counts(const std::vector<double>& layup, const std:
 // The fraction of the coupon's width a crack must span to count as a transverse crack.
 constexpr double kSpanningFraction = 0.8;
 
-// The 90° plies' mean density of transverse cracks (at least kSpanningFraction of the width
-// long) over [x_begin, x_end], at the breaks so far.
-double ninety_density(const Model& model, const std::vector<BondBreak>& breaks,
-                      const std::vector<int>& ninety, double x_begin, double x_end, double width) {
-  std::vector<Crack> cracks = find_cracks(model, breaks);
-  std::erase_if(cracks, [&](const Crack& c) { return c.length < kSpanningFraction * width; });
+// The 90° plies' transverse crack planes (transverse_crack_planes: broken bonds across one gap
+// between particle columns over at least kSpanningFraction of the width; `traction_free`: and at
+// least that fraction of the bonds across it broken) whose x lies in [x_begin, x_end], per 90°
+// ply.
+std::vector<std::vector<CrackPlane>> ninety_planes(const Model& model,
+                                                   const std::vector<BondBreak>& breaks,
+                                                   const std::vector<int>& ninety, double x_begin,
+                                                   double x_end, double width,
+                                                   bool traction_free = false) {
+  std::vector<std::vector<CrackPlane>> planes;
+  for (int ply : ninety) {
+    std::vector<CrackPlane> p =
+        transverse_crack_planes(model, breaks, ply, kSpanningFraction * width);
+    std::erase_if(p, [&](const CrackPlane& c) {
+      return c.position < x_begin || c.position > x_end ||
+             (traction_free && c.bonds < kSpanningFraction * c.crossing);
+    });
+    planes.push_back(std::move(p));
+  }
+  return planes;
+}
+
+// Their mean number per unit length over [x_begin, x_end].
+double ninety_density(const std::vector<std::vector<CrackPlane>>& planes, double x_begin,
+                      double x_end) {
   double sum = 0;
-  for (int ply : ninety) sum += crack_density(cracks, ply, x_begin, x_end);
-  return sum / static_cast<double>(ninety.size());
+  for (const std::vector<CrackPlane>& p : planes) sum += static_cast<double>(p.size());
+  return sum / static_cast<double>(planes.size()) / (x_end - x_begin);
 }
 
 // CalculiX of the cross-ply with the DEM's transverse cracks cut in: its axial stiffness between
@@ -95,40 +116,39 @@ struct FemCrackedStiffness {
   double seconds = 0;   ///< ccx's wall time, both runs
 };
 
-// The 90° plies' transverse cracks (at least kSpanningFraction of the width, centroid between
-// x_begin and x_end), gathered across the plies: cracks of different 90° plies whose centroids lie
-// within 1.5 particle diameters of the first of them are one FEM crack, at their mean x, through
-// the plies from the lowest to the highest of them.
-FemCrackedStiffness fem_cracked_stiffness(const Model& model, const std::vector<BondBreak>& breaks,
+// The 90° plies' crack planes gathered across the plies: planes of different 90° plies within a
+// quarter diameter of each other are one FEM crack, at their mean x, through the plies from the
+// lowest to the highest of them.
+FemCrackedStiffness fem_cracked_stiffness(const std::vector<std::vector<CrackPlane>>& planes,
                                           const std::vector<int>& ninety, const FemSpecimen& intact,
                                           double x_begin, double diameter,
                                           const FemSettings& settings) {
   FemCrackedStiffness out;
-  std::vector<Crack> cracks = find_cracks(model, breaks);
-  const double x_end = x_begin + intact.length;
-  std::erase_if(cracks, [&](const Crack& c) {
-    return c.interface || std::find(ninety.begin(), ninety.end(), c.ply) == ninety.end() ||
-           c.length < kSpanningFraction * intact.width || c.centroid.x() <= x_begin + diameter ||
-           c.centroid.x() >= x_end - diameter;
-  });
-  if (cracks.empty()) {
+  struct Cut {
+    double x;
+    int ply;
+  };
+  std::vector<Cut> cuts;
+  for (std::size_t k = 0; k < planes.size(); ++k)
+    for (const CrackPlane& c : planes[k]) cuts.push_back({c.position, ninety[k]});
+  if (cuts.empty()) {
     out.skipped = "no transverse crack at the peak";
     return out;
   }
-  std::sort(cracks.begin(), cracks.end(),
-            [](const Crack& a, const Crack& b) { return a.centroid.x() < b.centroid.x(); });
+  std::sort(cuts.begin(), cuts.end(), [](const Cut& a, const Cut& b) { return a.x < b.x; });
   FemSpecimen cracked = intact;
-  for (std::size_t k = 0; k < cracks.size();) {
+  for (std::size_t k = 0; k < cuts.size();) {
     std::size_t j = k;
     double sum = 0;
-    int low = cracks[k].ply, high = cracks[k].ply;
-    while (j < cracks.size() && cracks[j].centroid.x() - cracks[k].centroid.x() <= 1.5 * diameter) {
-      sum += cracks[j].centroid.x();
-      low = std::min(low, cracks[j].ply);
-      high = std::max(high, cracks[j].ply);
+    int low = cuts[k].ply, high = cuts[k].ply;
+    while (j < cuts.size() && cuts[j].x - cuts[k].x <= 0.25 * diameter) {
+      sum += cuts[j].x;
+      low = std::min(low, cuts[j].ply);
+      high = std::max(high, cuts[j].ply);
       ++j;
     }
-    cracked.cracks.push_back({sum / static_cast<double>(j - k) - x_begin, low, high});
+    const double x = sum / static_cast<double>(j - k) - x_begin;
+    if (x > 0 && x < intact.length) cracked.cracks.push_back({x, low, high});
     k = j;
   }
   out.cracks = static_cast<int>(cracked.cracks.size());
@@ -153,6 +173,7 @@ class CrossplyExperiment : public Experiment {
                           "seed",
                           "scatter",
                           "softening",
+                          "scatter_per",
                           "coupon.length_mm",
                           "coupon.width_mm",
                           "coupon.thickness_mm",
@@ -204,6 +225,12 @@ class CrossplyExperiment : public Experiment {
                         origin, scatter));
     const bool scatter_ninety = scatter == "90";
     base.strength_options.softening = c.boolean("softening", false);
+    const std::string scatter_per = c.string("scatter_per", "site");
+    require(scatter_per == "site" || scatter_per == "bond",
+            fmt::format("{}: scatter_per must be \"site\" (one strength factor per crack site: a "
+                        "band between particle rows along the fibre) or \"bond\", got \"{}\"",
+                        origin, scatter_per));
+    base.scatter_per_crack_site = scatter_per == "site";
     base.events.max_events = c.integer("events.max_events", base.events.max_events);
     base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
     base.events.max_update_rank =
@@ -234,10 +261,11 @@ class CrossplyExperiment : public Experiment {
     std::string table =
         markdown_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
                       "DEM vs it", "strength (MPa)", "strain at peak (%)",
-                      "90° transverse cracks per mm at the peak", "E/E0 DEM", "E/E0 shear lag",
-                      "E/E0 ply discount", "E/E0 DEM between the grips",
-                      "E/E0 CalculiX, same cracks", "cracks cut in CalculiX", "events"}) +
-        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+                      "90° transverse cracks per mm at the peak", "of which traction-free, per mm",
+                      "E/E0 DEM", "E/E0 shear lag", "E/E0 ply discount",
+                      "E/E0 DEM between the grips", "E/E0 CalculiX, same cracks",
+                      "cracks cut in CalculiX", "events"}) +
+        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     std::string fem_notes;
     std::string sections;
     std::vector<Curve> curves;
@@ -286,8 +314,8 @@ class CrossplyExperiment : public Experiment {
           so_far.push_back(r.breaks[next++]);
         // At critical state e the bonds broken before it are gone: its secant is theirs.
         if (r.strain[e] <= 0) continue;
-        const double density =
-            ninety_density(model, so_far, ninety, x_begin, x_end, s.coupon.width);
+        const double density = ninety_density(
+            ninety_planes(model, so_far, ninety, x_begin, x_end, s.coupon.width), x_begin, x_end);
         const double ratio = r.stress[e] / r.strain[e] / e0;
         dem.x.push_back(density * kMm);
         dem.y.push_back(ratio);
@@ -313,7 +341,7 @@ class CrossplyExperiment : public Experiment {
       // The same cracks in CalculiX, against the DEM's secant between the grips (nominal strain)
       // at the same state.
       FemCrackedStiffness fem_same;
-      double dem_grips = NAN;
+      double dem_grips = NAN, traction_free_density = 0;
       if (r.peak >= 0 && static_cast<std::size_t>(r.peak) + 1 < r.stress.size()) {
         const std::size_t e = static_cast<std::size_t>(r.peak) + 1;
         dem_grips = (r.stress[e] / r.nominal_strain[e]) / (r.stress[1] / r.nominal_strain[1]);
@@ -329,8 +357,17 @@ class CrossplyExperiment : public Experiment {
         specimen.length = x_end - x_begin;
         specimen.width = s.coupon.width;
         spdlog::info("{}: {}: CalculiX with the peak's transverse cracks cut in", name, text);
-        fem_same = fem_cracked_stiffness(model, at_peak, ninety, specimen, x_begin,
-                                         s.coupon.particle_diameter, fem);
+        fem_same = fem_cracked_stiffness(
+            ninety_planes(model, at_peak, ninety, x_begin, x_end, s.coupon.width), ninety, specimen,
+            x_begin, s.coupon.particle_diameter, fem);
+      }
+      {
+        std::vector<BondBreak> at_peak;
+        for (const BondBreak& br : r.breaks)
+          if (br.at < static_cast<double>(r.peak + 1)) at_peak.push_back(br);
+        traction_free_density = ninety_density(
+            ninety_planes(model, at_peak, ninety, x_begin, x_end, s.coupon.width, true), x_begin,
+            x_end);
       }
       if (!fem_same.skipped.empty()) fem_notes += fmt::format("- {}: {}\n", text, fem_same.skipped);
       double fpf = NAN;
@@ -342,6 +379,7 @@ class CrossplyExperiment : public Experiment {
                              fmt::format("{:.1f}", r.strength * kMPa),
                              fmt::format("{:.3f}", r.strain_at_peak * 100),
                              fmt::format("{:.3g}", last_density * kMm),
+                             fmt::format("{:.3g}", traction_free_density * kMm),
                              fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
                              fmt::format("{:.3f}", discount), fmt::format("{:.3f}", dem_grips),
                              fem_same.skipped.empty() ? fmt::format("{:.3f}", fem_same.ratio) : "-",
@@ -358,6 +396,8 @@ class CrossplyExperiment : public Experiment {
       row("stiffness ratio", "ply discount", discount, "1");
       row("stiffness ratio at peak between grips", fmt::format("dem {}", r.strategy), dem_grips,
           "1");
+      row("traction-free crack density 90 at peak", fmt::format("dem {}", r.strategy),
+          traction_free_density * kMm, "1/mm");
       if (fem_same.skipped.empty()) {
         row("stiffness ratio at peak between grips", "calculix same cracks", fem_same.ratio, "1");
         row("cracks cut in calculix", "calculix same cracks", fem_same.cracks, "1");
@@ -387,8 +427,11 @@ class CrossplyExperiment : public Experiment {
     md += fmt::format(
         "## Summary\n\n*First failure* is the first break, beside the closed-form first-ply "
         "failure of CLT (max-stress on each ply's stress under the mean sigma_x); the crack "
-        "density is the 90° plies' mean number of transverse cracks (broken-bond cracks at least "
-        "{:.0f}% of the width long) per mm between the grips at the peak; E/E0 is the "
+        "density is the 90° plies' mean number of transverse cracks per mm between the grips at "
+        "the peak: gaps between particle columns with broken bonds across at least {:.0f}% of the "
+        "width (solvers/cracks.hpp transverse_crack_planes: cracks one spacing apart stay apart); "
+        "*traction-free* ones have that fraction of the bonds across them broken too (the others "
+        "still bridge, through the lattice's diagonal bonds); E/E0 is the "
         "secant stiffness there over the intact one, beside the shear-lag model (Garrett & "
         "Bailey 1977) at the same density and the ply-discount limit "
         "(core/transverse_cracking.hpp). *Between the grips* is the same secant with the grips' "
