@@ -192,8 +192,9 @@ TEST_CASE("plydem run hole_failure.toml --quick: notched below unnotched, Kt, ma
   const double final_state = rows.at("notched|broken bonds at final|dem square");
   CHECK(half <= peak);
   CHECK(peak < final_state);
-  for (const char* file : {"report.md", "hole_failure_notched_cracks.csv",
-                           "vtu/hole_failure_notched.pvd", "vtu/hole_failure_unnotched.pvd"}) {
+  for (const char* file :
+       {"report.md", "hole_failure_notched_cracks.csv", "vtu/hole_failure_notched.pvd",
+        "vtu/hole_failure_unnotched.pvd", "vtu/hole_failure_damage_maps.pvd"}) {
     INFO(file);
     CHECK(fs::exists(dir / file));
   }

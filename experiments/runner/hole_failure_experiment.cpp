@@ -30,6 +30,7 @@
 #include "core/material.hpp"
 #include "core/stress_concentration.hpp"
 #include "experiments/output/figures.hpp"
+#include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/strength_test.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
@@ -296,7 +297,16 @@ class HoleFailureExperiment : public Experiment {
     std::string map_table = markdown_row({"map", "event", "grip force (N)", "gross stress (MPa)",
                                           "broken bonds", "cracks per ply"}) +
                             "|---|--:|--:|--:|--:|---|\n";
+    // The maps' states as a VTU series too (time = event), drawn on the undeformed plate: the
+    // displacements at an earlier critical state are not kept (only the bonds' states are).
+    fs::create_directories(context.out_dir / "vtu");
+    const std::string maps_stem = file_stem(fmt::format("{}_damage_maps", name));
+    VtkSeries maps_series((context.out_dir / "vtu" / fmt::format("{}.pvd", maps_stem)).string());
     auto add_map = [&](const std::string& label, long event, const Model& state, double force) {
+      Model undeformed = state;
+      undeformed.particles.displacement.setZero();
+      undeformed.particles.rotation.setZero();
+      maps_series.add_model(static_cast<double>(event), undeformed);
       std::vector<BondBreak> so_far;
       for (const BondBreak& b : n.breaks)
         if (b.at < static_cast<double>(event)) so_far.push_back(b);
@@ -331,6 +341,12 @@ class HoleFailureExperiment : public Experiment {
               damage_at(n, static_cast<long>(k)), grip_force(n, k));
     }
     add_map("final", n.events + 1, *n.model, grip_force(n, n.stress.size() - 1));
+    out.files.push_back(fs::path("vtu") / fmt::format("{}.pvd", maps_stem));
+    for (const std::string& file : maps_series.files()) out.files.push_back(fs::path("vtu") / file);
+    maps += fmt::format(
+        "ParaView: `vtu/{}.pvd` (these states on the undeformed plate; bond cell "
+        "data `state`, `damage`).\n",
+        maps_stem);
 
     std::string& md = out.report_markdown;
     md += fmt::format(
