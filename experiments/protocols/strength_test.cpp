@@ -64,10 +64,13 @@ constexpr double kEdgeTolerance = 1e-6;
 // load `unit`, it fails no earlier than the first bond of its ply's relaxed bulk under the same
 // uniform stress (`ply_stress` per ply, at the unit load); 1 for every other bond. See
 // StrengthSettings::consistent_edges.
+// Bonds whose two particles both lie within `keep_radius` of `keep_centre` (x, y) keep their
+// strengths: the notch's own concentration is not an edge artefact.
 std::vector<double> edge_strength_factors(const Model& model, const DofConstraints& unit,
                                           const StaticSettings& settings,
                                           const std::vector<StrengthCalibration>& plies,
-                                          const std::vector<PlyStress>& ply_stress) {
+                                          const std::vector<PlyStress>& ply_stress,
+                                          const Eigen::Vector2d& keep_centre, double keep_radius) {
   Model solved = model;
   StaticSystem(solved, unit, settings).solve(solved, unit.value);
   std::vector<double> bulk_first;
@@ -81,6 +84,14 @@ std::vector<double> edge_strength_factors(const Model& model, const DofConstrain
     const BondStrength strength = bond_strength(bonds, b);
     if (!std::isfinite(strength.tensile) && !std::isfinite(strength.cohesion)) continue;
     const int i = bonds.first(b), j = bonds.second(b);
+    if (keep_radius > 0) {
+      auto near = [&](int k) {
+        return (Eigen::Vector2d(p.reference_position(k, 0), p.reference_position(k, 1)) -
+                keep_centre)
+                   .norm() < keep_radius;
+      };
+      if (near(i) || near(j)) continue;
+    }
     const BondStresses stresses = intact_stresses(
         bond_stresses(bond_parameters(bonds, b), strength.radius, p.displacement.row(i).transpose(),
                       p.rotation.row(i).transpose(), p.displacement.row(j).transpose(),
@@ -150,6 +161,26 @@ double StrengthSettings::effective_weibull_modulus() const {
 
 void StrengthSettings::validate() const {
   coupon.validate();
+  require(std::isfinite(hole_diameter) && hole_diameter >= 0,
+          fmt::format("the hole diameter must be >= 0 (0 = no hole), got {:g} mm",
+                      hole_diameter * 1e3));
+  if (hole_diameter > 0) {
+    require(
+        hole_diameter < 0.9 * coupon.width,
+        fmt::format("a {:g} mm hole in a {:g} mm wide coupon leaves ligaments narrower than 5% of "
+                    "the width each: the hole must be narrower than 0.9 W ({:g} mm)",
+                    hole_diameter * 1e3, coupon.width * 1e3, 0.9 * coupon.width * 1e3));
+    require(
+        hole_diameter >= coupon.particle_diameter,
+        fmt::format("a {:g} mm hole is narrower than one particle ({:g} mm): the particles cannot "
+                    "resolve it",
+                    hole_diameter * 1e3, coupon.particle_diameter * 1e3));
+    const double grip = grip_length > 0 ? grip_length : 2.0 * coupon.particle_diameter;
+    require(
+        hole_diameter < coupon.length - 2.0 * grip,
+        fmt::format("a {:g} mm hole reaches into the grips ({:g} mm each) of a {:g} mm long coupon",
+                    hole_diameter * 1e3, grip * 1e3, coupon.length * 1e3));
+  }
   for (double angle : layup)
     require(std::isfinite(angle), "a ply angle of the layup is not finite");
   if (!layup.empty()) interface.validate();
@@ -208,6 +239,7 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
   h.add("softening", s.strength_options.softening ? "true" : "false");
   h.add("strength_particle_diameter", exact(s.strength_options.particle_diameter));
   h.add("edge_band_diameters", exact(s.edge_band_diameters));
+  h.add("hole_diameter", exact(s.hole_diameter));
   h.add("grips", strength_grips_name(s.grips));
   h.add("linear_solver", fmt::format("{}", static_cast<int>(s.linear_solver)));
   h.add("edge_strengths", s.consistent_edges ? "bulk" : "weighted");
@@ -311,7 +343,24 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   }
 
   // The coupon, as the tension test builds it, and the strength of every bond.
-  Specimen specimen = build_coupon(builder, s.coupon, s.layup, s.interface, s.coupon.ply_angle);
+  // A hole is cut into the coupon built without edge completion, and its edges then completed.
+  std::optional<BoundaryCompletion> completion;
+  CouponSpec coupon = s.coupon;
+  if (s.hole_diameter > 0) {
+    if (coupon.complete_boundary_cells)
+      completion = hole_boundary_completion(builder.strategy(), s.strategy);
+    coupon.complete_boundary_cells = false;
+  }
+  Specimen specimen = build_coupon(builder, coupon, s.layup, s.interface, s.coupon.ply_angle);
+  if (s.hole_diameter > 0) {
+    const Particles& q = specimen.model.particles;
+    const Eigen::Vector3d low = q.reference_position.colwise().minCoeff().transpose();
+    const Eigen::Vector3d high = q.reference_position.colwise().maxCoeff().transpose();
+    result.hole_centre = 0.5 * (low + high).head<2>();
+    result.hole = remove_hole(specimen.model, result.hole_centre.x(), result.hole_centre.y(),
+                              s.hole_diameter);
+    if (completion) complete_ply_boundary_cells(specimen.model, *completion);
+  }
   result.build_seconds = specimen.build_seconds;
   result.calibration = specimen.ply_calibrations.front();
   require(plies.size() == specimen.ply_calibrations.size(),
@@ -399,8 +448,9 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
           specimen_calibrations[k].relaxed * (kUnitNominalStrain * result.uniform_strain);
       ply_stress.push_back(to_ply_axes(sigma(0), sigma(1), sigma(2), plies[k].angle));
     }
-    const std::vector<double> factors =
-        edge_strength_factors(*model, unit, grip_settings, result.ply_strengths, ply_stress);
+    const std::vector<double> factors = edge_strength_factors(
+        *model, unit, grip_settings, result.ply_strengths, ply_stress, result.hole_centre,
+        s.hole_diameter > 0 ? 1.5 * s.hole_diameter : 0.0);
     if (result.weibull_modulus > 0) {
       Specimen scattered{std::move(*model), specimen_calibrations, 0.0};
       assign_bond_strengths(scattered, result.ply_strengths, s.interface_strength,

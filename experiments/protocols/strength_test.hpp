@@ -49,6 +49,7 @@
 #include "core/elasticity.hpp"
 #include "core/failure_criteria.hpp"
 #include "experiments/protocols/coupon.hpp"
+#include "experiments/protocols/plate_hole.hpp"
 #include "experiments/protocols/resource_estimate.hpp"
 #include "solvers/bond_events.hpp"
 #include "solvers/explicit_integrator.hpp"
@@ -102,6 +103,13 @@ struct StrengthSettings {
   bool scatter_per_crack_site = false;
   StrengthOptions strength_options;  ///< friction coefficient, softening
   double grip_length = 0;            ///< [m]; 0 = two particle diameters
+  /// A central circular hole of this diameter [m] (0 = none), centred in the coupon's extent:
+  /// the particles inside it are removed with their bonds and the free edges, the hole's
+  /// included, completed as boundary cells after the cut (experiments/protocols/plate_hole.hpp).
+  /// The edge pass of `consistent_edges` leaves the bonds within one hole diameter of the hole's
+  /// edge as assigned: their concentration is the notch's own. Must be narrower than 0.9 of the
+  /// width, at least one particle diameter, and clear of the grips.
+  double hole_diameter = 0;
   double gauge_fraction = 0.5;       ///< central fraction of the length used as gauge section
   double edge_band_diameters = 2.0;  ///< gauge particles at least this far from a free edge
   StrengthGrips grips = StrengthGrips::kUniform;
@@ -143,9 +151,9 @@ struct StrengthSettings {
 
   /// The Weibull modulus the run uses: weibull_modulus or the material's.
   double effective_weibull_modulus() const;
-  /// Throws plydem::Error naming the first bad setting: the coupon, the layup, the interfaces
-  /// (stiffness and strength; interface strengths without a laminate), a NaN or negative Weibull
-  /// modulus, the gauge, the events and explicit settings.
+  /// Throws plydem::Error naming the first bad setting: the coupon, the hole, the layup, the
+  /// interfaces (stiffness and strength; interface strengths without a laminate), a NaN or negative
+  /// Weibull modulus, the gauge, the events and explicit settings.
   void validate() const;
 };
 
@@ -214,6 +222,9 @@ struct StrengthResult {
   int peak = -1;  ///< index into path (the curve's point peak + 1)
 
   int particles = 0, bonds = 0;
+  /// StrengthSettings::hole_diameter > 0: what the hole took out, and its centre (x, y) [m].
+  HoleRemoval hole;
+  Eigen::Vector2d hole_centre = Eigen::Vector2d::Zero();
   double cross_section = 0;  ///< [m^2]
   double span = 0;           ///< grip-to-grip length along x [m]
   /// The relaxed bulk's uniform state under sigma_x (what uniform grips hold), per unit strain

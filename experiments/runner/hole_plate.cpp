@@ -13,6 +13,7 @@
 #include "core/material.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/output/vtk_output.hpp"
+#include "experiments/protocols/plate_hole.hpp"
 #include "experiments/protocols/resource_estimate.hpp"
 #include "strategies/boundary_cells.hpp"
 #include "strategies/registry.hpp"
@@ -27,33 +28,6 @@ double seconds_since(Clock::time_point start) {
 }
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// How the strategy completes its boundary cells, which the hole plate redoes once the hole is cut:
-// asked of the strategy (Strategy::boundary_completion).
-BoundaryCompletion boundary_completion(const Strategy& strategy, const std::string& name) {
-  const BoundaryCompletion completion = strategy.boundary_completion();
-  if (completion.family_count <= 0) {
-    throw Error(fmt::format(
-        "the hole-in-plate experiment completes the boundary cells of a regular layer per ply "
-        "after cutting the hole: strategy '{}' completes its edges its own way, which cannot be "
-        "redone on the cut coupon (use hex2d or square)",
-        name));
-  }
-  return completion;
-}
-
-// Union-find over particle indices.
-struct DisjointSets {
-  std::vector<int> parent;
-  explicit DisjointSets(int n) : parent(static_cast<size_t>(n)) {
-    std::iota(parent.begin(), parent.end(), 0);
-  }
-  int find(int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  void join(int a, int b) { parent[find(a)] = find(b); }
-};
 
 // Points of one ply, bucketed for the moving-least-squares interpolation.
 class PlyInterpolator {
@@ -216,84 +190,10 @@ void HolePlateSettings::validate() const {
   require(std::isfinite(interpolation_radius) && interpolation_radius >= 0,
           "interpolation radius must be >= 0 (0 = 1.5 particle diameters)");
   require(fem_threads >= 1, "fem threads must be >= 1");
-  boundary_completion(*default_registry().create(strategy), strategy);
+  hole_boundary_completion(*default_registry().create(strategy), strategy);
   interface.validate();
   fem_mesh.validate();
   parse_layup(layup);
-}
-
-HoleRemoval remove_hole(Model& model, double centre_x, double centre_y, double diameter) {
-  require(std::isfinite(centre_x) && std::isfinite(centre_y), "hole centre is not finite");
-  require(std::isfinite(diameter) && diameter > 0,
-          fmt::format("hole diameter must be positive, got {} mm", diameter * 1e3));
-  const Particles& p = model.particles;
-  const Bonds& b = model.bonds;
-  const double r2 = 0.25 * diameter * diameter;
-  std::vector<int> new_index(static_cast<size_t>(p.size()), -1);
-  std::vector<int> kept;
-  for (int i = 0; i < p.size(); ++i) {
-    const double dx = p.reference_position(i, 0) - centre_x;
-    const double dy = p.reference_position(i, 1) - centre_y;
-    if (dx * dx + dy * dy >= r2) {
-      new_index[i] = static_cast<int>(kept.size());
-      kept.push_back(i);
-    }
-  }
-  HoleRemoval removal;
-  removal.particles = p.size() - static_cast<int>(kept.size());
-  require(removal.particles > 0,
-          fmt::format("a {} mm hole at ({}, {}) mm holds no particle centre: nothing to cut",
-                      diameter * 1e3, centre_x * 1e3, centre_y * 1e3));
-  require(!kept.empty(),
-          fmt::format("a {} mm hole removes every particle of the plate", diameter * 1e3));
-  std::vector<int> kept_bonds;
-  for (int c = 0; c < b.size(); ++c) {
-    if (new_index[b.first(c)] >= 0 && new_index[b.second(c)] >= 0) kept_bonds.push_back(c);
-  }
-  removal.bonds = b.size() - static_cast<int>(kept_bonds.size());
-
-  // Each ply must stay one piece through its own bonds.
-  const int n = static_cast<int>(kept.size());
-  DisjointSets sets(n);
-  std::vector<int> in_ply_bonds(static_cast<size_t>(n), 0);
-  for (int c : kept_bonds) {
-    if (b.is_interface(c)) continue;
-    const int i = new_index[b.first(c)], j = new_index[b.second(c)];
-    sets.join(i, j);
-    ++in_ply_bonds[i];
-    ++in_ply_bonds[j];
-  }
-  int loose = 0;
-  for (int i = 0; i < n; ++i) loose += in_ply_bonds[i] == 0;
-  if (loose > 0) {
-    throw Error(fmt::format(
-        "a {} mm hole at ({}, {}) mm leaves {} loose particle(s) with no bond in their ply: "
-        "choose a hole that does not cut the plate's particles apart",
-        diameter * 1e3, centre_x * 1e3, centre_y * 1e3, loose));
-  }
-  std::vector<std::vector<int>> roots_of_ply;
-  for (int i = 0; i < n; ++i) {
-    const int ply = p.ply(kept[i]);
-    if (ply >= static_cast<int>(roots_of_ply.size())) roots_of_ply.resize(ply + 1);
-    std::vector<int>& roots = roots_of_ply[ply];
-    const int root = sets.find(i);
-    if (std::find(roots.begin(), roots.end(), root) == roots.end()) roots.push_back(root);
-  }
-  for (size_t ply = 0; ply < roots_of_ply.size(); ++ply) {
-    if (roots_of_ply[ply].size() > 1) {
-      throw Error(fmt::format(
-          "a {} mm hole at ({}, {}) mm cuts ply {} of the plate into {} separate pieces: the "
-          "hole must be narrower than the plate",
-          diameter * 1e3, centre_x * 1e3, centre_y * 1e3, ply + 1, roots_of_ply[ply].size()));
-    }
-  }
-
-  Model out = select_particles(model, kept);
-  out.description = fmt::format("{}, {} mm hole cut ({} particles removed)", model.description,
-                                diameter * 1e3, removal.particles);
-  out.check_consistency();
-  model = std::move(out);
-  return removal;
 }
 
 FemSpecimen hole_plate_specimen(const HolePlateSettings& settings) {
@@ -322,7 +222,7 @@ HolePlateDem solve_hole_plate_dem(const HolePlateSettings& settings) {
 
   HolePlateDem dem;
   dem.plies = static_cast<int>(spec.ply_angles.size());
-  const BoundaryCompletion completion = boundary_completion(*strategy, settings.strategy);
+  const BoundaryCompletion completion = hole_boundary_completion(*strategy, settings.strategy);
   // The plate (hole included: an upper bound), its solved copy and one static solve.
   check_resources(estimate_resources(*strategy, spec.coupon, spec.ply_angles, spec.interface,
                                      SolverUse::kStatic, 2),
@@ -333,16 +233,7 @@ HolePlateDem solve_hole_plate_dem(const HolePlateSettings& settings) {
         remove_hole(dem.model, 0.5 * settings.length, 0.5 * settings.width, settings.hole_diameter);
   }
   Particles& p = dem.model.particles;
-  Bonds& bonds = dem.model.bonds;
-  if (settings.complete_boundary_cells) {
-    // Only the in-ply bonds take part; interface bonds keep their stiffness.
-    std::vector<int> in_ply;
-    for (int c = 0; c < bonds.size(); ++c)
-      if (!bonds.is_interface(c)) in_ply.push_back(c);
-    Bonds layer = bonds.select(in_ply);
-    complete_boundary_cells(p, layer, completion.family_count, completion.bulk_bonds);
-    bonds.assign_rows(in_ply, layer);
-  }
+  if (settings.complete_boundary_cells) complete_ply_boundary_cells(dem.model, completion);
 
   // Grips: per ply, the particles within grip_length of that ply's outermost centres (the plies'
   // lattices differ, so their last columns do not line up).

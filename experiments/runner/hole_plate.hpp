@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "experiments/fem/calculix.hpp"
+#include "experiments/protocols/plate_hole.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
@@ -83,20 +84,6 @@ struct HolePlateSettings {
   /// Throws plydem::Error naming the first bad setting.
   void validate() const;
 };
-
-/// What remove_hole took out of a model.
-struct HoleRemoval {
-  int particles = 0;  ///< particles removed
-  int bonds = 0;      ///< bonds removed with them
-};
-
-/// Removes every particle whose centre lies inside the circle of `diameter` centred at
-/// (centre_x, centre_y) in the x-y plane (|x - c| < D/2), together with its bonds; the rest keep
-/// their order. Then checks that every ply is still one piece through its own bonds (in-ply
-/// bonds; interface bonds do not count): throws plydem::Error, leaving the model unchanged, if the
-/// hole removes no particle or every particle, leaves a loose particle (no in-ply bond), or cuts a
-/// ply apart (a hole as wide as the plate).
-HoleRemoval remove_hole(Model& model, double centre_x, double centre_y, double diameter);
 
 /// The solved particle model of the plate.
 struct HolePlateDem {
