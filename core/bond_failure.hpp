@@ -154,6 +154,16 @@ inline ModeComponents mode_components(const BondStresses& s, const BondStrength&
   return {std::max(s.normal, 0.0) / strength.tensile, s.shear / strength.cohesion};
 }
 
+/// The quadratic criterion's utilisation U = sqrt(x^2 + y^2).
+inline double quadratic_utilisation(const ModeComponents& c) {
+  return std::sqrt(c.opening * c.opening + c.sliding * c.sliding);
+}
+
+/// The mode a mixed-mode bond breaks in: tension where x >= y, else shear.
+inline BondState mixed_mode_break(const ModeComponents& c) {
+  return c.opening >= c.sliding ? BondState::kBrokenTension : BondState::kBrokenShear;
+}
+
 /// The mode mix B = G_II / (G_I + G_II) = r y^2 / (x^2 + r y^2) (0 for an unloaded bond).
 inline double mode_mix(const ModeComponents& c, const BondStrength& strength) {
   const double sliding = strength.peak_energy_ratio * c.sliding * c.sliding;
@@ -185,9 +195,8 @@ inline BondUtilisation utilisation(const BondStresses& s, const BondStrength& st
   if (strength.mixed_mode()) {
     const ModeComponents c = mode_components(s, strength);
     BondUtilisation u;
-    u.ratio = std::sqrt(c.opening * c.opening + c.sliding * c.sliding);
-    if (u.ratio >= 1)
-      u.mode = c.opening >= c.sliding ? BondState::kBrokenTension : BondState::kBrokenShear;
+    u.ratio = quadratic_utilisation(c);
+    if (u.ratio >= 1) u.mode = mixed_mode_break(c);
     return u;
   }
   const double tension = s.normal / strength.tensile;
@@ -240,10 +249,10 @@ inline CriticalLoad critical_load(const BondStresses& unit, const BondStrength& 
   CriticalLoad c;
   if (strength.mixed_mode()) {
     const ModeComponents m = mode_components(unit, strength);
-    const double u = std::sqrt(m.opening * m.opening + m.sliding * m.sliding);
+    const double u = quadratic_utilisation(m);  // linear in the load factor
     if (u > 0) {
       c.factor = kappa / u;
-      c.mode = m.opening >= m.sliding ? BondState::kBrokenTension : BondState::kBrokenShear;
+      c.mode = mixed_mode_break(m);
     }
     return c;
   }
