@@ -162,10 +162,12 @@ struct ExplicitPull {
   long cycles = 0;
 };
 
-ExplicitPull pull_explicit(const Interface& f, double angle, ExplicitKernel kernel, double step) {
+ExplicitPull pull_explicit(const Interface& f, double angle, ExplicitKernel kernel, double step,
+                           StrengthStorage storage = StrengthStorage::kAutomatic) {
   Model m = interface_pair(f, angle);
   ExplicitSettings settings;
   settings.kernel = kernel;
+  settings.strength_storage = storage;
   settings.time_step = 1e-9;
   ExplicitIntegrator integrator(m, settings);
   const double v = step / settings.time_step;
@@ -221,11 +223,17 @@ TEST_CASE("the mixed-mode law's onset and energy follow the quadratic criterion 
         c.name, expected.mix, r.path.front().reaction, expected.onset_force, r.path.size(), area,
         expected.energy, 100 * (area / expected.energy - 1));
 
-    // Both explicit kernels, about 200 cycles to the onset.
-    for (ExplicitKernel kernel : {ExplicitKernel::kReference, ExplicitKernel::kFused}) {
+    // Both explicit kernels (the fused one with strengths per type and per slot), about 200
+    // cycles to the onset.
+    for (const auto& [kernel, storage] :
+         {std::pair{ExplicitKernel::kReference, StrengthStorage::kAutomatic},
+          std::pair{ExplicitKernel::kFused, StrengthStorage::kTypes},
+          std::pair{ExplicitKernel::kFused, StrengthStorage::kSlots}}) {
       const bool fused = kernel == ExplicitKernel::kFused;
+      const bool slots = storage == StrengthStorage::kSlots;
       CAPTURE(fused);
-      const ExplicitPull e = pull_explicit(f, c.angle, kernel, travel / 200.3);
+      CAPTURE(slots);
+      const ExplicitPull e = pull_explicit(f, c.angle, kernel, travel / 200.3, storage);
       CHECK(relative(e.peak_force, expected.onset_force) < 1.0 / 200);
       CHECK(relative(e.work, expected.energy) < 0.02);
       CHECK(relative(e.released, e.work) < 0.01);
@@ -233,7 +241,7 @@ TEST_CASE("the mixed-mode law's onset and energy follow the quadratic criterion 
       std::printf(
           "mixed-mode %-8s %s kernel: peak %.6g N (%+.3f%%), %ld cycles, work %.5g J (%+.2f%%), "
           "released %.5g J\n",
-          c.name, fused ? "fused" : "reference", e.peak_force,
+          c.name, fused ? (slots ? "fused/slots" : "fused/types") : "reference", e.peak_force,
           100 * (e.peak_force / expected.onset_force - 1), e.cycles, e.work,
           100 * (e.work / expected.energy - 1), e.released);
     }
