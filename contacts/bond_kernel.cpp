@@ -154,9 +154,9 @@ ScreenConstants screen_constants(const HalfBondFailure& f, const BondStrength& s
   const double bending = kMomentContribution * 4.0 * f.bending_stiffness / s.radius;
   const double twisting = kMomentContribution * 2.0 * f.twisting_stiffness / s.radius;
   auto square = [](double x) { return x * x; };
-  c.displacement =
-      2.0 * std::max(square(f.normal_stiffness / tension),
-                     square((f.shear_stiffness + s.friction * f.normal_stiffness) / shear));
+  c.displacement = 2.0 * std::max(square(f.normal_stiffness / tension),
+                                  square((f.shear_stiffness + s.friction * f.normal_stiffness) /
+                                         shear));
   c.rotation = 2.0 * std::max(square(bending / tension), square(twisting / shear));
   // The mixed-mode law reaches U = sqrt(x^2 + y^2) >= kappa only where max(x, y) >= kappa /
   // sqrt(2): its screen thresholds are PFC's over sqrt(2) (alpha and beta bound it already).

@@ -72,10 +72,10 @@ struct BondDeformation {
 
 /// A bond's intact stiffnesses (its current ones are 1 - damage times these).
 struct BondStiffness {
-  double normal = 0;    ///< k_n [N/m]
-  double shear = 0;     ///< k_s [N/m]
-  double bending = 0;   ///< k_b [N m/rad]
-  double twisting = 0;  ///< k_t [N m/rad]
+  double normal = 0;     ///< k_n [N/m]
+  double shear = 0;      ///< k_s [N/m]
+  double bending = 0;    ///< k_b [N m/rad]
+  double twisting = 0;   ///< k_t [N m/rad]
 };
 
 /// The deformation from the contact point's relative displacement `du`, the relative rotation
@@ -103,9 +103,9 @@ struct BondStiffness {
 
 /// Bond b's deformation at the particles' current state, for the reference loop. The lever term
 /// (s_i theta_i + s_j theta_j) x n is written as (sigma (theta_i + theta_j) + delta (theta_j -
-/// theta_i)) x n with sigma = (s_i + s_j) / 2 and delta = (s_j - s_i) / 2, the form the fused
-/// kernel computes from either end alike (gather_breaking_block). With `du_out` and `dtheta_out`,
-/// also writes du and dtheta there.
+/// theta_i)) x n with sigma = (s_i + s_j) / 2 and delta = (s_j - s_i) / 2, the form the fused kernel
+/// computes from either end alike (gather_breaking_block). With `du_out` and `dtheta_out`, also
+/// writes du and dtheta there.
 BondDeformation bond_deformation(const Particles& particles, const Bonds& bonds, int b,
                                  double* du_out = nullptr, double* dtheta_out = nullptr);
 
@@ -132,10 +132,10 @@ inline BondDamageUpdate update_bond_damage(const BondDeformation& d, const BondS
                                            const BondStrength& strength, double damage,
                                            double kappa) {
   const double remaining = 1.0 - damage;
-  const BondStresses current =
-      section_stresses((remaining * intact.normal) * d.normal, (remaining * intact.shear) * d.shear,
-                       (remaining * intact.bending) * d.bend,
-                       (remaining * intact.twisting) * std::abs(d.twist), strength.radius);
+  const BondStresses current = section_stresses(
+      (remaining * intact.normal) * d.normal, (remaining * intact.shear) * d.shear,
+      (remaining * intact.bending) * d.bend, (remaining * intact.twisting) * std::abs(d.twist),
+      strength.radius);
   const BondStresses stresses = intact_stresses(current, damage);
   const BondUtilisation u = utilisation(stresses, strength);
   BondDamageUpdate r;
@@ -282,9 +282,9 @@ struct alignas(64) HalfBondLanes {
 /// which both ends of a bond evaluate to the same number (gather_breaking_block). The screen
 /// constants let the kernel skip the failure law for bonds far from their strength:
 ///  - alpha |du|^2 + beta |dtheta|^2 >= 1 whenever U >= 1 (a bound: |du_n|, |du_s| <= |du|,
-///    (x + y)^2 <= 2 (x^2 + y^2)), with alpha = 2 max(k_n^2 / T_t^2, (k_s + tan(phi) k_n)^2 /
-///    T_c^2), beta = 2 max((4 k_b / R)^2 / T_t^2, (2 k_t / R)^2 / T_c^2), T_t = A sigma_c and T_c =
-///    A c the section's strengths as forces; it holds for U >= kappa >= 1 too;
+///    (x + y)^2 <= 2 (x^2 + y^2)), with alpha = 2 max(k_n^2 / T_t^2, (k_s + tan(phi) k_n)^2 / T_c^2),
+///    beta = 2 max((4 k_b / R)^2 / T_t^2, (2 k_t / R)^2 / T_c^2), T_t = A sigma_c and T_c = A c
+///    the section's strengths as forces; it holds for U >= kappa >= 1 too;
 ///  - then, lane by lane, the tension and shear tests of core/bond_failure.hpp without square
 ///    roots (F_n + (4/R)|M_b| >= kappa T_t as (kappa T_t - F_n)^2 <= (4/R)^2 |M_b|^2, and so on),
 ///    against thresholds lowered by kScreenMargin, and only where one holds the exact law
@@ -299,13 +299,13 @@ struct HalfBondFailure {
   double twisting_stiffness = 0;     ///< intact k_t [N m/rad]
   /// The bond's strength; with strengths kept per slot, tensile and cohesion are the slot's.
   BondStrength strength;
-  double screen_displacement = 0;      ///< alpha [1/m^2] (strengths per type)
-  double screen_rotation = 0;          ///< beta [1/rad^2] (strengths per type)
-  double tension_threshold = 0;        ///< (1 - kScreenMargin) T_t [N] (strengths per type)
-  double shear_threshold = 0;          ///< (1 - kScreenMargin) T_c [N] (strengths per type)
-  double shear_friction = 0;           ///< (1 - kScreenMargin) tan(phi)
-  double bending_factor = 0;           ///< (4 k_b / R)^2 [N^2/rad^2]; 0 for an unbreakable bond
-  double twisting_factor = 0;          ///< 2 k_t / R [N/rad]; 0 for an unbreakable bond
+  double screen_displacement = 0;  ///< alpha [1/m^2] (strengths per type)
+  double screen_rotation = 0;      ///< beta [1/rad^2] (strengths per type)
+  double tension_threshold = 0;    ///< (1 - kScreenMargin) T_t [N] (strengths per type)
+  double shear_threshold = 0;      ///< (1 - kScreenMargin) T_c [N] (strengths per type)
+  double shear_friction = 0;       ///< (1 - kScreenMargin) tan(phi)
+  double bending_factor = 0;       ///< (4 k_b / R)^2 [N^2/rad^2]; 0 for an unbreakable bond
+  double twisting_factor = 0;      ///< 2 k_t / R [N/rad]; 0 for an unbreakable bond
   double shear_stiffness_squared = 0;  ///< k_s^2
 };
 
@@ -363,8 +363,7 @@ class GatherBonds {
   /// compute the same numbers. With `breaking.enabled` the types hold intact stiffnesses
   /// (current / (1 - damage)) and the failure data (HalfBondFailure), and every slot knows its
   /// bond (slot_bond).
-  GatherBonds(const Bonds& bonds, const std::vector<int>& order,
-              const GatherBreaking& breaking = {});
+  GatherBonds(const Bonds& bonds, const std::vector<int>& order, const GatherBreaking& breaking = {});
 
   int particle_count() const { return particles_; }
   /// Particles rounded up to whole lane blocks; the padding particles have no bonds.
@@ -453,10 +452,10 @@ class GatherBonds {
   std::vector<std::int32_t> block_run_;   // [block * width + slot]
   // Breaking.
   bool breaking_ = false, softening_ = false, slot_strengths_ = false;
-  std::vector<HalfBondFailure> failure_;                             // [type]
-  std::vector<HalfBondFailureLanes> failure_uniform_;                // [uniform type]
-  std::vector<std::int32_t> slot_bond_;                              // [cell]
-  std::vector<std::array<std::int64_t, 2>> bond_cells_;              // [model bond]
+  std::vector<HalfBondFailure> failure_;                // [type]
+  std::vector<HalfBondFailureLanes> failure_uniform_;  // [uniform type]
+  std::vector<std::int32_t> slot_bond_;                 // [cell]
+  std::vector<std::array<std::int64_t, 2>> bond_cells_;  // [model bond]
   lanes::Array slot_alpha_, slot_beta_, slot_tension_, slot_shear_;  // [cell], strengths per slot
   std::vector<double> slot_tensile_, slot_cohesion_;                 // [cell], strengths per slot
   lanes::Array slot_damage_, slot_kappa_;                            // [cell], softening
@@ -748,8 +747,8 @@ template <bool kEnergy, bool kSoften, bool kSlotStrength>
         lanes::gather(s.rotation[c], other, t_j[c]);
       }
     }
-    Doubles n[3] = {}, sigma{}, delta{}, k_s{}, s_k_s{}, k_n_excess{}, k_b{}, k_t_excess{}, alpha{},
-            beta{};
+    Doubles n[3] = {}, sigma{}, delta{}, k_s{}, s_k_s{}, k_n_excess{}, k_b{}, k_t_excess{},
+            alpha{}, beta{};
     if (uniform_type > 0) {
       const HalfBondLanes& h = g.uniform_lanes(uniform_type);
       const HalfBondFailureLanes& f = g.failure_lanes(uniform_type);

@@ -116,8 +116,8 @@ struct FusedState {
     for (int c = 0; c < 3; ++c)
       arrays += velocity[c].bytes() + angular_velocity[c].bytes() + contact_force[c].bytes() +
                 contact_torque[c].bytes();
-    arrays +=
-        inverse_mass.bytes() + inverse_inertia.bytes() + work_sum.bytes() + damping_sum.bytes();
+    arrays += inverse_mass.bytes() + inverse_inertia.bytes() + work_sum.bytes() +
+              damping_sum.bytes();
     return arrays + bonds.bytes() + (order.size() + position.size()) * sizeof(int) + motion.size() +
            classes.size() * sizeof(MotionClass) + partial.size() * sizeof(double) +
            contact_block.size();
@@ -175,10 +175,14 @@ struct StepArgs {
 // - F (v_old + v_new) where it is prescribed (blocks with prescribed particles only), and the
 // second halves (v_new alone) on the report cycle.
 template <bool kReport>
-[[gnu::always_inline]] inline void account_lanes(
-    const lanes::Doubles& f, const lanes::Doubles& damping, const lanes::Doubles& v_old,
-    const lanes::Doubles& v, const lanes::Mask& fixed, bool prescribed, lanes::Doubles& damping_sum,
-    lanes::Doubles& work_sum, lanes::Doubles& damping_half, lanes::Doubles& work_half) {
+[[gnu::always_inline]] inline void account_lanes(const lanes::Doubles& f,
+                                                 const lanes::Doubles& damping,
+                                                 const lanes::Doubles& v_old,
+                                                 const lanes::Doubles& v, const lanes::Mask& fixed,
+                                                 bool prescribed, lanes::Doubles& damping_sum,
+                                                 lanes::Doubles& work_sum,
+                                                 lanes::Doubles& damping_half,
+                                                 lanes::Doubles& work_half) {
   using lanes::Doubles;
   using lanes::Mask;
   const Doubles both = v_old + v;
@@ -376,8 +380,7 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     intact_[2](b) = scale * bonds.bending_stiffness(b);
     intact_[3](b) = scale * bonds.twisting_stiffness(b);
     damaged |= bonds.damage(b) > 0;
-    const bool breakable =
-        std::isfinite(bonds.tensile_strength(b)) || std::isfinite(bonds.cohesion(b));
+    const bool breakable = std::isfinite(bonds.tensile_strength(b)) || std::isfinite(bonds.cohesion(b));
     const BondStrength strength = bond_strength(bonds, b);
     softening |= breakable && may_soften(strength);
     kappa_(b) = softening_history(bonds.damage(b), strength);
@@ -412,7 +415,8 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     k.order = kernel_order(model, settings.particle_order);
     k.position.assign(k.order.size(), 0);
     for (std::size_t i = 0; i < k.order.size(); ++i) k.position[k.order[i]] = static_cast<int>(i);
-    k.bonds = GatherBonds(model.bonds, k.order, {breaking_, softening_, settings.strength_storage});
+    k.bonds =
+        GatherBonds(model.bonds, k.order, {breaking_, softening_, settings.strength_storage});
     k.particles = p.size();
     const int padded = k.bonds.padded_count();
     k.blocks = padded / lanes::kCount;
@@ -636,11 +640,10 @@ CycleReport ExplicitIntegrator::step(long cycles) {
     double kinetic = 0;
     for (int i = 0; i < now.size(); ++i)
       for (int c = 0; c < 3; ++c) {
-        if (!fixed_velocity_(i, c))
-          kinetic += now.mass(i) * now.velocity(i, c) * now.velocity(i, c);
+        if (!fixed_velocity_(i, c)) kinetic += now.mass(i) * now.velocity(i, c) * now.velocity(i, c);
         if (!fixed_angular_velocity_(i, c))
-          kinetic +=
-              now.moment_of_inertia(i) * now.angular_velocity(i, c) * now.angular_velocity(i, c);
+          kinetic += now.moment_of_inertia(i) * now.angular_velocity(i, c) *
+                     now.angular_velocity(i, c);
       }
     initial_energy_ = bond_strain_energy(now, model_.bonds) + 0.5 * kinetic;
     initial_set_ = true;
@@ -889,9 +892,10 @@ void ExplicitIntegrator::store_bonds() {
     if (cells[0] < 0) continue;  // broken before the table was built
     const auto first = static_cast<std::size_t>(cells[0]);
     const auto second = static_cast<std::size_t>(cells[1]);
-    const bool agree = g.holds(first) == g.holds(second) && g.holds(first) == !bonds.is_broken(b) &&
-                       (!g.softening() || (g.slot_damage()[first] == g.slot_damage()[second] &&
-                                           g.slot_kappa()[first] == g.slot_kappa()[second]));
+    const bool agree =
+        g.holds(first) == g.holds(second) && g.holds(first) == !bonds.is_broken(b) &&
+        (!g.softening() || (g.slot_damage()[first] == g.slot_damage()[second] &&
+                            g.slot_kappa()[first] == g.slot_kappa()[second]));
     if (!agree) {
       const bool soft = g.softening();
       throw Error(fmt::format(
@@ -1182,8 +1186,8 @@ CycleReport ExplicitIntegrator::reference_cycle(bool last) {
   const int n = p.size();
   // One component: the imposed velocity, or the damped central difference; with the account's
   // sums (EnergyAccount).
-  auto advance = [&](double& u, double& v, double force, double inertia, bool fixed, double imposed,
-                     int i) {
+  auto advance = [&](double& u, double& v, double force, double inertia, bool fixed,
+                     double imposed, int i) {
     const double v_old = v;
     if (fixed) {
       v = imposed;
@@ -1194,7 +1198,8 @@ CycleReport ExplicitIntegrator::reference_cycle(bool last) {
       }
       return;
     }
-    const double damping = alpha * std::abs(force) * (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0));
+    const double damping =
+        alpha * std::abs(force) * (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0));
     v += dt * (force - damping) / inertia;
     u += dt * v;
     kinetic2 += inertia * v_old * v;
