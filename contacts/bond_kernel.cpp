@@ -118,9 +118,10 @@ std::int64_t bits_of(double x) {
   return b;
 }
 
-// Elastic part (9) and, for breaking, strength radius, tensile strength, cohesion, friction and
-// ductility (exact bits: strengths are copied, not computed, so equal ones are equal to the bit).
-using TypeKey = std::array<std::int64_t, 14>;
+// Elastic part (9) and, for breaking, strength radius, tensile strength, cohesion, friction,
+// ductility and the mixed-mode law's exponent and ratios (exact bits: strengths are copied, not
+// computed, so equal ones are equal to the bit).
+using TypeKey = std::array<std::int64_t, 17>;
 
 struct KeyHash {
   std::size_t operator()(const TypeKey& key) const {
@@ -158,8 +159,11 @@ ScreenConstants screen_constants(const HalfBondFailure& f, const BondStrength& s
                                   square((f.shear_stiffness + s.friction * f.normal_stiffness) /
                                          shear));
   c.rotation = 2.0 * std::max(square(bending / tension), square(twisting / shear));
-  c.tension = (1.0 - kScreenMargin) * tension;
-  c.shear = (1.0 - kScreenMargin) * shear;
+  // The mixed-mode law reaches U = sqrt(x^2 + y^2) >= kappa only where max(x, y) >= kappa /
+  // sqrt(2): its screen thresholds are PFC's over sqrt(2) (alpha and beta bound it already).
+  const double reach = s.mixed_mode() ? std::numbers::sqrt2 / 2 : 1.0;
+  c.tension = (1.0 - kScreenMargin) * reach * tension;
+  c.shear = (1.0 - kScreenMargin) * reach * shear;
   return c;
 }
 
@@ -202,12 +206,14 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
   if (breaking_) {
     slot_strengths_ = breaking.storage == StrengthStorage::kSlots;
     if (breaking.storage == StrengthStorage::kAutomatic) {
-      std::set<std::array<std::int64_t, 5>> distinct;
+      std::set<std::array<std::int64_t, 8>> distinct;
       for (int b = 0; b < m && static_cast<int>(distinct.size()) <= kMaxTypeStrengths; ++b) {
         if (bonds.is_broken(b)) continue;
         distinct.insert({bits_of(bonds.strength_radius(b)), bits_of(bonds.tensile_strength(b)),
                          bits_of(bonds.cohesion(b)), bits_of(bonds.friction_coefficient(b)),
-                         bits_of(bonds.ductility(b))});
+                         bits_of(bonds.ductility(b)), bits_of(bonds.mixed_mode_exponent(b)),
+                         bits_of(bonds.fracture_energy_ratio(b)),
+                         bits_of(bonds.peak_energy_ratio(b))});
       }
       slot_strengths_ = static_cast<int>(distinct.size()) > kMaxTypeStrengths;
     }
@@ -249,17 +255,32 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
     return few_directions ? find_direction(Eigen::Vector3d(normal[0], normal[1], normal[2])) : -1;
   };
   auto key_of = [&](const HalfBondType& h, int d, const BondStrength& strength) {
-    TypeKey key{d >= 0 ? d : bits_of(h.normal[0]),   d >= 0 ? 0 : bits_of(h.normal[1]),
-                d >= 0 ? 0 : bits_of(h.normal[2]),   quantize_relative(h.lever_own),
-                quantize_relative(h.lever_other),    quantize_relative(h.shear_stiffness),
-                quantize_relative(h.normal_excess),  quantize_relative(h.bending_stiffness),
-                quantize_relative(h.twisting_excess), 0, 0, 0, 0, 0};
+    TypeKey key{d >= 0 ? d : bits_of(h.normal[0]),
+                d >= 0 ? 0 : bits_of(h.normal[1]),
+                d >= 0 ? 0 : bits_of(h.normal[2]),
+                quantize_relative(h.lever_own),
+                quantize_relative(h.lever_other),
+                quantize_relative(h.shear_stiffness),
+                quantize_relative(h.normal_excess),
+                quantize_relative(h.bending_stiffness),
+                quantize_relative(h.twisting_excess),
+                0,
+                0,
+                0,
+                0,
+                0,
+                0,
+                0,
+                0};
     if (breaking_) {
       key[9] = bits_of(strength.radius);
       key[10] = slot_strengths_ ? 0 : bits_of(strength.tensile);
       key[11] = slot_strengths_ ? 0 : bits_of(strength.cohesion);
       key[12] = bits_of(strength.friction);
       key[13] = bits_of(strength.ductility);
+      key[14] = bits_of(strength.mixed_mode_exponent);
+      key[15] = bits_of(strength.fracture_energy_ratio);
+      key[16] = bits_of(strength.peak_energy_ratio);
     }
     return key;
   };
@@ -477,8 +498,7 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
     if (bonds.is_broken(b)) continue;
     const BondStrength strength = bond_strength(bonds, b);
     const ScreenConstants screen = screen_constants(failure_[type_[bond_cells_[b][0]]], strength);
-    const double kappa =
-        bonds.damage(b) > 0 ? softening_ratio(bonds.damage(b), strength.ductility) : 1.0;
+    const double kappa = softening_history(bonds.damage(b), strength);
     for (const std::int64_t c : bond_cells_[b]) {
       const auto cell = static_cast<std::size_t>(c);
       if (slot_strengths_) {

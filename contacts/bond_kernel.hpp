@@ -125,7 +125,9 @@ struct BondDamageUpdate {
 /// intact-equivalent (intact_stresses), their utilisation() against `strength`. A brittle bond
 /// (ductility 1) breaks at U >= 1 in the mode utilisation() names; a softening one raises kappa
 /// to U when U > kappa, takes damage softening_damage(kappa, ductility), and breaks when it
-/// reaches 1. Both kernels decide through this function.
+/// reaches 1. A mixed-mode bond (core/bond_failure.hpp) softens alike with the ductility of the
+/// mix at this state, kappa_u(B), its damage never falling. Both kernels decide through this
+/// function.
 inline BondDamageUpdate update_bond_damage(const BondDeformation& d, const BondStiffness& intact,
                                            const BondStrength& strength, double damage,
                                            double kappa) {
@@ -134,12 +136,25 @@ inline BondDamageUpdate update_bond_damage(const BondDeformation& d, const BondS
       (remaining * intact.normal) * d.normal, (remaining * intact.shear) * d.shear,
       (remaining * intact.bending) * d.bend, (remaining * intact.twisting) * std::abs(d.twist),
       strength.radius);
-  const BondUtilisation u = utilisation(intact_stresses(current, damage), strength);
+  const BondStresses stresses = intact_stresses(current, damage);
+  const BondUtilisation u = utilisation(stresses, strength);
   BondDamageUpdate r;
   r.damage = damage;
   r.kappa = kappa;
   r.utilisation = u.ratio;
-  if (!(strength.ductility > 1)) {
+  if (strength.mixed_mode()) {
+    if (u.ratio > kappa) {
+      r.changed = true;
+      r.kappa = u.ratio;
+      r.damage =
+          std::max(damage, softening_damage(u.ratio, softening_ductility(stresses, strength)));
+      if (r.damage >= 1) {
+        r.broken = true;
+        r.mode = u.mode;  // U >= kappa_u(B) >= 1: tension or shear
+        r.damage = 1;
+      }
+    }
+  } else if (!(strength.ductility > 1)) {
     if (u.mode != BondState::kIntact) {
       r.changed = r.broken = true;
       r.mode = u.mode;

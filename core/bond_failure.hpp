@@ -32,6 +32,37 @@
 /// energy G over its share A_crack of crack area (bond_ductility). kappa_u = 1 is brittle.
 /// Events solvers follow the same line as a saw-tooth (DAMAGE_NOTES §3): a bond of damage d next
 /// fails when its kappa reaches softening_ratio(d, kappa_u), the line's kappa at stiffness 1 - d.
+///
+/// Mixed-mode law (interface bonds: Bonds::mixed_mode_exponent eta > 0; every other bond keeps
+/// PFC's law above). With the section stresses above (for an interface bond, k_b = k_t = 0, so
+/// sigma = F_n / A and tau = |F_s| / A, A = pi R^2, and the section strengths are the interface's
+/// N and S times area / A: sigma / sigma_c = t_n / N and tau / c = t_s / S with t = F / area the
+/// nominal tractions), the utilisation components
+///   x = <sigma> / sigma_c   (Macaulay: compression does not count),      y = tau / c
+/// give
+///  - onset, the quadratic nominal-traction criterion: U = sqrt(x^2 + y^2) = 1. U scales linearly
+///    with the bond's deformation, so the events solver's critical load factor stays kappa / U of
+///    the unit solution. No friction term: a mixed-mode bond has tan(phi) = 0.
+///  - the mode mix from the bond's current deformation, B = G_II / (G_I + G_II) with
+///    G_I ~ <F_n>^2 / (2 k_n) and G_II ~ |F_s|^2 / (2 k_s): B = r y^2 / (x^2 + r y^2), where
+///    r = E_II / E_I = (c^2 / k_s) / (sigma_c^2 / k_n) is the ratio of the energies the intact bond
+///    holds at onset in pure mode II and pure mode I (Bonds::peak_energy_ratio); B = 0 when the
+///    bond is unloaded.
+///  - propagation, Benzeggagh & Kenane (Compos. Sci. Technol. 56 (1996) 439):
+///    G_c(B) = GIc + (GIIc - GIc) B^eta. The intact bond holds E_peak(B) = E_I / (1 - B + B / r)
+///    at onset under the mix B, so the ductility that makes it dissipate G_c(B) area is
+///      kappa_u(B) = G_c(B) area / E_peak(B) = kappa_I (1 + (g - 1) B^eta) (1 - B + B / r),
+///    kappa_I = GIc area / E_I the bond's pure mode I ductility (Bonds::ductility) and
+///    g = GIIc / GIc (Bonds::fracture_energy_ratio); at least 1 (brittle). B = 0 gives kappa_I and
+///    the onset x = sigma / sigma_c: PFC's tension law exactly; B = 1 gives GIIc area / E_II.
+///  - history: the mix is taken where the law is evaluated, from the bond's intact-equivalent
+///    stresses at that state (explicit kernels: every cycle at which U passes the largest U so
+///    far, kappa; events solver: the unit solution of each equilibrium, whose mix every load
+///    factor shares), and the damage never falls: d = max(d, softening_damage(kappa,
+///    kappa_u(B))). Under a fixed mix (proportional loading) this is the linear-softening law of
+///    ductility kappa_u(B), which dissipates exactly G_c(B) area.
+///  - break mode: tension where x >= y at the break, else shear.
+/// Brittle mixed-mode bonds (no fracture energy) have kappa_I = g = r = 1: kappa_u(B) = 1.
 
 #include <algorithm>
 #include <cmath>
@@ -49,7 +80,12 @@ struct BondStrength {
   double tensile = std::numeric_limits<double>::infinity();   ///< sigma_c [Pa]
   double cohesion = std::numeric_limits<double>::infinity();  ///< c [Pa]
   double friction = 0;                                        ///< tan(phi)
-  double ductility = 1;                                       ///< kappa_u (1 = brittle)
+  double ductility = 1;  ///< kappa_u (1 = brittle); mixed-mode: kappa_I, in pure mode I
+  /// The mixed-mode law's Benzeggagh-Kenane exponent eta (see the file comment); 0 = PFC's law.
+  double mixed_mode_exponent = 0;
+  double fracture_energy_ratio = 1;  ///< g = GIIc / GIc (mixed-mode law)
+  double peak_energy_ratio = 1;      ///< r = E_II / E_I at onset (mixed-mode law)
+  bool mixed_mode() const { return mixed_mode_exponent > 0; }
 };
 
 /// PFC's moment-contribution factor beta for every bond of plydem (PFC's default).
@@ -107,8 +143,62 @@ struct BondUtilisation {
   BondState mode = BondState::kIntact;  ///< the mode that fails first at U >= 1; intact below
 };
 
-/// U of stresses `s` against `strength` (tension first at U >= 1, as PFC tests it).
+/// The mixed-mode law's utilisation components (see the file comment): x = <sigma> / sigma_c
+/// (opening) and y = tau / c (sliding), each 0 where the strength is +inf.
+struct ModeComponents {
+  double opening = 0;  ///< x
+  double sliding = 0;  ///< y
+};
+
+inline ModeComponents mode_components(const BondStresses& s, const BondStrength& strength) {
+  return {std::max(s.normal, 0.0) / strength.tensile, s.shear / strength.cohesion};
+}
+
+/// The quadratic criterion's utilisation U = sqrt(x^2 + y^2).
+inline double quadratic_utilisation(const ModeComponents& c) {
+  return std::sqrt(c.opening * c.opening + c.sliding * c.sliding);
+}
+
+/// The mode a mixed-mode bond breaks in: tension where x >= y, else shear.
+inline BondState mixed_mode_break(const ModeComponents& c) {
+  return c.opening >= c.sliding ? BondState::kBrokenTension : BondState::kBrokenShear;
+}
+
+/// The mode mix B = G_II / (G_I + G_II) = r y^2 / (x^2 + r y^2) (0 for an unloaded bond).
+inline double mode_mix(const ModeComponents& c, const BondStrength& strength) {
+  const double sliding = strength.peak_energy_ratio * c.sliding * c.sliding;
+  const double total = c.opening * c.opening + sliding;
+  return total > 0 ? sliding / total : 0.0;
+}
+
+/// The Benzeggagh-Kenane fracture energy relative to GIc: G_c(B) / GIc = 1 + (g - 1) B^eta.
+inline double bk_fracture_energy_ratio(double mix, const BondStrength& strength) {
+  return 1.0 + (strength.fracture_energy_ratio - 1.0) * std::pow(mix, strength.mixed_mode_exponent);
+}
+
+/// kappa_u(B) = kappa_I (1 + (g - 1) B^eta) (1 - B + B / r), at least 1 (see the file comment).
+inline double mixed_mode_ductility(double mix, const BondStrength& strength) {
+  return std::max(1.0, strength.ductility * bk_fracture_energy_ratio(mix, strength) *
+                           (1.0 - mix + mix / strength.peak_energy_ratio));
+}
+
+/// The ductility a bond softens with at stresses `s`: Bonds::ductility for PFC's law, kappa_u(B)
+/// of the mix at `s` for the mixed-mode law.
+inline double softening_ductility(const BondStresses& s, const BondStrength& strength) {
+  if (!strength.mixed_mode()) return strength.ductility;
+  return mixed_mode_ductility(mode_mix(mode_components(s, strength), strength), strength);
+}
+
+/// U of stresses `s` against `strength`: PFC's law (tension first at U >= 1, as PFC tests it), or
+/// for a mixed-mode bond the quadratic criterion U = sqrt(x^2 + y^2) (tension where x >= y).
 inline BondUtilisation utilisation(const BondStresses& s, const BondStrength& strength) {
+  if (strength.mixed_mode()) {
+    const ModeComponents c = mode_components(s, strength);
+    BondUtilisation u;
+    u.ratio = quadratic_utilisation(c);
+    if (u.ratio >= 1) u.mode = mixed_mode_break(c);
+    return u;
+  }
   const double tension = s.normal / strength.tensile;
   const double capacity = shear_capacity(strength, s.axial);
   const double shear = capacity > 0 ? s.shear / capacity
@@ -153,10 +243,19 @@ struct CriticalLoad {
 
 /// The smallest load factor lambda > 0 at which stresses lambda `unit` reach
 /// U = kappa against `strength` (tension: lambda sigma = kappa sigma_c; shear:
-/// lambda tau = kappa (c - lambda sigma_axial tan(phi))).
+/// lambda tau = kappa (c - lambda sigma_axial tan(phi)); mixed-mode law: lambda U = kappa).
 inline CriticalLoad critical_load(const BondStresses& unit, const BondStrength& strength,
                                   double kappa = 1.0) {
   CriticalLoad c;
+  if (strength.mixed_mode()) {
+    const ModeComponents m = mode_components(unit, strength);
+    const double u = quadratic_utilisation(m);  // linear in the load factor
+    if (u > 0) {
+      c.factor = kappa / u;
+      c.mode = mixed_mode_break(m);
+    }
+    return c;
+  }
   if (unit.normal > 0) {
     c.factor = kappa * strength.tensile / unit.normal;
     c.mode = BondState::kBrokenTension;
@@ -180,7 +279,26 @@ inline BondStrength bond_strength(const Bonds& bonds, int b) {
   s.cohesion = bonds.cohesion(b);
   s.friction = bonds.friction_coefficient(b);
   s.ductility = bonds.ductility(b);
+  s.mixed_mode_exponent = bonds.mixed_mode_exponent(b);
+  s.fracture_energy_ratio = bonds.fracture_energy_ratio(b);
+  s.peak_energy_ratio = bonds.peak_energy_ratio(b);
   return s;
+}
+
+/// Whether a bond of `strength` may soften (ductility > 1 under some mix): PFC's law at
+/// ductility > 1; every mixed-mode bond but a brittle one (kappa_I = g = r = 1).
+inline bool may_soften(const BondStrength& strength) {
+  return strength.ductility > 1 || (strength.mixed_mode() && (strength.fracture_energy_ratio != 1 ||
+                                                              strength.peak_energy_ratio != 1));
+}
+
+/// The softening history (largest utilisation so far, kappa) that a bond of `damage` starts from
+/// when a kernel is built on it: 1 for an intact bond; PFC's law: softening_ratio(damage,
+/// ductility); mixed-mode law: 1, since its kappa_u depends on the mix the damage was taken at
+/// (the damage never falls, so a lower kappa only makes the law look again).
+inline double softening_history(double damage, const BondStrength& strength) {
+  if (!(damage > 0) || strength.mixed_mode()) return 1.0;
+  return softening_ratio(damage, strength.ductility);
 }
 
 /// One broken (or, for softening, fully softened) bond, as solvers log it.

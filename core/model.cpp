@@ -104,6 +104,25 @@ void check_bond_strength(const Bonds& b, int k) {
   if (!(std::isfinite(b.ductility(k)) && b.ductility(k) >= 1))
     throw Error(fmt::format("bond {} has a ductility of {} (kappa_u >= 1; 1 = brittle)", k,
                             b.ductility(k)));
+  const double eta = b.mixed_mode_exponent(k);
+  if (!(std::isfinite(eta) && eta >= 0))
+    throw Error(fmt::format(
+        "bond {} has a mixed-mode exponent of {} (must be finite and >= 0; 0 = PFC's law)", k,
+        eta));
+  if (eta > 0) {
+    for (const auto& [name, value] :
+         {std::pair{"fracture energy ratio GIIc/GIc", b.fracture_energy_ratio(k)},
+          std::pair{"peak energy ratio", b.peak_energy_ratio(k)}}) {
+      if (!(std::isfinite(value) && value > 0))
+        throw Error(fmt::format("mixed-mode bond {} has a {} of {} (must be finite and > 0)", k,
+                                name, value));
+    }
+    if (b.friction_coefficient(k) != 0)
+      throw Error(fmt::format(
+          "mixed-mode bond {} has a friction coefficient of {}: the quadratic criterion has no "
+          "friction term (it must be 0)",
+          k, b.friction_coefficient(k)));
+  }
   if (!(b.damage(k) >= 0 && b.damage(k) <= 1))
     throw Error(fmt::format("bond {} has a damage of {} (must lie in [0, 1])", k, b.damage(k)));
   if (!(b.state(k) >= 0 && b.state(k) <= static_cast<int>(BondState::kBrokenShear)))

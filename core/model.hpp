@@ -153,8 +153,16 @@ struct Bonds {
   Eigen::ArrayXd cohesion;              ///< c, the shear strength at zero normal stress [Pa]
   Eigen::ArrayXd friction_coefficient;  ///< tan(phi) of the shear strength c - sigma tan(phi)
   /// Linear softening: the ratio of the separation at which the bond carries nothing to that at
-  /// its peak (kappa_u >= 1); 1 = brittle.
+  /// its peak (kappa_u >= 1); 1 = brittle. For a mixed-mode bond, kappa_u in pure mode I.
   Eigen::ArrayXd ductility;
+  /// The mixed-mode law of core/bond_failure.hpp (interface bonds): the Benzeggagh-Kenane exponent
+  /// eta > 0; 0 = PFC's law (tension, then shear), as every in-ply bond has.
+  Eigen::ArrayXd mixed_mode_exponent;
+  /// Mixed-mode law: GIIc / GIc of the bond's interface (> 0).
+  Eigen::ArrayXd fracture_energy_ratio;
+  /// Mixed-mode law: r = E_II / E_I, the elastic energy the intact bond holds at onset in pure
+  /// mode II over that in pure mode I: (c^2 / k_s) / (sigma_c^2 / k_n) (> 0).
+  Eigen::ArrayXd peak_energy_ratio;
   /// 0 intact .. 1 broken: the stiffnesses above are (1 - damage) times the intact ones.
   Eigen::ArrayXd damage;
   Eigen::ArrayXi state;  ///< BondState as int
@@ -181,6 +189,9 @@ struct Bonds {
     f(FieldInfo{"cohesion", false, kUnbreakable}, &Bonds::cohesion);
     f(FieldInfo{"friction_coefficient"}, &Bonds::friction_coefficient);
     f(FieldInfo{"ductility", false, 1.0}, &Bonds::ductility);
+    f(FieldInfo{"mixed_mode_exponent"}, &Bonds::mixed_mode_exponent);
+    f(FieldInfo{"fracture_energy_ratio", false, 1.0}, &Bonds::fracture_energy_ratio);
+    f(FieldInfo{"peak_energy_ratio", false, 1.0}, &Bonds::peak_energy_ratio);
     f(FieldInfo{"damage"}, &Bonds::damage);
     f(FieldInfo{"state"}, &Bonds::state);
   }

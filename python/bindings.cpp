@@ -145,7 +145,9 @@ bool writable_particle_field(const std::string& name) {
 bool writable_bond_field(const std::string& name) {
   return name == "normal_stiffness" || name == "shear_stiffness" || name == "bending_stiffness" ||
          name == "twisting_stiffness" || name == "strength_radius" || name == "tensile_strength" ||
-         name == "cohesion" || name == "friction_coefficient" || name == "ductility";
+         name == "cohesion" || name == "friction_coefficient" || name == "ductility" ||
+         name == "mixed_mode_exponent" || name == "fracture_energy_ratio" ||
+         name == "peak_energy_ratio";
 }
 
 template <class Rows, class Class>
@@ -1188,7 +1190,13 @@ void plydem::python::define_module(py::module_& m) {
       .def_property(
           "interface_GIIc", [](const StrengthSettings& s) { return s.interface_strength.GIIc; },
           [](StrengthSettings& s, double v) { s.interface_strength.GIIc = v; },
-          "mode II fracture energy of the interface [J/m^2] (softening bonds)")
+          "mode II fracture energy of the interface [J/m^2] (softening bonds; 0 = GIc)")
+      .def_property(
+          "interface_bk_exponent",
+          [](const StrengthSettings& s) { return s.interface_strength.bk_exponent; },
+          [](StrengthSettings& s, double v) { s.interface_strength.bk_exponent = v; },
+          "Benzeggagh-Kenane exponent eta of the interface's mixed-mode fracture energy "
+          "GIc + (GIIc - GIc) B^eta (softening bonds)")
       .def_property(
           "method", [](const StrengthSettings& s) { return strength_method_name(s.method); },
           [](StrengthSettings& s, const std::string& v) { s.method = parse_strength_method(v); },

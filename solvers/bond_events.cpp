@@ -515,10 +515,13 @@ struct UnitState {
   DofArray force;              // the bonds' generalized forces on each particle (force, torque)
   std::vector<double> factor;  // critical load factor of each bond (+inf: none)
   std::vector<BondState> mode;
+  std::vector<double> ductility;  // kappa_u of each bond at this mix (softening_ductility)
 };
 
-bool softening(const Bonds& bonds, int b) {
-  return bonds.ductility(b) > 1;
+// Whether a bond of `ductility` (its kappa_u at the unit solution's mix: softening_ductility)
+// softens.
+bool softening(double ductility) {
+  return ductility > 1;
 }
 
 // Whether a softening bond's current tooth is its last (its next would be below the floor).
@@ -526,11 +529,12 @@ bool last_tooth(const Bonds& bonds, int b, const EventSettings& settings) {
   return (1.0 - bonds.damage(b)) * settings.tooth_stiffness_ratio < settings.last_tooth_stiffness;
 }
 
-// The utilisation at which bond b fails next (see the file comment of bond_events.hpp).
-double failure_kappa(const Bonds& bonds, int b, const EventSettings& settings) {
-  if (!softening(bonds, b) || bonds.damage(b) == 0) return 1.0;
-  if (last_tooth(bonds, b, settings)) return bonds.ductility(b);
-  return softening_ratio(bonds.damage(b), bonds.ductility(b));
+// The utilisation at which bond b, of kappa_u `ductility`, fails next (see the file comment of
+// bond_events.hpp).
+double failure_kappa(const Bonds& bonds, int b, double ductility, const EventSettings& settings) {
+  if (!softening(ductility) || bonds.damage(b) == 0) return 1.0;
+  if (last_tooth(bonds, b, settings)) return ductility;
+  return softening_ratio(bonds.damage(b), ductility);
 }
 
 void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reaction_dofs,
@@ -541,6 +545,7 @@ void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reac
   s.force = DofArray::Zero(n, kDofsPerParticle);
   s.factor.assign(m, std::numeric_limits<double>::infinity());
   s.mode.assign(m, BondState::kIntact);
+  s.ductility.assign(m, 1.0);
   for (int b = 0; b < m; ++b) {
     if (bonds.is_broken(b)) continue;
     const int i = bonds.first(b), j = bonds.second(b);
@@ -558,11 +563,16 @@ void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reac
     if (!std::isfinite(bonds.tensile_strength(b)) && !std::isfinite(bonds.cohesion(b))) continue;
     const BondStresses stresses = intact_stresses(
         bond_stresses(params, bonds.strength_radius(b), ui, ti, uj, tj), bonds.damage(b));
+    const BondStrength strength = bond_strength(bonds, b);
+    // kappa_u: Bonds::ductility, or for a mixed-mode bond that of the unit solution's mix, which
+    // every load factor of this equilibrium shares.
+    const double ductility = softening_ductility(stresses, strength);
     const CriticalLoad critical =
-        critical_load(stresses, bond_strength(bonds, b), failure_kappa(bonds, b, settings));
+        critical_load(stresses, strength, failure_kappa(bonds, b, ductility, settings));
     if (critical.factor > 0) {
       s.factor[b] = critical.factor;
       s.mode[b] = critical.mode;
+      s.ductility[b] = ductility;
     }
   }
   // The support's reaction is K u on its dof: minus the bonds' generalized force there.
@@ -747,7 +757,7 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
       v[5] = bonds.state(b);
     };
     fields(change.before);
-    const bool breaks = !softening(bonds, b) || last_tooth(bonds, b, settings);
+    const bool breaks = !softening(state.ductility[b]) || last_tooth(bonds, b, settings);
     const double keep = breaks ? 0.0 : r;
     BondParameters removed = before;
     removed.normal_stiffness *= 1 - keep;

@@ -389,8 +389,9 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     intact_[3](b) = scale * bonds.twisting_stiffness(b);
     damaged |= bonds.damage(b) > 0;
     const bool breakable = std::isfinite(bonds.tensile_strength(b)) || std::isfinite(bonds.cohesion(b));
-    softening |= breakable && bonds.ductility(b) > 1;
-    if (bonds.damage(b) > 0) kappa_(b) = softening_ratio(bonds.damage(b), bonds.ductility(b));
+    const BondStrength strength = bond_strength(bonds, b);
+    softening |= breakable && may_soften(strength);
+    kappa_(b) = softening_history(bonds.damage(b), strength);
   }
   breaking_ = bonds.breakable() || broken || settings.energy_account;
   softening_ = breaking_ && (softening || damaged);

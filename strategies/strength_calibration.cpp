@@ -591,6 +591,14 @@ void InterfaceStrength::validate() const {
                       normal, shear));
   require(given() || (GIc == 0 && GIIc == 0),
           "the interface fracture energies GIc, GIIc need interface strengths (normal and shear)");
+  require(GIIc == 0 || GIc > 0,
+          fmt::format("the interface GIIc ({} J/m^2) needs GIc (interface.GIc): the mixed-mode "
+                      "law scales the fracture energy from GIc",
+                      GIIc));
+  require(std::isfinite(bk_exponent) && bk_exponent > 0,
+          fmt::format("the interface's Benzeggagh-Kenane exponent (interface.bk_exponent) must be "
+                      "finite and > 0, got {}",
+                      bk_exponent));
 }
 
 void StrengthOptions::validate() const {
@@ -643,20 +651,23 @@ void set_interface_bond_strength(Bonds& bonds, int b, double area,
   bonds.tensile_strength(b) = interface.normal > 0 ? interface.normal * area / section : kInf;
   bonds.cohesion(b) = interface.shear > 0 ? interface.shear * area / section : kInf;
   bonds.friction_coefficient(b) = 0;
-  // kappa_u = G area / E_peak with E_peak = (strength area)^2 / (2 k) in pure mode I (k_n) or
-  // II (k_s); one ductility per bond: the smaller of the two given.
-  double ductility = kInf;
-  if (interface.GIc > 0 && interface.normal > 0 && bonds.normal_stiffness(b) > 0) {
-    const double force = interface.normal * area;
-    ductility = std::min(ductility,
-                         interface.GIc * area / (0.5 * force * force / bonds.normal_stiffness(b)));
+  bonds.mixed_mode_exponent(b) = interface.bk_exponent;
+  // kappa_I = GIc area / E_I, E_I = (normal area)^2 / (2 k_n) the energy at onset in pure mode I;
+  // E_II = (shear area)^2 / (2 k_s) in pure mode II. Brittle (kappa_I = g = r = 1) without GIc.
+  bonds.ductility(b) = 1;
+  bonds.fracture_energy_ratio(b) = 1;
+  bonds.peak_energy_ratio(b) = 1;
+  const double k_n = bonds.normal_stiffness(b), k_s = bonds.shear_stiffness(b);
+  if (interface.GIc > 0 && interface.normal > 0 && k_n > 0) {
+    const double normal_force = interface.normal * area;
+    const double mode_I_energy = 0.5 * normal_force * normal_force / k_n;
+    bonds.ductility(b) = bond_ductility(interface.GIc, area, mode_I_energy);
+    bonds.fracture_energy_ratio(b) = interface.mode_II_energy() / interface.GIc;
+    if (interface.shear > 0 && k_s > 0) {
+      const double shear_force = interface.shear * area;
+      bonds.peak_energy_ratio(b) = 0.5 * shear_force * shear_force / k_s / mode_I_energy;
+    }
   }
-  if (interface.GIIc > 0 && interface.shear > 0 && bonds.shear_stiffness(b) > 0) {
-    const double force = interface.shear * area;
-    ductility = std::min(ductility,
-                         interface.GIIc * area / (0.5 * force * force / bonds.shear_stiffness(b)));
-  }
-  bonds.ductility(b) = ductility < kInf ? std::max(1.0, ductility) : 1.0;
 }
 
 namespace {

@@ -54,14 +54,26 @@
 namespace plydem {
 
 /// Strengths and fracture energies of a laminate's interface bonds (0 = not given: the interface
-/// does not break).
+/// does not break). Interface bonds fail by the mixed-mode law of core/bond_failure.hpp: onset
+/// where (<t_n> / normal)^2 + (t_s / shear)^2 = 1, then linear softening that dissipates the
+/// Benzeggagh-Kenane energy G_c(B) = GIc + (GIIc - GIc) B^bk_exponent at the mode mix B.
 struct InterfaceStrength {
   double normal = 0;  ///< tensile strength across the interface [Pa]
   double shear = 0;   ///< shear strength (cohesion) [Pa]
-  double GIc = 0;     ///< mode I fracture energy [J/m^2]
-  double GIIc = 0;    ///< mode II fracture energy [J/m^2]
+  double GIc = 0;     ///< mode I fracture energy [J/m^2]; 0 = brittle (no softening)
+  /// Mode II fracture energy [J/m^2]; 0 with GIc given = GIc (a mode-independent G_c). Given
+  /// without GIc is refused: the law scales from GIc.
+  double GIIc = 0;
+  /// The Benzeggagh-Kenane exponent eta (> 0). Default 2.284: the value Camanho, Davila & de Moura
+  /// (J. Compos. Mater. 37 (2003) 1415) fitted to Reeder's mixed-mode bending tests of AS4/PEEK,
+  /// the one most cohesive-zone studies use when the interface's own is not measured; it is not a
+  /// measurement of E-glass/MY750 (measure it by mixed-mode bending, ASTM D6671).
+  double bk_exponent = 2.284;
   bool given() const { return normal > 0 || shear > 0; }
-  /// Throws plydem::Error naming a negative or non-finite entry, or only one of the two strengths.
+  /// GIIc, or GIc where GIIc is not given (0).
+  double mode_II_energy() const { return GIIc > 0 ? GIIc : GIc; }
+  /// Throws plydem::Error naming a negative or non-finite entry, only one of the two strengths,
+  /// GIIc without GIc, or a bk_exponent that is not finite and > 0.
   void validate() const;
 };
 
@@ -139,12 +151,14 @@ StrengthCalibration calibrate_strengths(const Strategy& strategy, const Calibrat
                                         double thickness, const StrengthOptions& options = {});
 
 /// The strength fields of interface bond `b` (BondKind::kInterface, its strength_radius set) that
-/// stands for `area` [m^2] of interface: it breaks when F_n / area reaches interface.normal or
-/// |F_s| / area reaches interface.shear (section strengths normal area / (pi R^2) and shear
-/// area / (pi R^2); a strength not given (0) is +inf), no friction, and ductility G area / E_peak
-/// from GIc (pure mode I, E_peak = (normal area)^2 / (2 k_n)) and GIIc (mode II, with k_s), the
-/// smaller of those given (1, brittle, if neither). Throws plydem::Error for a bond that is not an
-/// interface bond, a non-positive area or radius.
+/// stands for `area` [m^2] of interface, for the mixed-mode law (core/bond_failure.hpp): section
+/// strengths normal area / (pi R^2) and shear area / (pi R^2) (a strength not given (0) is +inf),
+/// so that U = sqrt((<F_n> / (normal area))^2 + (|F_s| / (shear area))^2); no friction;
+/// mixed_mode_exponent = bk_exponent; ductility kappa_I = GIc area / E_I with E_I =
+/// (normal area)^2 / (2 k_n), the energy at onset in pure mode I (at least 1); fracture energy
+/// ratio mode_II_energy() / GIc; peak energy ratio E_II / E_I with E_II = (shear area)^2 / (2 k_s).
+/// Without GIc the bond is brittle (kappa_I = ratios = 1). Throws plydem::Error for a bond that is
+/// not an interface bond, a non-positive area or radius.
 void set_interface_bond_strength(Bonds& bonds, int b, double area,
                                  const InterfaceStrength& interface);
 
@@ -164,8 +178,8 @@ void set_interface_bond_strength(Bonds& bonds, int b, double area,
 ///  - Interface bonds: a bond of interface area a (its particles' areas split over their interface
 ///    bonds, as strategies/laminate.hpp gives it k_n = K_n a) breaks when F_n / a reaches `normal`
 ///    or |F_s| / a reaches `shear`: section strengths normal a / (pi R^2), shear a / (pi R^2), no
-///    friction; no scatter; ductility G a / E_peak from GIc (pure mode I, E_peak = (normal a)^2 /
-///    (2 k_n)) and GIIc (mode II, with k_s), the smaller of those given.
+///    friction; no scatter; the mixed-mode law with GIc, GIIc and bk_exponent
+///    (set_interface_bond_strength).
 ///  - `scattered_plies`: the plies whose bonds get the scatter (index = ply; empty = every ply);
 ///    the others keep their calibrated strengths (every row still draws).
 ///  - `per_crack_site`: the scatter is drawn per crack site instead of per bond: a ply's flaws

@@ -55,8 +55,9 @@ void write_bytes(const fs::path& file, const std::string& bytes) {
 
 // Strengths that the pull reaches after about `cycles` cycles (the largest bond stress of an
 // elastic run grows linearly with the grips' travel).
+// `mixed`: every bond gets the mixed-mode law of interface bonds (core/bond_failure.hpp) instead.
 void set_strengths(Model& m, const ExplicitSettings& settings, double speed, double cycles,
-                   double ductility) {
+                   double ductility, bool mixed = false) {
   Model elastic = m;
   ExplicitSettings s = settings;
   s.kernel = ExplicitKernel::kReference;
@@ -79,8 +80,13 @@ void set_strengths(Model& m, const ExplicitSettings& settings, double speed, dou
     m.bonds.strength_radius(k) = m.particles.radius(m.bonds.first(k));
     m.bonds.tensile_strength(k) = cycles * rate;
     m.bonds.cohesion(k) = 1.7 * cycles * rate;
-    m.bonds.friction_coefficient(k) = 0.3;
+    m.bonds.friction_coefficient(k) = mixed ? 0.0 : 0.3;
     m.bonds.ductility(k) = ductility;
+    if (mixed) {
+      m.bonds.mixed_mode_exponent(k) = 2.284;
+      m.bonds.fracture_energy_ratio(k) = 2.5;
+      m.bonds.peak_energy_ratio(k) = 3.0;
+    }
   }
 }
 
@@ -190,7 +196,7 @@ namespace {
 // and restarted at 3000, for each ductility, kernel and way of saving given.
 void check_explicit_restart(const std::vector<double>& ductilities,
                             const std::vector<ExplicitKernel>& kernels,
-                            const std::vector<bool>& from_hooks) {
+                            const std::vector<bool>& from_hooks, bool mixed = false) {
   const Model built = small_coupon();
   ExplicitSettings settings;
   settings.time_step = 0.8 * critical_time_step(built);
@@ -199,7 +205,7 @@ void check_explicit_restart(const std::vector<double>& ductilities,
   TempFile file("explicit");
   for (const double ductility : ductilities) {
     Model initial = built;
-    set_strengths(initial, settings, speed, 2000.37, ductility);
+    set_strengths(initial, settings, speed, 2000.37, ductility, mixed);
     for (const ExplicitKernel kernel : kernels) {
       for (const bool from_hook : from_hooks) {
         CAPTURE(ductility);
@@ -240,6 +246,12 @@ TEST_CASE("every kernel: explicit runs with breaking bonds restarted are bitwise
   // Brittle and softening, fused and reference kernels, saved between runs and from a hook.
   check_explicit_restart({1.0, 4.0}, {ExplicitKernel::kFused, ExplicitKernel::kReference},
                          {false, true});
+}
+
+TEST_CASE("explicit runs with mixed-mode bonds restarted are bitwise the same") {
+  // The interface bonds' law (its fields travel in the checkpoint's bonds), both kernels.
+  check_explicit_restart({4.0}, {ExplicitKernel::kFused, ExplicitKernel::kReference}, {false},
+                         true);
 }
 
 TEST_CASE("an explicit checkpoint of another model or other settings is refused") {

@@ -205,6 +205,9 @@ TEST_CASE("the DCB refuses what its side view cannot represent, naming it") {
   s.interface_strength.normal = 0;
   refuses(s, "interface.strength_normal");
   s = four_row_beam();
+  s.interface_strength.bk_exponent = 0;
+  refuses(s, "interface.bk_exponent");
+  s = four_row_beam();
   s.width = std::nan("");
   refuses(s, "the width must be positive and finite");
   s = four_row_beam();
@@ -260,5 +263,14 @@ TEST_CASE("a DCB config with a misspelt key fails before anything runs") {
                                      "[interface]\nstrength_normal = 40e6\nGIc = 250\n";
   options.config = dir / "odd.toml";
   CHECK_THROWS_WITH_AS(run_experiment(options), doctest::Contains("odd.toml: dcb: the layup has 7"),
+                       Error);
+  // interface.bk_exponent is read (not refused as unknown) and checked.
+  std::ofstream(dir / "eta.toml") << "experiment = \"dcb\"\n"
+                                     "[interface]\nstrength_normal = 40e6\nGIc = 250\n"
+                                     "bk_exponent = -1\n";
+  options.config = dir / "eta.toml";
+  CHECK_THROWS_WITH_AS(run_experiment(options),
+                       doctest::Contains("Benzeggagh-Kenane exponent (interface.bk_exponent) must "
+                                         "be finite and > 0, got -1"),
                        Error);
 }

@@ -112,6 +112,7 @@ struct StrengthCommandOptions : CouponOptions {
   CLI::Option* seed_option = nullptr;
   double interface_strength_normal = 0, interface_strength_shear = 0;
   double interface_GIc = 0, interface_GIIc = 0;
+  double interface_bk_exponent = plydem::InterfaceStrength{}.bk_exponent;
   double friction = 0;
   bool softening = false;
   std::string edge_strengths = "bulk";
@@ -239,12 +240,14 @@ void refuse_inapplicable(const CLI::App& app, const StrengthCommandOptions& o) {
   if (o.layup.empty()) {
     refuse_given(app,
                  {"--interface-strength-normal", "--interface-strength-shear", "--interface-GIc",
-                  "--interface-GIIc"},
+                  "--interface-GIIc", "--interface-bk-exponent"},
                  "interface strengths and fracture energies need a laminate (--layup): one ply has "
                  "no interface");
   }
   if (!o.softening) {
-    refuse_given(app, {"--tooth-stiffness-ratio", "--interface-GIc", "--interface-GIIc"},
+    refuse_given(app,
+                 {"--tooth-stiffness-ratio", "--interface-GIc", "--interface-GIIc",
+                  "--interface-bk-exponent"},
                  "it is a setting of softening bonds, and the bonds are brittle (add --softening)");
   }
   if (o.grips != "uniform") {
@@ -313,7 +316,11 @@ void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
                  "mode I fracture energy of the interface [J/m^2] (softening bonds)")
       ->capture_default_str();
   app.add_option("--interface-GIIc", o.interface_GIIc,
-                 "mode II fracture energy of the interface [J/m^2] (softening bonds)")
+                 "mode II fracture energy of the interface [J/m^2] (softening bonds; 0 = GIc)")
+      ->capture_default_str();
+  app.add_option("--interface-bk-exponent", o.interface_bk_exponent,
+                 "Benzeggagh-Kenane exponent eta of the interface's mixed-mode fracture energy "
+                 "GIc + (GIIc - GIc) B^eta (softening bonds)")
       ->capture_default_str();
   app.add_option("--friction", o.friction,
                  "friction coefficient tan(phi) of the bonds' shear strength c - sigma tan(phi)")
@@ -412,6 +419,7 @@ plydem::StrengthSettings to_settings(const StrengthCommandOptions& o) {
   s.interface_strength.shear = o.interface_strength_shear;
   s.interface_strength.GIc = o.interface_GIc;
   s.interface_strength.GIIc = o.interface_GIIc;
+  s.interface_strength.bk_exponent = o.interface_bk_exponent;
   s.strength_options.friction_coefficient = o.friction;
   s.strength_options.softening = o.softening;
   s.events.max_events = o.max_events;

@@ -156,8 +156,11 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   if (!r.layup.empty()) {
     j["layup"] = format_layup(r.layup);
     const InterfaceStrength& is = s.interface_strength;
-    j["interface_strength"] = {
-        {"normal", is.normal}, {"shear", is.shear}, {"GIc", is.GIc}, {"GIIc", is.GIIc}};
+    j["interface_strength"] = {{"normal", is.normal},
+                               {"shear", is.shear},
+                               {"GIc", is.GIc},
+                               {"GIIc", is.GIIc},
+                               {"bk_exponent", is.bk_exponent}};
   }
   j["method"] = strength_method_name(r.method);
   j["grips"] = strength_grips_name(s.grips);

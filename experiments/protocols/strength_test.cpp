@@ -227,6 +227,7 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
   h.add("interface_strength.shear", exact(s.interface_strength.shear));
   h.add("interface_strength.GIc", exact(s.interface_strength.GIc));
   h.add("interface_strength.GIIc", exact(s.interface_strength.GIIc));
+  h.add("interface_strength.bk_exponent", exact(s.interface_strength.bk_exponent));
   h.add("weibull_modulus", exact(s.effective_weibull_modulus()));
   if (!s.scatter_plies.empty()) {
     std::string plies;

@@ -7,7 +7,8 @@
 //   [laminate]  layup = "[0_16]", ply_thickness_mm
 //   [coupon]    length_mm, width_mm, crack_mm, diameter_mm, max_crack_mm
 //   [quick]     layup, ply_thickness_mm, length_mm, crack_mm, diameter_mm, max_crack_mm
-//   [interface] strength_normal, strength_shear (Pa), GIc, GIIc (J/m^2), normal, shear (N/m^3)
+//   [interface] strength_normal, strength_shear (Pa), GIc, GIIc (J/m^2), bk_exponent, normal,
+//   shear (N/m^3)
 //   [events]    max_events, tooth_stiffness_ratio, max_update_rank
 //   [output]    vtu_series
 //
@@ -67,6 +68,7 @@ class DcbExperiment : public Experiment {
                           "interface.strength_shear",
                           "interface.GIc",
                           "interface.GIIc",
+                          "interface.bk_exponent",
                           "events.max_events",
                           "events.tooth_stiffness_ratio",
                           "events.max_update_rank",
@@ -98,6 +100,8 @@ class DcbExperiment : public Experiment {
     s.interface_strength.shear = c.number("interface.strength_shear", 0);
     s.interface_strength.GIc = c.number("interface.GIc", 0);
     s.interface_strength.GIIc = c.number("interface.GIIc", 0);
+    s.interface_strength.bk_exponent =
+        c.number("interface.bk_exponent", s.interface_strength.bk_exponent);
     s.events.max_events = c.integer("events.max_events", s.events.max_events);
     s.events.tooth_stiffness_ratio =
         c.number("events.tooth_stiffness_ratio", s.events.tooth_stiffness_ratio);

@@ -205,6 +205,7 @@ class StrengthExperiment : public Experiment {
                           "interface.strength_shear",
                           "interface.GIc",
                           "interface.GIIc",
+                          "interface.bk_exponent",
                           "events.max_events",
                           "events.stop_fraction",
                           "events.tooth_stiffness_ratio",
@@ -229,6 +230,8 @@ class StrengthExperiment : public Experiment {
     base.interface_strength.shear = c.number("interface.strength_shear", 0);
     base.interface_strength.GIc = c.number("interface.GIc", 0);
     base.interface_strength.GIIc = c.number("interface.GIIc", 0);
+    base.interface_strength.bk_exponent =
+        c.number("interface.bk_exponent", base.interface_strength.bk_exponent);
     base.method = parse_strength_method(c.string("method", "events"));
     if (c.contains("weibull_modulus")) base.weibull_modulus = c.number("weibull_modulus", 0);
     base.seed = static_cast<std::uint64_t>(c.integer("seed", 1));
@@ -259,12 +262,14 @@ class StrengthExperiment : public Experiment {
       }
     };
     if (base.layup.empty()) {
-      refuse_given({"interface.normal", "interface.shear", "interface.strength_normal",
-                    "interface.strength_shear", "interface.GIc", "interface.GIIc"},
-                   "interfaces join the plies of a laminate, and one ply has none (set layup)");
+      refuse_given(
+          {"interface.normal", "interface.shear", "interface.strength_normal",
+           "interface.strength_shear", "interface.GIc", "interface.GIIc", "interface.bk_exponent"},
+          "interfaces join the plies of a laminate, and one ply has none (set layup)");
     }
     if (!base.strength_options.softening) {
-      refuse_given({"events.tooth_stiffness_ratio", "interface.GIc", "interface.GIIc"},
+      refuse_given({"events.tooth_stiffness_ratio", "interface.GIc", "interface.GIIc",
+                    "interface.bk_exponent"},
                    "it is a setting of softening bonds, and the bonds are brittle (softening = "
                    "true)");
     }

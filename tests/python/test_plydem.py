@@ -251,3 +251,15 @@ def test_docstrings_on_everything():
                 if (not attr.startswith("_") or attr == "__init__") and not described(attr, member.__doc__):
                     missing.append(f"{name}.{attr}")
     assert not missing
+
+
+def test_interface_mixed_mode_settings_and_bond_fields():
+    settings = plydem.StrengthSettings(interface_GIc=300.0, interface_bk_exponent=1.5)
+    assert settings.interface_bk_exponent == 1.5
+    assert plydem.StrengthSettings().interface_bk_exponent == pytest.approx(2.284)
+    model = plydem.build_laminate(plydem.create_strategy("hex2d"), plydem.CouponSpec(length=1e-3, width=0.3e-3),
+                                  "[0/90]")
+    # In-ply and unassigned interface bonds keep PFC's law (exponent 0); the law's fields are writable.
+    assert (model.bonds.mixed_mode_exponent == 0).all()
+    assert (model.bonds.fracture_energy_ratio == 1).all() and (model.bonds.peak_energy_ratio == 1).all()
+    model.bonds.mixed_mode_exponent[0] = 2.0
