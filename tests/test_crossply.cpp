@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <vector>
 
 #include "core/error.hpp"
 #include "core/material.hpp"
@@ -66,6 +67,28 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
   CHECK(report.find("## Summary") != std::string::npos);
   CHECK(report.find("| [0/90]s |") != std::string::npos);
   CHECK(fs::exists(dir / "crossply__0_90_s_cracks.csv"));
+  // Crack planes against strain: the header, and densities that never fall.
+  const std::string planes = read(dir / "crossply__0_90_s_crack_planes.csv");
+  CHECK(planes.rfind("event,strain,stress_MPa,crack_planes_per_mm,traction_free_per_mm,E_over_E0\n",
+                     0) == 0);
+  {
+    std::istringstream lines(planes);
+    std::string line;
+    std::getline(lines, line);
+    double previous = 0;
+    int rows = 0;
+    while (std::getline(lines, line)) {
+      std::vector<double> v;
+      std::istringstream fields(line);
+      for (std::string f; std::getline(fields, f, ',');) v.push_back(std::stod(f));
+      REQUIRE(v.size() == 6);
+      CHECK(v[3] >= previous);
+      CHECK(v[4] <= v[3]);
+      previous = v[3];
+      ++rows;
+    }
+    CHECK(rows > 10);
+  }
   // CalculiX of the same laminate with the peak's transverse cracks cut in: softer than intact,
   // stiffer than the ply-discount limit (the cracks are a finite number, not every section).
   REQUIRE(rows.count("[0/90]s|stiffness ratio at peak between grips|dem square") == 1);

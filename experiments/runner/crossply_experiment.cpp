@@ -27,6 +27,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 
 #include "core/error.hpp"
@@ -306,6 +307,8 @@ class CrossplyExperiment : public Experiment {
       std::size_t next = 0;
       double last_density = 0, last_ratio = 1;
       std::size_t last_event = 0;
+      std::string planes_csv =
+          "event,strain,stress_MPa,crack_planes_per_mm,traction_free_per_mm,E_over_E0\n";
       for (std::size_t j = 1; j <= kStiffnessSamples; ++j) {
         const std::size_t e = std::max<std::size_t>(1, events * j / kStiffnessSamples);
         if (e == last_event) continue;
@@ -317,6 +320,11 @@ class CrossplyExperiment : public Experiment {
         const double density = ninety_density(
             ninety_planes(model, so_far, ninety, x_begin, x_end, s.coupon.width), x_begin, x_end);
         const double ratio = r.stress[e] / r.strain[e] / e0;
+        const double free_density = ninety_density(
+            ninety_planes(model, so_far, ninety, x_begin, x_end, s.coupon.width, true), x_begin,
+            x_end);
+        planes_csv += fmt::format("{},{:.8g},{:.6g},{:.6g},{:.6g},{:.6g}\n", e, r.strain[e],
+                                  r.stress[e] * kMPa, density * kMm, free_density * kMm, ratio);
         dem.x.push_back(density * kMm);
         dem.y.push_back(ratio);
         // Up to the peak: after it the 0° plies break and the laminate is failing.
@@ -326,6 +334,14 @@ class CrossplyExperiment : public Experiment {
         }
       }
       curves.push_back(dem);
+      const fs::path planes_file = fs::path(stem + "_crack_planes.csv");
+      {
+        std::ofstream file(context.out_dir / planes_file, std::ios::binary);
+        file << planes_csv;
+        require(static_cast<bool>(file), fmt::format("crossply: could not write {}",
+                                                     (context.out_dir / planes_file).string()));
+      }
+      out.files.push_back(planes_file);
       Curve lag{fmt::format("shear lag {}", text), {}, {}, false};
       const double top = std::max(2.0 * last_density, 1.0 / (2.0 * t * (m + n)));
       for (int j = 0; j <= 60; ++j) {
