@@ -9,6 +9,7 @@
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <optional>
 
 #include "contacts/cell_list.hpp"
 #include "core/error.hpp"
@@ -150,17 +151,27 @@ std::vector<CrackPlane> transverse_crack_planes(const Model& model,
            y_max = -std::numeric_limits<double>::infinity(), diameter = 0;
     int bonds = 0;
   };
+  // The band an in-ply bond of the ply crosses; nullopt for other bonds and for bonds along the
+  // plane (their ends at the same x), which cross none.
+  auto band_of = [&](int b) -> std::optional<long> {
+    const int i = bonds.first(b), j = bonds.second(b);
+    if (bonds.is_interface(b) || p.ply(i) != ply || p.ply(j) != ply) return std::nullopt;
+    const double xi = p.reference_position(i, 0), xj = p.reference_position(j, 0);
+    const double d = p.radius(i) + p.radius(j);
+    if (std::abs(xi - xj) < 1e-6 * d) return std::nullopt;
+    return std::lround(2.0 * (0.5 * (xi + xj) - x0) / d);
+  };
   std::map<long, Band> bands;
   for (const BondBreak& br : breaks) {
     require(br.bond >= 0 && br.bond < bonds.size(),
             fmt::format("transverse crack planes: break of bond {} of {}", br.bond, bonds.size()));
-    const int b = br.bond, i = bonds.first(b), j = bonds.second(b);
-    if (bonds.is_interface(b) || p.ply(i) != ply || p.ply(j) != ply) continue;
-    const double xi = p.reference_position(i, 0), xj = p.reference_position(j, 0);
+    const int b = br.bond;
+    const std::optional<long> index = band_of(b);
+    if (!index) continue;
+    const int i = bonds.first(b), j = bonds.second(b);
+    const double mid = 0.5 * (p.reference_position(i, 0) + p.reference_position(j, 0));
     const double d = p.radius(i) + p.radius(j);
-    if (std::abs(xi - xj) < 1e-6 * d) continue;  // along the plane: crosses none
-    const double mid = 0.5 * (xi + xj);
-    Band& band = bands[std::lround(2.0 * (mid - x0) / d)];
+    Band& band = bands[*index];
     band.x_sum += mid;
     band.y_min = std::min(band.y_min, br.position.y());
     band.y_max = std::max(band.y_max, br.position.y());
@@ -168,14 +179,8 @@ std::vector<CrackPlane> transverse_crack_planes(const Model& model,
     ++band.bonds;
   }
   std::map<long, int> crossing;
-  for (int b = 0; b < bonds.size(); ++b) {
-    const int i = bonds.first(b), j = bonds.second(b);
-    if (bonds.is_interface(b) || p.ply(i) != ply || p.ply(j) != ply) continue;
-    const double xi = p.reference_position(i, 0), xj = p.reference_position(j, 0);
-    const double d = p.radius(i) + p.radius(j);
-    if (std::abs(xi - xj) < 1e-6 * d) continue;
-    ++crossing[std::lround((xi + xj - 2.0 * x0) / d)];
-  }
+  for (int b = 0; b < bonds.size(); ++b)
+    if (const std::optional<long> index = band_of(b)) ++crossing[*index];
   std::vector<CrackPlane> planes;
   for (const auto& [index, band] : bands) {
     CrackPlane c;

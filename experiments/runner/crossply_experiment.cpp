@@ -79,32 +79,36 @@ std::pair<int, int> crossply_counts(const std::vector<double>& layup, const std:
 constexpr double kSpanningFraction = 0.8;
 
 // The 90° plies' transverse crack planes (transverse_crack_planes: broken bonds across one gap
-// between particle columns over at least kSpanningFraction of the width; `traction_free`: and at
-// least that fraction of the bonds across it broken) whose x lies in [x_begin, x_end], per 90°
-// ply.
+// between particle columns over at least kSpanningFraction of the width) whose x lies in
+// [x_begin, x_end], per 90° ply.
 std::vector<std::vector<CrackPlane>> ninety_planes(const Model& model,
                                                    const std::vector<BondBreak>& breaks,
                                                    const std::vector<int>& ninety, double x_begin,
-                                                   double x_end, double width,
-                                                   bool traction_free = false) {
+                                                   double x_end, double width) {
   std::vector<std::vector<CrackPlane>> planes;
   for (int ply : ninety) {
     std::vector<CrackPlane> p =
         transverse_crack_planes(model, breaks, ply, kSpanningFraction * width);
-    std::erase_if(p, [&](const CrackPlane& c) {
-      return c.position < x_begin || c.position > x_end ||
-             (traction_free && c.bonds < kSpanningFraction * c.crossing);
-    });
+    std::erase_if(p,
+                  [&](const CrackPlane& c) { return c.position < x_begin || c.position > x_end; });
     planes.push_back(std::move(p));
   }
   return planes;
 }
 
-// Their mean number per unit length over [x_begin, x_end].
+// A traction-free plane: at least kSpanningFraction of the bonds across it broken (the others
+// bridge it).
+bool traction_free(const CrackPlane& c) {
+  return c.bonds >= kSpanningFraction * c.crossing;
+}
+
+// Their mean number per unit length over [x_begin, x_end]; `only_traction_free`: of those only.
 double ninety_density(const std::vector<std::vector<CrackPlane>>& planes, double x_begin,
-                      double x_end) {
+                      double x_end, bool only_traction_free = false) {
   double sum = 0;
-  for (const std::vector<CrackPlane>& p : planes) sum += static_cast<double>(p.size());
+  for (const std::vector<CrackPlane>& p : planes)
+    sum += static_cast<double>(only_traction_free ? std::count_if(p.begin(), p.end(), traction_free)
+                                                  : std::ssize(p));
   return sum / static_cast<double>(planes.size()) / (x_end - x_begin);
 }
 
@@ -114,7 +118,6 @@ struct FemCrackedStiffness {
   std::string skipped;  ///< why it did not run ("" when it did)
   int cracks = 0;       ///< FEM cracks cut
   double ratio = 1;     ///< K cracked / K intact
-  double seconds = 0;   ///< ccx's wall time, both runs
 };
 
 // The 90° plies' crack planes gathered across the plies: planes of different 90° plies within a
@@ -157,7 +160,6 @@ FemCrackedStiffness fem_cracked_stiffness(const std::vector<std::vector<CrackPla
   const FemSolution cut = run_calculix(cracked, settings);
   out.ratio =
       (cut.reaction_force / cut.end_displacement) / (whole.reaction_force / whole.end_displacement);
-  out.seconds = whole.solver_seconds + cut.solver_seconds;
   return out;
 }
 
@@ -317,12 +319,11 @@ class CrossplyExperiment : public Experiment {
           so_far.push_back(r.breaks[next++]);
         // At critical state e the bonds broken before it are gone: its secant is theirs.
         if (r.strain[e] <= 0) continue;
-        const double density = ninety_density(
-            ninety_planes(model, so_far, ninety, x_begin, x_end, s.coupon.width), x_begin, x_end);
+        const std::vector<std::vector<CrackPlane>> planes =
+            ninety_planes(model, so_far, ninety, x_begin, x_end, s.coupon.width);
+        const double density = ninety_density(planes, x_begin, x_end);
+        const double free_density = ninety_density(planes, x_begin, x_end, true);
         const double ratio = r.stress[e] / r.strain[e] / e0;
-        const double free_density = ninety_density(
-            ninety_planes(model, so_far, ninety, x_begin, x_end, s.coupon.width, true), x_begin,
-            x_end);
         planes_csv += fmt::format("{},{:.8g},{:.6g},{:.6g},{:.6g},{:.6g}\n", e, r.strain[e],
                                   r.stress[e] * kMPa, density * kMm, free_density * kMm, ratio);
         dem.x.push_back(density * kMm);
@@ -357,33 +358,27 @@ class CrossplyExperiment : public Experiment {
       // The same cracks in CalculiX, against the DEM's secant between the grips (nominal strain)
       // at the same state.
       FemCrackedStiffness fem_same;
-      double dem_grips = NAN, traction_free_density = 0;
+      double dem_grips = NAN;
       if (r.peak >= 0 && static_cast<std::size_t>(r.peak) + 1 < r.stress.size()) {
         const std::size_t e = static_cast<std::size_t>(r.peak) + 1;
         dem_grips = (r.stress[e] / r.nominal_strain[e]) / (r.stress[1] / r.nominal_strain[1]);
       }
+      std::vector<BondBreak> at_peak;
+      for (const BondBreak& br : r.breaks)
+        if (br.at < static_cast<double>(r.peak + 1)) at_peak.push_back(br);
+      const std::vector<std::vector<CrackPlane>> peak_planes =
+          ninety_planes(model, at_peak, ninety, x_begin, x_end, s.coupon.width);
+      const double traction_free_density = ninety_density(peak_planes, x_begin, x_end, true);
       if (!ccx.available) {
         fem_same.skipped = ccx.message;
       } else {
-        std::vector<BondBreak> at_peak;
-        for (const BondBreak& br : r.breaks)
-          if (br.at < static_cast<double>(r.peak + 1)) at_peak.push_back(br);
         FemSpecimen specimen;
         for (double angle : s.layup) specimen.plies.push_back({material, angle, t});
         specimen.length = x_end - x_begin;
         specimen.width = s.coupon.width;
         spdlog::info("{}: {}: CalculiX with the peak's transverse cracks cut in", name, text);
-        fem_same = fem_cracked_stiffness(
-            ninety_planes(model, at_peak, ninety, x_begin, x_end, s.coupon.width), ninety, specimen,
-            x_begin, s.coupon.particle_diameter, fem);
-      }
-      {
-        std::vector<BondBreak> at_peak;
-        for (const BondBreak& br : r.breaks)
-          if (br.at < static_cast<double>(r.peak + 1)) at_peak.push_back(br);
-        traction_free_density = ninety_density(
-            ninety_planes(model, at_peak, ninety, x_begin, x_end, s.coupon.width, true), x_begin,
-            x_end);
+        fem_same = fem_cracked_stiffness(peak_planes, ninety, specimen, x_begin,
+                                         s.coupon.particle_diameter, fem);
       }
       if (!fem_same.skipped.empty()) fem_notes += fmt::format("- {}: {}\n", text, fem_same.skipped);
       double fpf = NAN;
@@ -453,9 +448,9 @@ class CrossplyExperiment : public Experiment {
         "(core/transverse_cracking.hpp). *Between the grips* is the same secant with the grips' "
         "separation as the strain, the measure CalculiX gives: its column is CalculiX of the same "
         "laminate between the grips (C3D8I, {:g} mm elements, {} per ply, ends moved along x and "
-        "free laterally) with the DEM's transverse cracks at the peak cut in (traction-free, "
-        "cracks of different 90° plies within 1.5 diameters of each other one crack through "
-        "them), over the intact laminate's. {}\n\n{}{}\n{}\n",
+        "free laterally) with the DEM's transverse crack planes at the peak cut in "
+        "(traction-free; planes of different 90° plies within a quarter diameter of each other "
+        "one crack through them), over the intact laminate's. {}\n\n{}{}\n{}\n",
         100 * kSpanningFraction, fem.mesh.element_size / kMm, fem.mesh.elements_per_ply,
         base.interface.transverse_shear
             ? "The plies carry the laminate's transverse shear (G13, G23; interface "
