@@ -59,6 +59,27 @@ struct Coupon {
   StrengthCalibration strengths;
 };
 
+// A 2 x 0.6 mm square coupon of E-glass at `angle`, built, and its ply's strength calibration
+// (no strengths assigned yet).
+struct SmallCoupon {
+  CouponSpec spec;
+  Specimen built;
+  StrengthCalibration strengths;
+};
+
+SmallCoupon small_square_coupon(double angle) {
+  const auto s = strategy("square");
+  SmallCoupon c;
+  c.spec.material = test::eglass();
+  c.spec.length = 2e-3;
+  c.spec.width = 0.6e-3;
+  c.spec.ply_angle = angle;
+  c.built = s->build(c.spec);
+  c.strengths = calibrate_strengths(*s, c.built.ply_calibrations.front(), c.spec.material, angle,
+                                    c.spec.thickness);
+  return c;
+}
+
 Coupon strong_coupon(const Strategy& s, const Material& material, double angle,
                      double diameter = CouponSpec{}.particle_diameter) {
   Coupon c;
@@ -577,16 +598,11 @@ TEST_CASE("softening: ductility from the fracture energy over the bond's share o
 }
 
 TEST_CASE("assign_bond_strengths per crack site: the bonds across one band share their factor") {
-  const Material m = test::eglass();
-  const auto s = strategy("square");
-  CouponSpec spec;
-  spec.material = m;
-  spec.length = 2e-3;
-  spec.width = 0.6e-3;
-  spec.ply_angle = std::numbers::pi / 2;  // rows of particles along the fibre, y
-  const Specimen built = s->build(spec);
+  // At 90°, rows of particles along the fibre, y.
+  const SmallCoupon coupon = small_square_coupon(std::numbers::pi / 2);
+  const Specimen& built = coupon.built;
   const Calibration& cal = built.ply_calibrations.front();
-  const StrengthCalibration sc = calibrate_strengths(*s, cal, m, spec.ply_angle, spec.thickness);
+  const StrengthCalibration& sc = coupon.strengths;
   const double modulus = 10;
   for (const bool per_site : {true, false}) {
     CAPTURE(per_site);
@@ -627,13 +643,11 @@ TEST_CASE("assign_bond_strengths per crack site: the bonds across one band share
 TEST_CASE("assign_bond_strengths: stiffness weights, scatter, interfaces, mismatches") {
   const Material m = test::eglass();
   const auto s = strategy("square");
-  CouponSpec spec;
-  spec.material = m;
-  spec.length = 2e-3;
-  spec.width = 0.6e-3;
-  const Specimen built = s->build(spec);
+  const SmallCoupon coupon = small_square_coupon(0.0);
+  const CouponSpec& spec = coupon.spec;
+  const Specimen& built = coupon.built;
   const Calibration& cal = built.ply_calibrations.front();
-  const StrengthCalibration sc = calibrate_strengths(*s, cal, m, 0.0, spec.thickness);
+  const StrengthCalibration& sc = coupon.strengths;
 
   // Without scatter: strength = family strength x k_n / bulk k_n (edge bonds carry their missing
   // partners' share and are as utilised as the bulk under the same strain).
