@@ -19,8 +19,10 @@
 #include "solvers/bond_events.hpp"
 #include "strategies/registry.hpp"
 #include "support/coupon_fixtures.hpp"
+#include "support/events_path.hpp"
 
 using namespace plydem;
+using plydem::test::area_under_path;
 using plydem::test::grip_constraints;
 
 namespace {
@@ -73,21 +75,6 @@ void add_bonds(Model& m, const std::vector<BondSpec>& specs) {
 
 DofFlags flags_for(int particles) {
   return DofFlags::Constant(particles, kDofsPerParticle, false);
-}
-
-// The work of the grips along the events path (critical states joined by the secant lines of the
-// stiffness between them, with the drops at fixed grips), from the path alone: on the secant of
-// event k + 1 the reaction is R_{k+1} / lambda_{k+1} per unit load factor, so the work from
-// lambda_k to lambda_{k+1} is 1/2 (R_{k+1} / lambda_{k+1}) (lambda_{k+1}^2 - lambda_k^2) times the
-// grip travel per unit load factor; the first secant starts at zero.
-double area_under_path(const EventsResult& r, double travel) {
-  double work = 0, previous = 0;
-  for (const EventPoint& p : r.path) {
-    const double secant = p.reaction / p.load_factor;
-    work += 0.5 * secant * (p.load_factor * p.load_factor - previous * previous) * travel;
-    previous = p.load_factor;
-  }
-  return work;
 }
 
 Model hex2d_coupon(double length, double width, double diameter, double ply_angle = 0) {

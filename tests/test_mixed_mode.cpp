@@ -20,8 +20,10 @@
 #include "solvers/bond_events.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/strength_calibration.hpp"
+#include "support/events_path.hpp"
 
 using namespace plydem;
+using plydem::test::area_under_path;
 
 namespace {
 
@@ -127,19 +129,6 @@ EventsResult run_pull(Model& m, double travel, const EventSettings& settings) {
   DofFlags reaction = DofFlags::Constant(2, kDofsPerParticle, false);
   reaction(1, 0) = true;
   return run_events(m, unit, reaction, settings);
-}
-
-// The area under the events path: between critical states the bond is linear (the secant
-// R_k / lambda_k per unit load factor from the previous critical load factor up), and the drops
-// at fixed travel do no work.
-double area_under_path(const EventsResult& r, double travel) {
-  double work = 0, previous = 0;
-  for (const EventPoint& p : r.path) {
-    const double secant = p.reaction / p.load_factor;
-    work += 0.5 * secant * (p.load_factor * p.load_factor - previous * previous) * travel;
-    previous = p.load_factor;
-  }
-  return work;
 }
 
 EventSettings fine_teeth() {
