@@ -53,8 +53,9 @@ void validate(const Material& material);
 void require_strengths(const Material& material, const std::string& purpose,
                        bool softening = false);
 
-/// Names of the built-in materials ("eglass-my750", paper Table 1, with the WWFE-I strengths of
-/// Soden, Hinton & Kaddour, Compos. Sci. Technol. 58 (1998) 1011).
+/// Names of the built-in materials: "eglass-my750" (paper Table 1, with the WWFE-I strengths of
+/// Soden, Hinton & Kaddour, Compos. Sci. Technol. 58 (1998) 1011), and the WWFE-I carbon/epoxy
+/// plies "t300-914c" and "as4-3501-6" (same source, Table 1).
 std::vector<std::string> builtin_material_names();
 
 /// A built-in material by name, or a TOML file with keys name, E1, E2, G12, nu12, nu23 (SI, Pa) and

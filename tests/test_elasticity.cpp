@@ -458,9 +458,24 @@ TEST_CASE("validate rejects constants no elastic solid has") {
   }
 }
 
+TEST_CASE("built-in carbon plies are WWFE-I's T300/914C and AS4/3501-6") {
+  const Material t300 = plydem::load_material("t300-914c");
+  CHECK(t300.E1 == 138e9);
+  CHECK(t300.E2 == 11e9);
+  CHECK(t300.G12 == 5.5e9);
+  CHECK(t300.strength.YT == 27e6);
+  const Material as4 = plydem::load_material("as4-3501-6");
+  CHECK(as4.E1 == 126e9);
+  CHECK(as4.G12 == 6.6e9);
+  CHECK(as4.strength.XT == 1950e6);
+  // Both are stiff-fibre plies: E1/E2 above 11, G12 near E2/2.
+  CHECK(t300.E1 / t300.E2 > 11);
+  CHECK(as4.G12 / as4.E2 == doctest::Approx(0.6));
+}
+
 TEST_CASE("built-in material eglass-my750 is paper Table 1") {
   const auto names = plydem::builtin_material_names();
-  REQUIRE(names.size() == 1);
+  REQUIRE(names.size() == 3);
   CHECK(names[0] == "eglass-my750");
   const Material m = plydem::load_material("eglass-my750");
   CHECK(m.name == "eglass-my750");
@@ -598,7 +613,8 @@ TEST_CASE("material TOML files") {
   }
   SUBCASE("neither a built-in nor a file") {
     CHECK_THROWS_WITH_AS(plydem::load_material("xyz"),
-                         "unknown material 'xyz': not a built-in (eglass-my750) and no such file",
+                         "unknown material 'xyz': not a built-in (eglass-my750, t300-914c, "
+                         "as4-3501-6) and no such file",
                          plydem::Error);
   }
 }
