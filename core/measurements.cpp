@@ -8,23 +8,27 @@
 namespace plydem {
 
 GaugeStrain fit_gauge_strain(const Particles& particles, const std::vector<int>& selection) {
-  const int n = static_cast<int>(selection.size());
-  require(n >= 3, "the gauge section holds fewer than three particles");
-  // Centre the coordinates: better conditioned normal equations.
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  for (int i : selection)
-    mean += particles.reference_position.row(i).head<2>().matrix().transpose();
-  mean /= n;
-  Eigen::MatrixXd design(n, 3);
-  Eigen::MatrixXd rhs(n, 2);
-  for (int k = 0; k < n; ++k) {
-    const int i = selection[k];
-    design(k, 0) = 1.0;
-    design(k, 1) = particles.reference_position(i, 0) - mean.x();
-    design(k, 2) = particles.reference_position(i, 1) - mean.y();
-    rhs(k, 0) = particles.displacement(i, 0);
-    rhs(k, 1) = particles.displacement(i, 1);
+  const auto n = static_cast<Eigen::Index>(selection.size());
+  Eigen::Array<double, Eigen::Dynamic, 2> position(n, 2), displacement(n, 2);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    position.row(k) = particles.reference_position.row(selection[k]).head<2>();
+    displacement.row(k) = particles.displacement.row(selection[k]).head<2>();
   }
+  return fit_plane_strain(position, displacement);
+}
+
+GaugeStrain fit_plane_strain(const Eigen::Array<double, Eigen::Dynamic, 2>& position,
+                             const Eigen::Array<double, Eigen::Dynamic, 2>& displacement) {
+  const Eigen::Index n = position.rows();
+  require(n >= 3, "the gauge section holds fewer than three particles");
+  require(displacement.rows() == n, "gauge strain fit: positions and displacements differ in size");
+  // Centre the coordinates: better conditioned normal equations.
+  const Eigen::Array<double, 1, 2> mean = position.colwise().mean();
+  Eigen::MatrixXd design(n, 3);
+  design.col(0).setOnes();
+  design.col(1) = (position.col(0) - mean(0)).matrix();
+  design.col(2) = (position.col(1) - mean(1)).matrix();
+  const Eigen::MatrixXd rhs = displacement.matrix();
   const auto qr = design.colPivHouseholderQr();
   require(qr.rank() == 3, "the gauge-section particles are collinear: no in-plane strain fit");
   const Eigen::MatrixXd coef = qr.solve(rhs);

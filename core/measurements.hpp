@@ -16,6 +16,10 @@ struct GaugeStrain {
 };
 /// Throws plydem::Error if fewer than 3 particles are selected or they are collinear.
 GaugeStrain fit_gauge_strain(const Particles& particles, const std::vector<int>& selection);
+/// The same fit over points given by their in-plane positions and displacements (row k: point k),
+/// e.g. a FEM field sampled where a DEM coupon's gauge particles sit. Same errors.
+GaugeStrain fit_plane_strain(const Eigen::Array<double, Eigen::Dynamic, 2>& position,
+                             const Eigen::Array<double, Eigen::Dynamic, 2>& displacement);
 
 /// Indices of particles whose reference x lies in [x_begin, x_end].
 std::vector<int> particles_between(const Particles& particles, double x_begin, double x_end);

@@ -23,11 +23,13 @@
 #include <filesystem>
 #include <iostream>
 #include <numbers>
+#include <optional>
 
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/progress.hpp"
 #include "experiments/cli/python_plugin.hpp"
+#include "experiments/fem/calculix.hpp"
 #include "experiments/output/report.hpp"
 #include "experiments/output/strength_report.hpp"
 #include "experiments/protocols/coupon.hpp"
@@ -98,6 +100,11 @@ struct TensionOptions : CouponOptions {
   double grip_velocity_mm_s = 0;
   std::string solver = "static";
   CheckpointFlags checkpoint;
+  bool fem = false;  // CalculiX of the same coupon beside the DEM
+  std::string ccx = "ccx";
+  double fem_element_mm = 0;
+  int fem_elements_per_ply = plydem::FemTwinSettings{}.mesh.elements_per_ply;
+  int fem_threads = 1;
 };
 
 struct StrengthCommandOptions : CouponOptions {
@@ -233,6 +240,10 @@ void refuse_inapplicable(const CLI::App& app, const TensionOptions& o) {
     refuse_given(app, {"--ramp-cycles"},
                  "--grip-velocity-mm-s sets the grips' speed, which --ramp-cycles would derive");
   }
+  if (!o.fem) {
+    refuse_given(app, {"--ccx", "--fem-element-mm", "--fem-elements-per-ply", "--fem-threads"},
+                 "it is a setting of the CalculiX run of the same coupon (add --fem)");
+  }
 }
 
 void refuse_inapplicable(const CLI::App& app, const StrengthCommandOptions& o) {
@@ -286,6 +297,23 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
       ->check(CLI::IsMember({"explicit", "static"}))
       ->capture_default_str();
   add_checkpoint_options(app, o.checkpoint, "cycles (--solver explicit)");
+  app.add_flag("--fem", o.fem,
+               "also run CalculiX on the same coupon (plies, size, grips; strains at the DEM's "
+               "gauge particles) and show the DEM against it beside CLT");
+  app.add_option("--ccx", o.ccx, "the CalculiX executable (--fem)")->capture_default_str();
+  app.add_option(
+         "--fem-element-mm", o.fem_element_mm,
+         "in-plane element size of --fem [mm]; 0 = two particle diameters (at most an eighth of "
+         "the width)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--fem-elements-per-ply", o.fem_elements_per_ply,
+                 "C3D8I elements through each ply's thickness (--fem)")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
+  app.add_option("--fem-threads", o.fem_threads, "threads CalculiX may use (--fem)")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
 }
 
 void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
@@ -447,6 +475,35 @@ void log_build_statistics() {
                work.builds == 1 ? "" : "s");
 }
 
+// `plydem tension --fem`: CalculiX of the coupons the DEM pulled (experiments/fem/calculix.hpp).
+plydem::SameCouponReference same_coupon_fem(const TensionOptions& o,
+                                            const plydem::TensionSettings& settings,
+                                            const plydem::TensionResult& result) {
+  const plydem::CalculixAvailability ccx = plydem::calculix_availability(o.ccx);
+  if (!ccx.available) {
+    throw plydem::Error(
+        fmt::format("--fem: {} (Debian: apt-get install calculix-ccx)", ccx.message));
+  }
+  plydem::FemTwinSettings twin;
+  twin.mesh.element_size = o.fem_element_mm * 1e-3;
+  twin.mesh.elements_per_ply = o.fem_elements_per_ply;
+  twin.executable = ccx.executable;
+  twin.threads = o.fem_threads;
+  spdlog::info("CalculiX of the same coupon (two runs)");
+  const plydem::FemTensionResult fem = plydem::fem_twin_tension_test(settings, result, twin);
+  plydem::SameCouponReference reference;
+  reference.name = "CalculiX";
+  reference.description = fmt::format(
+      "{} + {} {} elements, {:g} mm in plane, {} per ply, grips {:g} mm; strains at the DEM's "
+      "gauge particles",
+      fem.along_x.elements, fem.along_y.elements, plydem::fem_element_name(fem.along_x.element),
+      plydem::fem_twin_element_size(settings, twin) * 1e3, twin.mesh.elements_per_ply,
+      plydem::TensionTest(settings).grip_length() * 1e3);
+  reference.constants = fem.fem;
+  reference.wall_seconds = fem.along_x.wall_seconds + fem.along_y.wall_seconds;
+  return reference;
+}
+
 int run_tension(const TensionOptions& o) {
   const plydem::TensionSettings settings = to_settings(o);
   const std::string narrow = plydem::narrow_laminate_warning(
@@ -461,10 +518,15 @@ int run_tension(const TensionOptions& o) {
   });
   const plydem::TensionResult result = test.run();
   log_build_statistics();
+  std::optional<plydem::SameCouponReference> fem;
+  if (o.fem) fem = same_coupon_fem(o, settings, result);
   if (o.json) {
-    std::cout << plydem::tension_json(result, settings).dump(2) << "\n";  // with "warnings"
+    nlohmann::json j = plydem::tension_json(result, settings);  // with "warnings"
+    if (fem) j["fem"] = plydem::same_coupon_json(result, *fem);
+    std::cout << j.dump(2) << "\n";
   } else {
     std::cout << plydem::format_tension_table(result, settings);
+    if (fem) std::cout << plydem::format_same_coupon_table(result, *fem);
     if (!narrow.empty()) std::cout << "\nwarning: " << narrow << "\n";
   }
   return 0;

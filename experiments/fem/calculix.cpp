@@ -18,7 +18,10 @@
 #include <string_view>
 
 #include "core/error.hpp"
+#include "core/measurements.hpp"
 #include "experiments/output/external_tool.hpp"
+#include "experiments/protocols/coupon.hpp"
+#include "strategies/laminate.hpp"
 
 namespace plydem {
 namespace {
@@ -1073,6 +1076,27 @@ FemSolution run_calculix(const FemSpecimen& specimen, const FemSettings& setting
   return solution;
 }
 
+namespace {
+
+// Ex, nu_xy, gamma_xy/eps_x from the pull along x; Ey, nu_yx from the one along y.
+void set_moduli_from_pulls(FemTensionResult& result) {
+  for (const FemSolution* pull : {&result.along_x, &result.along_y}) {
+    if (!(pull->exx > 0))
+      throw Error(fmt::format("the FEM coupon did not stretch (fitted strain {})", pull->exx));
+  }
+  result.available = true;
+  const FemSolution& x = result.along_x;
+  const FemSolution& y = result.along_y;
+  result.fem.Ex = x.gross_stress / x.exx;
+  result.fem.nu_xy = -x.eyy / x.exx;
+  result.fem.shear_coupling_x = x.gamma_xy / x.exx;
+  result.fem.Ey = y.gross_stress / y.exx;
+  result.fem.nu_yx = -y.eyy / y.exx;
+  result.nu_xz = -x.ezz / x.exx;
+}
+
+}  // namespace
+
 FemTensionResult fem_tension_test(const FemSpecimen& specimen, const FemSettings& settings) {
   specimen.validate();
   settings.validate();
@@ -1088,19 +1112,96 @@ FemTensionResult fem_tension_test(const FemSpecimen& specimen, const FemSettings
   FemSpecimen turned = specimen;
   for (Ply& ply : turned.plies) ply.angle -= 0.5 * std::numbers::pi;
   result.along_y = run_calculix(turned, settings);
-  for (const FemSolution* pull : {&result.along_x, &result.along_y}) {
-    if (!(pull->exx > 0))
-      throw Error(fmt::format("the FEM coupon did not stretch (fitted strain {})", pull->exx));
+  set_moduli_from_pulls(result);
+  return result;
+}
+
+namespace {
+
+// The DEM coupon's gauge particles (as the tension test selects them) at their positions in the
+// FEM frame: x and y as built, z from the particles' mid-plane.
+std::vector<Eigen::Vector3d> gauge_points(const Model& coupon, const TensionSettings& s,
+                                          double grip_length) {
+  Particles p = coupon.particles;
+  const CouponGrips grips = assign_grips(p, grip_length);
+  const GaugeSection gauge =
+      gauge_section(p, grips, s.gauge_fraction, s.edge_band_diameters, s.coupon.particle_diameter);
+  const double z_mid =
+      0.5 * (p.reference_position.col(2).minCoeff() + p.reference_position.col(2).maxCoeff());
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(gauge.particles.size());
+  for (int i : gauge.particles) {
+    points.emplace_back(p.reference_position(i, 0), p.reference_position(i, 1),
+                        p.reference_position(i, 2) - z_mid);
   }
-  result.available = true;
-  const FemSolution& x = result.along_x;
-  const FemSolution& y = result.along_y;
-  result.fem.Ex = x.gross_stress / x.exx;
-  result.fem.nu_xy = -x.eyy / x.exx;
-  result.fem.shear_coupling_x = x.gamma_xy / x.exx;
-  result.fem.Ey = y.gross_stress / y.exx;
-  result.fem.nu_yx = -y.eyy / y.exx;
-  result.nu_xz = -x.ezz / x.exx;
+  return points;
+}
+
+// Replaces the solution's strain fit by the fit at `points` (the DEM's gauge particles).
+void fit_at_points(FemSolution& solution, const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Array<double, Eigen::Dynamic, 2> position(static_cast<Eigen::Index>(points.size()), 2);
+  Eigen::Array<double, Eigen::Dynamic, 2> displacement(position.rows(), 2);
+  Eigen::Index n = 0;
+  for (const Eigen::Vector3d& x : points) {
+    const std::optional<Eigen::Vector3d> u = solution.displacement.at(x.x(), x.y(), x.z());
+    if (!u) continue;
+    position.row(n) << x.x(), x.y();
+    displacement.row(n) << u->x(), u->y();
+    ++n;
+  }
+  require(n >= 3,
+          fmt::format("the FEM twin of the coupon: only {} of its {} gauge particles lie in "
+                      "the FEM plate",
+                      n, points.size()));
+  const GaugeStrain strain = fit_plane_strain(position.topRows(n), displacement.topRows(n));
+  solution.exx = strain.exx;
+  solution.eyy = strain.eyy;
+  solution.gamma_xy = strain.gamma_xy;
+}
+
+}  // namespace
+
+double fem_twin_element_size(const TensionSettings& settings, const FemTwinSettings& twin) {
+  if (twin.mesh.element_size > 0) return twin.mesh.element_size;
+  return std::min(2 * settings.coupon.particle_diameter, settings.coupon.width / 8);
+}
+
+FemTensionResult fem_twin_tension_test(const TensionSettings& settings, const TensionResult& dem,
+                                       const FemTwinSettings& twin) {
+  require(dem.along_x.model && dem.along_y.model,
+          "the FEM twin of a tension test needs the DEM's coupons (run the tension test first)");
+  const CouponSpec& coupon = settings.coupon;
+  FemSpecimen specimen;
+  specimen.plies = settings.layup.empty()
+                       ? std::vector<Ply>{Ply{coupon.material, dem.ply_angle, coupon.thickness}}
+                       : laminate_plies(LaminateSpec{coupon, settings.layup, settings.interface});
+  specimen.length = coupon.length;
+  specimen.width = coupon.width;
+
+  FemSettings fem;
+  fem.mesh = twin.mesh;
+  fem.mesh.element_size = fem_twin_element_size(settings, twin);
+  fem.loading.grips = settings.grips;
+  fem.loading.grip_length = TensionTest(settings).grip_length();
+  fem.gauge_fraction = settings.gauge_fraction;
+  fem.executable = twin.executable;
+  fem.threads = twin.threads;
+
+  FemTensionResult result;
+  result.theory = laminate_constants(specimen.plies);
+  result.along_x = run_calculix(specimen, fem);
+  if (!result.along_x.available) {
+    result.message = result.along_x.message;
+    return result;
+  }
+  FemSpecimen turned = specimen;
+  for (Ply& ply : turned.plies) ply.angle -= 0.5 * std::numbers::pi;
+  result.along_y = run_calculix(turned, fem);
+  fit_at_points(result.along_x,
+                gauge_points(*dem.along_x.model, settings, fem.loading.grip_length));
+  fit_at_points(result.along_y,
+                gauge_points(*dem.along_y.model, settings, fem.loading.grip_length));
+  set_moduli_from_pulls(result);
   return result;
 }
 

@@ -306,4 +306,31 @@ struct FemTensionResult {
 /// no hole. Unavailable (not thrown) when ccx is missing.
 FemTensionResult fem_tension_test(const FemSpecimen& specimen, const FemSettings& settings);
 
+/// How the CalculiX twin of a DEM tension test (fem_twin_tension_test) is meshed and run.
+struct FemTwinSettings {
+  /// element_size 0 = two particle diameters (W / 8 if that is finer); two elements through each
+  /// ply. On a [45/-45]s E-glass coupon 3 x 0.83 mm (0.05 mm particles) this lies within 0.1% of
+  /// the converged Ex: one element per ply is 0.45% stiff, three and four move Ex by -0.07% and
+  /// -0.10% (the free edges' interlaminar stresses need the layers); halving the in-plane size
+  /// moves it by 0.02%.
+  FemMeshSettings mesh{.element = FemElement::kC3D8I, .elements_per_ply = 2};
+  std::string executable = "ccx";
+  int threads = 1;
+};
+
+/// CalculiX of a DEM tension test's own coupons, "the same coupon": the plies, length, width and
+/// grips (length, free or clamped) of `settings`; each pull's strain fitted, as the DEM's is
+/// (core/measurements.hpp), on the FEM displacement field sampled at the very particles that gave
+/// the DEM's strain (its gauge section and edge band, each particle at its ply's mid-surface);
+/// the stress is the grips' force over the gross section W h. The pull along y turns every ply
+/// by -90 deg, as the DEM's does. Free edges, a narrow coupon's free-edge zones and the grips are
+/// then physics that both models share, and the DEM against this FEM is the particle model's own
+/// error. `dem` must come from a TensionTest run with `settings` (its coupons' models are read for
+/// the gauge particles). Unavailable (not thrown) when ccx is missing; throws plydem::Error when a
+/// coupon has no gauge particle inside the FEM plate.
+FemTensionResult fem_twin_tension_test(const TensionSettings& settings, const TensionResult& dem,
+                                       const FemTwinSettings& twin);
+/// The in-plane element size the twin uses [m] (twin.mesh.element_size, or its default).
+double fem_twin_element_size(const TensionSettings& settings, const FemTwinSettings& twin);
+
 }  // namespace plydem

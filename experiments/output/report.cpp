@@ -108,6 +108,15 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
         "({} frame particles, 3 static solves, {:.2f} s)\n",
         r.ply_angle / kDegree, r.specimen.frame_particles, r.specimen.wall_seconds);
   }
+  if (!s.layup.empty() && r.specimen.interior_particles > 0) {
+    // A laminate's membrane stiffness as its bulk carries it (no free edge, no frame).
+    const InPlaneConstants& m = r.specimen.interior_constants;
+    out += fmt::format(
+        "membrane stiffness, interior window ({} particles, no free edges) vs CLT: Ex {:+.2f}%, "
+        "Ey {:+.2f}%, nu_xy {:+.4f}, Gxy {:+.2f}%\n",
+        r.specimen.interior_particles, 100 * (m.Ex / r.theory.Ex - 1),
+        100 * (m.Ey / r.theory.Ey - 1), m.nu_xy - r.theory.nu_xy, 100 * (m.Gxy / r.theory.Gxy - 1));
+  }
   out += fmt::format("calibration: {}; relaxed stiffness vs target: {:.2e} relative\n",
                      r.calibration.method, r.calibration.relaxed_error);
   out += fmt::format("wall time {:.2f} s\n", r.wall_seconds);
@@ -143,6 +152,16 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
         {"constants", constants_json(r.specimen.constants)},
         {"frame_particles", r.specimen.frame_particles},
         {"wall_seconds", r.specimen.wall_seconds}};
+    if (r.specimen.interior_particles > 0) {
+      j["specimen_stiffness"]["interior"] = {
+          {"method",
+           "virial stress and fitted strain of an interior window, the same solves "
+           "(experiments/protocols/stiffness_test.hpp)"},
+          {"stiffness", matrix_json(r.specimen.interior_stiffness)},
+          {"constants", constants_json(r.specimen.interior_constants)},
+          {"particles", r.specimen.interior_particles},
+          {"margin", r.specimen.interior_margin}};
+    }
   }
   j["calibration"] = calibration_json(r.calibration);
   // What the user should know about the coupon (experiments/protocols/coupon.hpp).
@@ -150,6 +169,50 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
   const std::string narrow =
       narrow_laminate_warning(s.coupon.width, s.coupon.thickness, s.layup);
   if (!narrow.empty()) j["warnings"].push_back(narrow);
+  return j;
+}
+
+std::string format_same_coupon_table(const TensionResult& r, const SameCouponReference& ref) {
+  struct Row {
+    const char* name;
+    double dem, reference, clt;
+    bool modulus;
+  };
+  const InPlaneConstants& f = ref.constants;
+  const Row rows[] = {{"Ex", r.dem.Ex, f.Ex, r.theory.Ex, true},
+                      {"Ey", r.dem.Ey, f.Ey, r.theory.Ey, true},
+                      {"nu_xy", r.dem.nu_xy, f.nu_xy, r.theory.nu_xy, false},
+                      {"nu_yx", r.dem.nu_yx, f.nu_yx, r.theory.nu_yx, false}};
+  std::string out = fmt::format("\n{}, the same coupon: {} ({:.1f} s)\n", ref.name, ref.description,
+                                ref.wall_seconds);
+  out += fmt::format("{:<14} {:>12} {:>12} {:>16} {:>12} {:>16}\n", "", "DEM", ref.name,
+                     fmt::format("DEM vs {}", ref.name), "CLT", fmt::format("{} vs CLT", ref.name));
+  for (const Row& row : rows) {
+    // Moduli: relative errors; Poisson's ratios: differences (a small ratio's relative error
+    // says little).
+    auto value = [&](double v) {
+      return row.modulus ? fmt::format("{:.3f} GPa", v * 1e-9) : fmt::format("{:.4f}", v);
+    };
+    auto error = [&](double a, double b) {
+      return row.modulus ? fmt::format("{:+.3f}%", 100.0 * (a - b) / b)
+                         : fmt::format("{:+.4f}", a - b);
+    };
+    out += fmt::format("{:<14} {:>12} {:>12} {:>16} {:>12} {:>16}\n", row.name, value(row.dem),
+                       value(row.reference), error(row.dem, row.reference), value(row.clt),
+                       error(row.reference, row.clt));
+  }
+  return out;
+}
+
+nlohmann::json same_coupon_json(const TensionResult& r, const SameCouponReference& ref) {
+  nlohmann::json j = constants_json(ref.constants);
+  j.erase("Gxy");
+  j["description"] = ref.description;
+  j["wall_seconds"] = ref.wall_seconds;
+  j["dem_error"] = {{"Ex", (r.dem.Ex - ref.constants.Ex) / ref.constants.Ex},
+                    {"Ey", (r.dem.Ey - ref.constants.Ey) / ref.constants.Ey},
+                    {"nu_xy", r.dem.nu_xy - ref.constants.nu_xy},
+                    {"nu_yx", r.dem.nu_yx - ref.constants.nu_yx}};
   return j;
 }
 

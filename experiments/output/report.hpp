@@ -14,6 +14,24 @@ namespace plydem {
 std::string format_tension_table(const TensionResult& result, const TensionSettings& settings);
 nlohmann::json tension_json(const TensionResult& result, const TensionSettings& settings);
 
+/// A second model of the very coupon the DEM pulled (CalculiX of the same coupon:
+/// experiments/fem fem_twin_tension_test), shown beside the DEM and CLT.
+struct SameCouponReference {
+  std::string name;            ///< e.g. "CalculiX"
+  std::string description;     ///< one line: elements, mesh, how strains were measured
+  InPlaneConstants constants;  ///< Ex, Ey, nu_xy, nu_yx, shear_coupling_x (Gxy unused)
+  double wall_seconds = 0;
+};
+
+/// The table of the DEM beside the same-coupon reference and CLT: each of Ex, Ey, nu_xy, nu_yx
+/// with DEM vs reference (the particle model's own error) and reference vs CLT (what the coupon's
+/// free edges and grips do, by physics).
+std::string format_same_coupon_table(const TensionResult& result,
+                                     const SameCouponReference& reference);
+/// The same as JSON (SI): the reference's constants, "description", "wall_seconds", and
+/// "dem_error" (DEM vs reference: moduli as relative errors, Poisson's ratios as differences).
+nlohmann::json same_coupon_json(const TensionResult& result, const SameCouponReference& reference);
+
 /// The calibration as JSON (SI units): method, lattice orientation, every family's stiffnesses,
 /// the target, affine and relaxed 3x3 stiffness and the relaxed relative error.
 nlohmann::json calibration_json(const Calibration& calibration);

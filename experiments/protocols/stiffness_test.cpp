@@ -4,13 +4,44 @@
 
 #include <chrono>
 
+#include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
+#include "core/measurements.hpp"
 #include "solvers/static_solver.hpp"
 
 namespace plydem {
+namespace {
+
+// The window's mean virial stress (xx, yy, xy) at the solved state (see the header).
+Eigen::Vector3d window_stress(const Model& solved, const std::vector<char>& inside,
+                              double window_volume) {
+  const Particles& p = solved.particles;
+  const Bonds& bonds = solved.bonds;
+  std::vector<int> both, one;
+  for (int b = 0; b < bonds.size(); ++b) {
+    const int ends = inside[bonds.first(b)] + inside[bonds.second(b)];
+    if (ends == 2) both.push_back(b);
+    if (ends == 1) one.push_back(b);
+  }
+  Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();
+  for (const auto& [rows, weight] : {std::pair{&both, 1.0}, std::pair{&one, 0.5}}) {
+    Particles state = p;
+    compute_bond_forces(state, bonds.select(*rows));
+    for (int i = 0; i < p.size(); ++i) {
+      const Eigen::Vector2d f(state.force(i, 0), state.force(i, 1));
+      const Eigen::Vector2d x = p.reference_position.row(i).head<2>().matrix().transpose();
+      stress -= weight * f * x.transpose();
+    }
+  }
+  stress /= window_volume;
+  return {stress(0, 0), stress(1, 1), 0.5 * (stress(0, 1) + stress(1, 0))};
+}
+
+}  // namespace
 
 SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
-                                             LinearSolverKind linear_solver) {
+                                             LinearSolverKind linear_solver,
+                                             double interior_margin) {
   const auto start = std::chrono::steady_clock::now();
   const Particles& p = model.particles;
   require(p.size() >= 4, "the specimen stiffness needs at least four particles");
@@ -30,6 +61,27 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
       frame.push_back(i);
     }
   }
+  // The interior window (see the header): `interior_margin` inside the frame.
+  require(std::isfinite(interior_margin) && interior_margin >= 0,
+          "the interior window's margin must be >= 0");
+  if (interior_margin == 0) interior_margin = band;
+  const double inset = band + interior_margin;
+  const bool has_window = high.x() - low.x() - 2 * inset >= 6 * p.radius.maxCoeff() &&
+                          high.y() - low.y() - 2 * inset >= 6 * p.radius.maxCoeff();
+  std::vector<char> inside(p.size(), 0);
+  std::vector<int> window;
+  double window_volume = 0;
+  for (int i = 0; has_window && i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0), y = p.reference_position(i, 1);
+    if (x >= low.x() + inset && x <= high.x() - inset && y >= low.y() + inset &&
+        y <= high.y() - inset) {
+      inside[i] = 1;
+      window.push_back(i);
+      window_volume += p.volume(i);
+    }
+  }
+  Eigen::Matrix3d window_stresses, window_strains;
+
   SpecimenStiffness result;
   result.volume = p.volume.sum();
   result.frame_particles = static_cast<int>(frame.size());
@@ -78,6 +130,18 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
     // Symmetric part: the frame's reactions carry no net moment when the particles turn freely.
     const double sxy = 0.5 * (stress(0, 1) + stress(1, 0));
     result.stiffness.col(column) = Eigen::Vector3d(stress(0, 0), stress(1, 1), sxy) / 1e-3;
+    if (window.size() >= 3) {
+      const GaugeStrain e = fit_gauge_strain(solved.particles, window);
+      window_strains.col(column) = Eigen::Vector3d(e.exx, e.eyy, e.gamma_xy);
+      window_stresses.col(column) = window_stress(solved, inside, window_volume);
+    }
+  }
+  if (window.size() >= 3) {
+    const Eigen::Matrix3d c = window_stresses * window_strains.inverse();
+    result.interior_stiffness = 0.5 * (c + c.transpose());
+    result.interior_constants = in_plane_constants(result.interior_stiffness);
+    result.interior_particles = static_cast<int>(window.size());
+    result.interior_margin = interior_margin;
   }
   result.stiffness = 0.5 * (result.stiffness + result.stiffness.transpose()).eval();
   result.constants = in_plane_constants(result.stiffness);

@@ -11,6 +11,20 @@
 /// Prescribed boundary displacements bound the stiffness from above; the bound closes as the frame
 /// shrinks relative to the specimen (the paper's coupon: within 0.1% of the periodic value for
 /// hex2d). Gxy = 1 / (C^-1)_66, the modulus under shear stress alone, as CLT defines it.
+///
+/// The interior measure. The frame holds its particles affine, which a laminate's plies resist
+/// near it (their lattices are turned against each other, so the interface bonds between them
+/// relax with particle-scale fluctuations that the frame forbids); across a narrow coupon that
+/// boundary layer is a good part of the specimen. The same three solves also give the stiffness of
+/// an interior window, `interior_margin` inside the frame: the window's mean stress is the
+/// particles' virial stress, sigma_W = -(1/V_W) sum_b w_b (f_b,i (x) x_i + f_b,j (x) x_j) over the
+/// bonds with an end in the window (w_b = 1 with both ends inside, 1/2 with one: each particle owns
+/// half of each of its bonds, so that a uniform state is measured exactly), V_W the window
+/// particles' volume; its mean strain is the least-squares fit of the window particles'
+/// displacements (core/measurements.hpp). C_W = [sigma_W] [eps_W]^-1 over the three cases is the
+/// membrane stiffness of the laminate as its bulk carries it, interface bonds included, with no
+/// free edge and no frame. A laminate of plies turned against each other has no common period,
+/// so no exactly periodic cell exists for it; the window is the periodic cell's stand-in.
 
 #include <Eigen/Dense>
 
@@ -26,17 +40,27 @@ struct SpecimenStiffness {
   InPlaneConstants constants;   ///< from `stiffness`, Gxy among them
   double volume = 0;            ///< material volume V [m^3]
   int frame_particles = 0;      ///< particles with prescribed displacements
+  /// The interior window's stiffness (see the file comment) [Pa], its constants, its particles
+  /// and its distance from the frame [m]; zero where the specimen has no such window.
+  Eigen::Matrix3d interior_stiffness = Eigen::Matrix3d::Zero();
+  InPlaneConstants interior_constants;
+  int interior_particles = 0;
+  double interior_margin = 0;
   int factorizations = 0;       ///< of the stiffness matrix (one serves the three solves)
   int solves = 0;               ///< static solves (three)
   double wall_seconds = 0;
 };
 
 /// Measures the specimen (the model is copied; `model` is left untouched). `band` [m] is the
-/// frame's width; 0 = two particle diameters (2 x the largest radius x 2). Throws plydem::Error for
+/// frame's width; 0 = two particle diameters (2 x the largest radius x 2). The interior window lies
+/// `interior_margin` [m] inside the frame (0 = the frame's width again); where that leaves no
+/// window of at least three particle diameters across, the interior is not measured. Throws
+/// plydem::Error for
 /// an empty specimen or one whose interior the frame would swallow, or when a solve is refused
 /// (solve_static names the cause). The three solves share one factorization (StaticSystem), made
 /// by `linear_solver` (solvers/linear_solver.hpp).
 SpecimenStiffness measure_specimen_stiffness(
-    const Model& model, double band = 0, LinearSolverKind linear_solver = LinearSolverKind::kAuto);
+    const Model& model, double band = 0, LinearSolverKind linear_solver = LinearSolverKind::kAuto,
+    double interior_margin = 0);
 
 }  // namespace plydem
