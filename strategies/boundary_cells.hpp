@@ -53,6 +53,9 @@ struct EdgeBalance {
   double max_weight = 1;        ///< largest bond weight
   double max_imbalance = 0;     ///< after: largest unbalanced force or moment / mean bond force
   double imbalance_before = 0;  ///< the same with every weight 1
+  /// Already in equilibrium (to 1e-9 of a mean bond force) with the strips' stresses exact:
+  /// nothing was changed.
+  bool balanced = false;
 };
 
 /// Weights the in-ply bonds within `depth` [m] of the bounding box of `particles` (a rectangular
@@ -67,14 +70,21 @@ EdgeBalance balance_free_edges(const Particles& particles, Bonds& bonds, const U
                                const std::vector<FamilyStiffness>& families,
                                const Eigen::Matrix3d& stiffness, double depth);
 
+/// Whether the bonds as they are already meet balance_free_edges's conditions (to 1e-9 of a mean
+/// bond force): edges along lattice lines after complete_boundary_cells do.
+bool free_edges_balanced(const Particles& particles, const Bonds& bonds, const UnitCell& cell,
+                         const std::vector<FamilyStiffness>& families,
+                         const Eigen::Matrix3d& stiffness, double depth);
+
 /// The edge strips' depth balance_free_edges gets from treat_free_edges, in particle diameters.
 inline constexpr double kEdgeStripDiameters = 2.0;
 
 /// What a one-particle-cell strategy's assemble() does to its built coupon: nothing unless
 /// coupon.complete_boundary_cells; then `treatment`, complete_boundary_cells with two bonds per
 /// family and particle in the bulk, or balance_free_edges with `cell` (the strategy's unit cell
-/// for `calibration`), the calibration's families and relaxed stiffness, and strips
-/// kEdgeStripDiameters deep.
+/// for `calibration`), the calibration's families and the relaxed stiffness of `cell` with them,
+/// and strips kEdgeStripDiameters deep. Where complete_boundary_cells already balances the edges
+/// (edges along lattice lines: square at 0, 45, 90 deg), its weights are kept.
 void treat_free_edges(Model& model, const CouponSpec& coupon, const Calibration& calibration,
                       const UnitCell& cell, int family_count, EdgeTreatment treatment);
 
