@@ -75,6 +75,10 @@ constexpr double kSegmentBonds = 10;
 // (hex2d, square; E-glass, T300/914C) within [0.15, 3.4]; 1e-3 fits equilibrium closer but
 // gives negative weights.
 constexpr double kEquilibriumRegularization = 1e-2;
+// The least bond weight accepted, and how many tenfold steps of eps are tried to reach it (the
+// last, 1e2, asks almost nothing of equilibrium: the weights then only keep the strips' stress).
+constexpr double kLeastWeight = 0.05;
+constexpr int kRegularizationSteps = 5;
 
 // balance_free_edges, or with `check_only` whether the bonds are balanced already (result's
 // balanced), changing nothing.
@@ -292,33 +296,44 @@ EdgeBalance balance_edges(const Particles& particles, Bonds& bonds, const UnitCe
   //   dw = A^T lambda - G^T mu,   (A A^T + eps I) lambda = rhs + A G^T mu,
   //   (G A^T M^-1 A G^T - G G^T) mu = goal - G A^T M^-1 rhs,   M = A A^T + eps I.
   // Exact equilibrium is out of reach where an edge cuts the lattice at an irrational angle (three
-  // equations per particle, fewer weights); eps trades the residual for weights near 1.
-  Eigen::SparseMatrix<double> normal = a * a.transpose();
-  const double eps = kEquilibriumRegularization * normal.diagonal().mean();
-  for (int r = 0; r < m; ++r) normal.coeffRef(r, r) += eps;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(normal);
-  require(factor.info() == Eigen::Success, "edge equilibrium: the normal equations are singular");
+  // equations per particle, fewer weights); eps trades the residual for weights near 1, and grows
+  // tenfold while a weight would fall below kLeastWeight.
+  const Eigen::SparseMatrix<double> normal = a * a.transpose();
   const Eigen::MatrixXd agt = Eigen::MatrixXd(a * g.transpose());
-  const Eigen::MatrixXd m_agt = factor.solve(agt);
-  const Eigen::VectorXd m_rhs = factor.solve(rhs);
-  const Eigen::MatrixXd schur = agt.transpose() * m_agt - Eigen::MatrixXd(g * g.transpose());
-  const Eigen::VectorXd mu =
-      schur.completeOrthogonalDecomposition().solve(goal - agt.transpose() * m_rhs);
-  const Eigen::VectorXd lambda = m_rhs + m_agt * mu;
-  const Eigen::VectorXd dw = a.transpose() * lambda - g.transpose() * mu;
+  const Eigen::MatrixXd ggt = Eigen::MatrixXd(g * g.transpose());
+  Eigen::VectorXd dw;
+  double regularization = kEquilibriumRegularization;
+  for (int attempt = 0;; ++attempt, regularization *= 10) {
+    Eigen::SparseMatrix<double> regularized = normal;
+    const double eps = regularization * normal.diagonal().mean();
+    for (int r = 0; r < m; ++r) regularized.coeffRef(r, r) += eps;
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(regularized);
+    require(factor.info() == Eigen::Success, "edge equilibrium: the normal equations are singular");
+    const Eigen::MatrixXd m_agt = factor.solve(agt);
+    const Eigen::VectorXd m_rhs = factor.solve(rhs);
+    const Eigen::MatrixXd schur = agt.transpose() * m_agt - ggt;
+    const Eigen::VectorXd mu =
+        schur.completeOrthogonalDecomposition().solve(goal - agt.transpose() * m_rhs);
+    const Eigen::VectorXd lambda = m_rhs + m_agt * mu;
+    dw = a.transpose() * lambda - g.transpose() * mu;
+    if (1 + dw.minCoeff() >= kLeastWeight) break;
+    if (attempt + 1 == kRegularizationSteps) {
+      Eigen::Index col = 0;
+      const double w = 1 + dw.minCoeff(&col);
+      const int b = variable[static_cast<size_t>(col)];
+      throw Error(fmt::format(
+          "edge equilibrium: bond {} (particles {} and {}, family {}) would need a weight of "
+          "{:.4g} (the least allowed is {:g}) however little equilibrium is asked of the edges: "
+          "this coupon's edges cannot be balanced (strategy option edge_equilibrium=0 builds it "
+          "with the count completion)",
+          b, bonds.first(b), bonds.second(b), bonds.family(b), w, kLeastWeight));
+    }
+  }
+  result.regularization = regularization;
   result.max_imbalance = state_imbalance(a * dw - rhs);
   result.min_weight = 1 + dw.minCoeff();
   result.max_weight = 1 + dw.maxCoeff();
 
-  for (int col = 0; col < nv; ++col) {
-    const int b = variable[static_cast<size_t>(col)];
-    const double w = 1 + dw(col);
-    require(w > 0, fmt::format("edge equilibrium: bond {} (particles {} and {}, family {}) would "
-                               "need a weight of {:.4g}, and a bond cannot be negative: this "
-                               "coupon's edges cannot be balanced (strategy option "
-                               "edge_equilibrium=0 builds it with the count completion)",
-                               b, bonds.first(b), bonds.second(b), bonds.family(b), w));
-  }
   for (int col = 0; col < nv; ++col) {
     const int b = variable[static_cast<size_t>(col)];
     const double w = 1 + dw(col);

@@ -53,6 +53,9 @@ struct EdgeBalance {
   double max_weight = 1;        ///< largest bond weight
   double max_imbalance = 0;     ///< after: largest unbalanced force or moment / mean bond force
   double imbalance_before = 0;  ///< the same with every weight 1
+  /// eps / mean diagonal of A A^T the weights were solved with: 1e-2, or tenfold more for each
+  /// retry that a weight below 0.05 needed (boundary_cells.cpp).
+  double regularization = 0;
   /// Already in equilibrium (to 1e-9 of a mean bond force) with the strips' stresses exact:
   /// nothing was changed.
   bool balanced = false;
