@@ -128,11 +128,22 @@ Model Hex2dStrategy::assemble(const CouponSpec& coupon, const Calibration& cal) 
   layout.description = fmt::format("hex2d layer, ply angle {:.4g} deg, {} particles",
                                    coupon.ply_angle / kDegree, layout.position.rows());
   Model model = assemble_specimen(layout, &cal.families);
-  if (coupon.complete_boundary_cells) {
-    complete_boundary_cells(model.particles, model.bonds, HexagonalLayer::kFamilyCount, 2);
-  }
+  treat_free_edges(model, coupon, cal, *unit_cell(cal, coupon.thickness),
+                   HexagonalLayer::kFamilyCount, edge_treatment_);
   model.check_consistency();
   return model;
+}
+
+std::vector<StrategyOption> Hex2dStrategy::options() const {
+  return {edge_treatment_option(edge_treatment_)};
+}
+
+void Hex2dStrategy::set_option(const std::string& name, double value) {
+  if (name != "edge_equilibrium") {
+    Strategy::set_option(name, value);
+    return;
+  }
+  edge_treatment_ = parse_edge_treatment("hex2d", value);
 }
 
 BoundaryCompletion Hex2dStrategy::boundary_completion() const {

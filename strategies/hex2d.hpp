@@ -9,6 +9,7 @@
 
 #include <array>
 
+#include "strategies/boundary_cells.hpp"
 #include "strategies/strategy.hpp"
 
 namespace plydem {
@@ -25,6 +26,9 @@ std::array<FamilyStiffness, 3> hexagonal_springs_eq27_as_printed(const Eigen::Ma
 
 class Hex2dStrategy : public Strategy {
  public:
+  /// `edge_equilibrium` (strategies/boundary_cells.hpp): 1 (default) or 0.
+  std::vector<StrategyOption> options() const override;
+  void set_option(const std::string& name, double value) override;
   std::string description() const override;
   Calibration calibrate(const Material& material, double ply_angle,
                         double thickness) const override;
@@ -33,6 +37,9 @@ class Hex2dStrategy : public Strategy {
   /// The one-particle hexagonal cell of unit spacing turned by calibration.lattice_angle.
   std::optional<UnitCell> unit_cell(const Calibration& calibration,
                                     double thickness) const override;
+
+ protected:
+  EdgeTreatment edge_treatment_ = EdgeTreatment::kEquilibrium;
 };
 
 /// `hex2d-paper`: the paper's Hex2D as printed: the lattice fixed with family 1 along x
@@ -42,6 +49,8 @@ class Hex2dStrategy : public Strategy {
 /// never run.
 class Hex2dPaperStrategy : public Hex2dStrategy {
  public:
+  /// Edges by the count completion unless the option says otherwise (the paper had neither).
+  Hex2dPaperStrategy() { edge_treatment_ = EdgeTreatment::kCellCompletion; }
   std::string description() const override;
   Calibration calibrate(const Material& material, double ply_angle,
                         double thickness) const override;

@@ -147,10 +147,15 @@ void fill_stiffness(Calibration& cal, double thickness) {
   cal.relaxed_error = relative_difference(cal.relaxed, cal.target);
 }
 
+// The cell the calibration's relaxed stiffness is computed on, turned as the coupon's lattice.
+UnitCell layer_cell(const Calibration& cal, double thickness) {
+  return SquareLayer(1.0, cal.lattice_angle).unit_cell(thickness);
+}
+
 // Particles on the lattice sites of the rectangle, masses from the cell area l^2, bonds to the
 // eight neighbours with the calibrated stiffness of their family.
-Model build_square_coupon(const CouponSpec& coupon, const Calibration& cal,
-                          const std::string& name) {
+Model build_square_coupon(const CouponSpec& coupon, const Calibration& cal, const std::string& name,
+                          EdgeTreatment edges) {
   const SquareLayer layer(coupon.particle_diameter, cal.lattice_angle);
   SpecimenLayout layout;
   layout.position = layer.fill_rectangle(coupon.length, coupon.width);
@@ -165,9 +170,8 @@ Model build_square_coupon(const CouponSpec& coupon, const Calibration& cal,
       fmt::format("{} layer, ply angle {:.4g} deg, lattice at {:.4g} deg, {} particles", name,
                   coupon.ply_angle / kDegree, cal.lattice_angle / kDegree, layout.position.rows());
   Model model = assemble_specimen(layout, &cal.families);
-  if (coupon.complete_boundary_cells) {
-    complete_boundary_cells(model.particles, model.bonds, SquareLayer::kFamilyCount, 2);
-  }
+  treat_free_edges(model, coupon, cal, layer_cell(cal, coupon.thickness), SquareLayer::kFamilyCount,
+                   edges);
   model.check_consistency();
   return model;
 }
@@ -236,10 +240,15 @@ std::vector<StrategyOption> SquareStrategy::options() const {
       {"fibre_offset", fibre_offset_deg_,
        "angle of the fibre from the lattice x axis [deg]: 0 (lattice along the fibre), 45 "
        "(fibre along a diagonal), or -1 to choose: 45 where that puts the lattice along x, else 0; "
-       "the other where the first cannot represent the ply"}};
+       "the other where the first cannot represent the ply"},
+      edge_treatment_option(edge_treatment_)};
 }
 
 void SquareStrategy::set_option(const std::string& name, double value) {
+  if (name == "edge_equilibrium") {
+    edge_treatment_ = parse_edge_treatment("square", value);
+    return;
+  }
   if (name != "fibre_offset") {
     Strategy::set_option(name, value);
     return;
@@ -340,7 +349,7 @@ Calibration SquareStrategy::calibrate(const Material& material, double ply_angle
 }
 
 Model SquareStrategy::assemble(const CouponSpec& coupon, const Calibration& calibration) const {
-  return build_square_coupon(coupon, calibration, "square");
+  return build_square_coupon(coupon, calibration, "square", edge_treatment_);
 }
 
 BoundaryCompletion SquareStrategy::boundary_completion() const {
@@ -383,7 +392,7 @@ Calibration SquarePaperStrategy::calibrate(const Material& material, double ply_
 
 Model SquarePaperStrategy::assemble(const CouponSpec& coupon,
                                     const Calibration& calibration) const {
-  return build_square_coupon(coupon, calibration, "square-paper");
+  return build_square_coupon(coupon, calibration, "square-paper", EdgeTreatment::kCellCompletion);
 }
 
 BoundaryCompletion SquarePaperStrategy::boundary_completion() const {

@@ -32,6 +32,7 @@
 #include <array>
 #include <optional>
 
+#include "strategies/boundary_cells.hpp"
 #include "strategies/strategy.hpp"
 
 namespace plydem {
@@ -67,6 +68,7 @@ class SquareStrategy : public Strategy {
   /// `fibre_offset`: angle of the fibre from the lattice x axis [deg], 0 or 45. -1 (default)
   /// chooses: 45 when that puts the lattice along the specimen axes (ply angles of 45 deg plus a
   /// multiple of 90), else 0; the other one when the first cannot represent the ply.
+  /// `edge_equilibrium` (strategies/boundary_cells.hpp): 1 (default) or 0.
   std::vector<StrategyOption> options() const override;
   void set_option(const std::string& name, double value) override;
   std::string description() const override;
@@ -82,6 +84,7 @@ class SquareStrategy : public Strategy {
 
  private:
   double fibre_offset_deg_ = -1;
+  EdgeTreatment edge_treatment_ = EdgeTreatment::kEquilibrium;
 };
 
 class SquarePaperStrategy : public Strategy {

@@ -314,7 +314,16 @@ TEST_CASE("a particle ordering that is not a permutation is refused") {
 }
 
 TEST_CASE("gather lists: a lattice gets one slot per direction and a few bond types") {
-  const Model lattice = hex_coupon();
+  // The count completion of the edges: a few weights (edge equilibrium, the default, gives every
+  // bond in its edge strips a weight, and a half-bond type, of its own).
+  CouponSpec spec;
+  spec.material = load_material("eglass-my750");
+  spec.ply_angle = 0.3;
+  spec.length = 0.6e-3;
+  spec.width = 0.4e-3;
+  Hex2dStrategy counted;
+  counted.set_option("edge_equilibrium", 0);
+  const Model lattice = counted.build(spec).model;
   const std::vector<int> order = space_filling_curve_order(lattice.particles.reference_position);
   const GatherBonds g(lattice.bonds, order);
   CHECK(g.lattice_slots());

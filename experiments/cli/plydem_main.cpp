@@ -588,18 +588,34 @@ int run_calibrate(const TensionOptions& o, bool json) {
   const plydem::Material material = plydem::load_material(o.material);
   const double angle = o.angle_deg * std::numbers::pi / 180.0;
   const std::unique_ptr<plydem::Strategy> strategy = make_strategy(o);
-  const plydem::Calibration calibration =
-      strategy->calibrate(material, angle, o.thickness_mm * 1e-3);
+  // The calibration the coupon of these options gets, as `plydem tension` builds it: for lattice
+  // that of the coupon's own packing (Strategy::calibrate_coupon), not of a calibration sample.
+  plydem::CouponSpec coupon;
+  coupon.material = material;
+  coupon.ply_angle = angle;
+  coupon.length = o.length_mm * 1e-3;
+  coupon.width = o.width_mm * 1e-3;
+  coupon.thickness = o.thickness_mm * 1e-3;
+  coupon.particle_diameter = o.diameter_mm * 1e-3;
+  coupon.validate();
+  const plydem::Calibration calibration = strategy->calibrate_coupon(coupon);
   if (json) {
     nlohmann::json j = plydem::calibration_json(calibration);
     j["strategy"] = o.strategy;
     j["material"] = material.name;
     j["angle_deg"] = o.angle_deg;
     j["thickness"] = o.thickness_mm * 1e-3;
+    j["coupon"] = {{"length", coupon.length},
+                   {"width", coupon.width},
+                   {"particle_diameter", coupon.particle_diameter}};
     j["units"] = "SI (N/m, N m/rad, Pa)";
     std::cout << j.dump(2) << "\n";
   } else {
     std::cout << plydem::format_calibration(calibration, o.strategy, material, angle);
+    std::cout << fmt::format(
+        "the calibration a {:g} x {:g} mm coupon of {:g} mm particles gets (what `plydem "
+        "tension` with these options builds)\n",
+        o.length_mm, o.width_mm, o.diameter_mm);
   }
   return 0;
 }
@@ -667,6 +683,16 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
       "simulated beside the target");
   add_ply_options(*calibrate, calibrate_options);
   calibrate->add_option("--thickness-mm", calibrate_options.thickness_mm, "ply thickness [mm]")
+      ->capture_default_str();
+  calibrate
+      ->add_option("--length-mm", calibrate_options.length_mm,
+                   "length of the coupon calibrated [mm] (lattice calibrates each coupon's own "
+                   "packing; the other strategies do not depend on it)")
+      ->capture_default_str();
+  calibrate->add_option("--width-mm", calibrate_options.width_mm, "coupon width [mm] (lattice)")
+      ->capture_default_str();
+  calibrate
+      ->add_option("--diameter-mm", calibrate_options.diameter_mm, "particle diameter [mm] (lattice)")
       ->capture_default_str();
   calibrate->add_flag("--json", calibrate_json, "print one JSON object (SI units)");
   CLI::App* strategies = app.add_subcommand("strategies", "list the registered strategies");
