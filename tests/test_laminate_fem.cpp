@@ -38,6 +38,7 @@ struct SameCouponCase {
   std::string layup;  // empty: a single ply at `angle_deg`
   double angle_deg = 0;
   double length = 10e-3;  // the paper's coupon, 10 x 0.83 mm, 0.05 mm particles
+  bool transverse_shear = false;  // InterfaceStiffness::transverse_shear
 };
 
 // The DEM's tension test and CalculiX of the same coupon, and CLT: (DEM, FEM, CLT).
@@ -52,6 +53,7 @@ SameCouponResult run_same_coupon(const SameCouponCase& c) {
   s.coupon.ply_angle = c.angle_deg * kDeg;
   s.coupon.length = c.length;
   if (!c.layup.empty()) s.layup = parse_layup(c.layup);
+  s.interface.transverse_shear = c.transverse_shear;
   const TensionResult dem = TensionTest(s).run();
   const FemTensionResult fem = fem_twin_tension_test(s, dem, FemTwinSettings{});
   REQUIRE(fem.available);
@@ -102,5 +104,9 @@ TEST_CASE("the paper's coupon, [0/45/-45/90]s E-glass: DEM within 1.5% of the sa
 
 TEST_CASE("the paper's coupon, [45/-45]s carbon: DEM within 1.5% of the same coupon") {
   if (!have_ccx()) return;
-  check_within({"square", "t300-914c", "[45/-45]s"}, 0.015, 0.015);
+  // The free-edge zones of an angle-ply carry interlaminar shear (CalculiX: Ex 9.5% below CLT on
+  // this coupon), which single-layer plies hold only with their transverse shear stiffness: without
+  // it the DEM is 1.8% soft. Square plies at +-45 deg have their lattices along x, lined up, so the
+  // interface penalty does not stiffen the membrane (the interior window measures A/h to 0.01%).
+  check_within({"square", "t300-914c", "[45/-45]s", 0, 10e-3, true}, 0.015, 0.015);
 }
