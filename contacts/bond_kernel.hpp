@@ -267,6 +267,11 @@ class GatherBonds {
   const double* slot_tension_threshold() const { return slot_tension_.data(); }
   const double* slot_shear_threshold() const { return slot_shear_.data(); }
   double slot_tensile_strength(std::size_t cell) const { return slot_tensile_[cell]; }
+  /// The per-cell arrays whole (a device backend copies them): slot_bond, the tensile strengths
+  /// and cohesions per slot.
+  const std::int32_t* slot_bonds() const { return slot_bond_.data(); }
+  const double* slot_tensile_strengths() const { return slot_tensile_.data(); }
+  const double* slot_cohesions() const { return slot_cohesion_.data(); }
   double slot_cohesion(std::size_t cell) const { return slot_cohesion_[cell]; }
   /// Softening (softening()): per cell, the bond's damage and kappa as this end holds them.
   double* slot_damage() { return slot_damage_.data(); }
@@ -381,45 +386,6 @@ template <bool kEnergy>
       for (int l = 0; l < kLanes; ++l) force_norm[l] += 0.5 * __builtin_sqrt(f2[l]);
     }
   }
-}
-
-/// A damage step (a break, or a softening step) that a bond's first end decided. The energy the
-/// step releases needs the bond's deformation at the next state: with q the deformation and K the
-/// intact stiffness, a step from damage d to d' decided at q_n (acting from n + 1) takes
-/// 1/2 (d' - d) q_n.K q_n+1 out of the leapfrog account exactly (the trapezoidal work of the bond
-/// over the step, less its change of energy). The event keeps K q_n for that.
-struct SlotEvent {
-  int bond = 0;    ///< model bond
-  long cycle = 0;  ///< BreakingPass::cycle of the pass
-  bool broken = false;
-  BondState mode = BondState::kIntact;  ///< how it broke
-  double damage_before = 0, damage_after = 0;
-  double force[3] = {0, 0, 0};   ///< intact force k_n du_n n + k_s du_s on the first end at q_n
-  double moment[3] = {0, 0, 0};  ///< intact moment k_t dtheta_n n + k_b dtheta_s at q_n
-  double displacement[3] = {0, 0, 0};  ///< of the bond's first particle, at q_n's state
-};
-
-/// The event of a bond whose first end saw `update` at deformation (du, dtheta) along n with
-/// intact stiffnesses `k` (both kernels build them alike).
-inline SlotEvent damage_event(int bond, long cycle, const BondDamageUpdate& update,
-                              double damage_before, const BondStiffness& k, const double du[3],
-                              const double dtheta[3], const double n[3],
-                              const double displacement[3]) {
-  SlotEvent e;
-  e.bond = bond;
-  e.cycle = cycle;
-  e.broken = update.broken;
-  e.mode = update.mode;
-  e.damage_before = damage_before;
-  e.damage_after = update.damage;
-  const double du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
-  const double dt_n = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
-  for (int c = 0; c < 3; ++c) {
-    e.force[c] = k.normal * du_n * n[c] + k.shear * (du[c] - du_n * n[c]);
-    e.moment[c] = k.twisting * dt_n * n[c] + k.bending * (dtheta[c] - dt_n * n[c]);
-    e.displacement[c] = displacement[c];
-  }
-  return e;
 }
 
 /// What one thread's breaking pass writes besides forces.

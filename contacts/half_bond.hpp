@@ -179,6 +179,46 @@ inline constexpr double kScreenMargin = 1e-9;
 /// The first screen's bound is compared with 1 - kScreenBound.
 inline constexpr double kScreenBound = 1e-6;
 
+/// A damage step (a break, or a softening step) that a bond's first end decided. The energy the
+/// step releases needs the bond's deformation at the next state: with q the deformation and K the
+/// intact stiffness, a step from damage d to d' decided at q_n (acting from n + 1) takes
+/// 1/2 (d' - d) q_n.K q_n+1 out of the leapfrog account exactly (the trapezoidal work of the bond
+/// over the step, less its change of energy). The event keeps K q_n for that.
+struct SlotEvent {
+  int bond = 0;    ///< model bond
+  long cycle = 0;  ///< BreakingPass::cycle of the pass
+  bool broken = false;
+  BondState mode = BondState::kIntact;  ///< how it broke
+  double damage_before = 0, damage_after = 0;
+  double force[3] = {0, 0, 0};   ///< intact force k_n du_n n + k_s du_s on the first end at q_n
+  double moment[3] = {0, 0, 0};  ///< intact moment k_t dtheta_n n + k_b dtheta_s at q_n
+  double displacement[3] = {0, 0, 0};  ///< of the bond's first particle, at q_n's state
+};
+
+/// The event of a bond whose first end saw `update` at deformation (du, dtheta) along n with
+/// intact stiffnesses `k` (both kernels build them alike).
+PLYDEM_HOST_DEVICE inline SlotEvent damage_event(int bond, long cycle,
+                                                 const BondDamageUpdate& update,
+                                                 double damage_before, const BondStiffness& k,
+                                                 const double du[3], const double dtheta[3],
+                                                 const double n[3], const double displacement[3]) {
+  SlotEvent e;
+  e.bond = bond;
+  e.cycle = cycle;
+  e.broken = update.broken;
+  e.mode = update.mode;
+  e.damage_before = damage_before;
+  e.damage_after = update.damage;
+  const double du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
+  const double dt_n = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
+  for (int c = 0; c < 3; ++c) {
+    e.force[c] = k.normal * du_n * n[c] + k.shear * (du[c] - du_n * n[c]);
+    e.moment[c] = k.twisting * dt_n * n[c] + k.bending * (dtheta[c] - dt_n * n[c]);
+    e.displacement[c] = displacement[c];
+  }
+  return e;
+}
+
 /// The relative rotation dtheta = theta_j - theta_i and the lever term a of du = (u_j - u_i) - a x
 /// n in the form the elastic kernel computes: a = s_own theta_i + s_other theta_j (the parallel
 /// bond of core/parallel_bond.hpp).

@@ -97,6 +97,7 @@ struct TensionOptions : CouponOptions {
   double safety = 0.8;
   double grip_velocity_mm_s = 0;
   std::string solver = "static";
+  std::string backend = "cpu";  // --backend: where explicit dynamics run
   CheckpointFlags checkpoint;
 };
 
@@ -222,7 +223,7 @@ void refuse_inapplicable(const CLI::App& app, const TensionOptions& o) {
   if (o.solver == "static") {
     refuse_given(app,
                  {"--stages", "--ramp-cycles", "--cycles", "--max-cycles", "--tolerance",
-                  "--damping", "--safety", "--grip-velocity-mm-s"},
+                  "--damping", "--safety", "--grip-velocity-mm-s", "--backend"},
                  "it is a setting of explicit dynamics, and the static solver (--solver static, "
                  "the default) solves once at the target strain (add --solver explicit)");
   } else if (o.cycles > 0) {
@@ -257,6 +258,16 @@ void refuse_inapplicable(const CLI::App& app, const StrengthCommandOptions& o) {
   }
 }
 
+// --backend cpu|cuda: where the explicit integrator's kernel runs (solvers/device_backend.hpp).
+void add_backend_option(CLI::App& app, std::string& backend, const std::string& needs) {
+  app.add_option("--backend", backend,
+                 "where explicit dynamics run (" + needs +
+                     "): cpu (SIMD kernel, OpenMP threads) or cuda (one CUDA device; a build "
+                     "with -DPLYDEM_CUDA=ON)")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
+}
+
 void add_tension_options(CLI::App& app, TensionOptions& o) {
   add_coupon_options(app, o, "free (uniaxial stress) or clamped (ends held laterally)",
                      {"free", "clamped"});
@@ -286,6 +297,7 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
       ->check(CLI::IsMember({"explicit", "static"}))
       ->capture_default_str();
   add_checkpoint_options(app, o.checkpoint, "cycles (--solver explicit)");
+  add_backend_option(app, o.backend, "--solver explicit");
 }
 
 void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
@@ -403,6 +415,7 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
       o.solver == "static" ? plydem::TensionSolver::kStatic : plydem::TensionSolver::kExplicit;
   s.explicit_settings.local_damping = o.damping;
   s.explicit_settings.safety_factor = o.safety;
+  s.explicit_settings.backend = plydem::parse_backend(o.backend);
   s.checkpoint = to_checkpoint(o.checkpoint);
   s.validate();  // checkpoints with the static solver fail here, before any work
   return s;
