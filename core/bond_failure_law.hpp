@@ -15,10 +15,6 @@
 
 namespace plydem {
 
-/// pi, spelled out (the same double as std::numbers::pi) so that device code needs no host
-/// variable.
-inline constexpr double kPi = 3.141592653589793238462643383279502884;
-
 /// One bond's strength (the strength fields of Bonds, core/model.hpp).
 struct BondStrength {
   double radius = 0;                                          ///< R of the section [m]
@@ -47,7 +43,9 @@ struct BondStresses {
 PLYDEM_HOST_DEVICE inline BondStresses section_stresses(double normal_force, double shear_force,
                                                         double bending, double twisting,
                                                         double radius) {
-  const double area = kPi * radius * radius;
+  // pi spelled out (the same double as std::numbers::pi): device code reads no host variable.
+  constexpr double pi = 3.141592653589793238462643383279502884;
+  const double area = pi * radius * radius;
   const double inertia = 0.25 * area * radius * radius;  // I = pi R^4 / 4; J = 2 I
   BondStresses s;
   s.axial = normal_force / area;

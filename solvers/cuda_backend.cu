@@ -46,6 +46,9 @@ void check(cudaError_t status, const std::string& what) {
 }
 
 constexpr int kThreads = 256;  // per block of threads; 8 warps
+
+// Bytes this process holds on the device through DeviceArray (one backend at a time in practice).
+std::size_t allocated_bytes = 0;
 constexpr int kReduceThreads = 256;
 
 // One device allocation, freed with its owner.
@@ -56,17 +59,24 @@ class DeviceArray {
   DeviceArray(const DeviceArray&) = delete;
   DeviceArray& operator=(const DeviceArray&) = delete;
   ~DeviceArray() {
-    if (data_) cudaFree(data_);  // no throw from a destructor
+    if (data_) {
+      cudaFree(data_);  // no throw from a destructor
+      allocated_bytes -= size_ * sizeof(T);
+    }
   }
   void resize(std::size_t n, const char* what) {
     if (n == size_ && data_) return;
-    if (data_) check(cudaFree(data_), "cudaFree");
+    if (data_) {
+      check(cudaFree(data_), "cudaFree");
+      allocated_bytes -= size_ * sizeof(T);
+    }
     data_ = nullptr;
     size_ = 0;
     if (n == 0) return;
     check(cudaMalloc(reinterpret_cast<void**>(&data_), n * sizeof(T)),
           text("cudaMalloc of ", what, " (", n * sizeof(T), " bytes)"));
     size_ = n;
+    allocated_bytes += n * sizeof(T);
   }
   void upload(const T* from, std::size_t n, const char* what) {
     resize(n, what);
@@ -195,7 +205,7 @@ class CudaBackend final : public DeviceBackend {
     const std::size_t needed = bytes_needed(a);
     std::size_t free = 0, total = 0;
     check(cudaMemGetInfo(&free, &total), "cudaMemGetInfo");
-    const std::size_t held = held_bytes();
+    const std::size_t held = allocated_bytes;  // what re-uploading into them frees
     require(needed <= free + held,
             text("CUDA backend: the model needs ", needed * 1e-9, " GB of device memory, ",
                  (free + held) * 1e-9, " GB of the device's ", total * 1e-9, " GB are free"));
@@ -379,13 +389,6 @@ class CudaBackend final : public DeviceBackend {
   static std::size_t event_capacity(const DeviceArrays& a) {
     const std::size_t bonds = static_cast<std::size_t>(a.padded) * a.width / 2 + 1;
     return std::min(bonds, kMaxEvents);
-  }
-  std::size_t held_bytes() const {
-    std::size_t bytes = 0;
-    for (int b = 0; b < 2; ++b)
-      for (int c = 0; c < 3; ++c)
-        bytes += (displacement_[b][c].size() + rotation_[b][c].size()) * sizeof(double);
-    return bytes;  // the largest part; the rest is re-sized in place
   }
 
   std::string name_;
