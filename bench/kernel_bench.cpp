@@ -5,6 +5,7 @@
 //   plydem_kernel_bench layer --particles 100000 --steps 500 --threads 2   # one JSON line
 //   plydem_kernel_bench layer --particles 10000 --lammps-data layer.data --yade-layer layer.txt
 //   plydem_kernel_bench coupon --cycles 200000     # the paper's Table 2 Hex2D coupon, timed
+//   plydem_kernel_bench layer --particles 10000000 --steps 200 --backend cuda   # on a GPU
 //   plydem_kernel_bench tension --cycles 200000    # the same coupon through the tension test
 //   plydem_kernel_bench table < rows.jsonl         # the table bench/run prints
 //
@@ -21,6 +22,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -186,10 +188,47 @@ ParticleOrder order_named(const std::string& name) {
   return ParticleOrder::kAutomatic;
 }
 
+// Strengths far above anything the pull reaches (no bond breaks): the breaking kernel decides every
+// bond at every cycle, the elastic one's work plus the failure law's.
+void unreachable_strengths(Model& model) {
+  for (int b = 0; b < model.bonds.size(); ++b) {
+    model.bonds.strength_radius(b) = model.particles.radius(model.bonds.first(b));
+    model.bonds.tensile_strength(b) = 1e15;
+    model.bonds.cohesion(b) = 1e15;
+  }
+}
+
+// The explicit settings of the benchmark runs: the kernel on `backend`; a breakable model without
+// contacts (none would touch: no bond breaks), which the device backends do not have.
+ExplicitSettings bench_settings(const std::string& order, const std::string& backend) {
+  ExplicitSettings settings;
+  settings.particle_order = order_named(order);
+  settings.backend = parse_backend(backend);
+  settings.contacts = false;
+  return settings;
+}
+
+// The largest number of bonds of one particle: the gather table's width on a lattice.
+int max_degree(const Model& model) {
+  std::vector<int> degree(static_cast<std::size_t>(model.particles.size()), 0);
+  int widest = 0;
+  for (int b = 0; b < model.bonds.size(); ++b)
+    for (int end : {model.bonds.first(b), model.bonds.second(b)})
+      widest = std::max(widest, ++degree[static_cast<std::size_t>(end)]);
+  return widest;
+}
+
+// What a device must stream per particle and cycle (solvers/device_backend.hpp), for the achieved
+// bandwidth bench/gpu_check reports.
+double streamed_bytes(const Model& model, bool breaking) {
+  return streamed_bytes_per_particle(max_degree(model), breaking ? kBrittleTypes : kElasticMode);
+}
+
 int run_layer(long particles, long steps, int threads, const std::string& order,
               const std::string& api, const std::string& lammps_data, const std::string& yade_layer,
-              bool describe) {
+              bool describe, const std::string& backend, bool breakable) {
   Model model = square_layer(particles);
+  if (breakable) unreachable_strengths(model);
   const long n = model.particles.size(), bonds = model.bonds.size();
   if (!lammps_data.empty()) write_lammps_data(model, lammps_data);
   if (!yade_layer.empty()) write_yade_layer(model, yade_layer);
@@ -207,8 +246,7 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   }
   require(steps >= 1, "--steps must be at least 1");
   omp_set_num_threads(threads);
-  ExplicitSettings settings;
-  settings.particle_order = order_named(order);
+  const ExplicitSettings settings = bench_settings(order, backend);
   ExplicitIntegrator integrator(model, settings);
   pull_with_grips(model, integrator, 200'000);
   integrator.advance(1);  // first touch of the kernel's arrays, not timed
@@ -222,27 +260,21 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
                          static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(n));
   r["order"] = order;
   r["api"] = api;
+  r["backend"] = backend;
+  r["breakable"] = breakable;
+  r["streamed_bytes_per_particle_step"] = streamed_bytes(model, integrator.breaking());
   if (timers.is_object()) r.update(timers);
   std::cout << r.dump() << "\n";
   return 0;
 }
 
 int run_coupon(long cycles, int threads, const std::string& order, const std::string& api,
-               long report_every, bool breakable) {
+               long report_every, bool breakable, const std::string& backend) {
   require(cycles >= 1 && report_every >= 1, "--cycles and --report-every must be at least 1");
   Model model = table2_coupon();
-  if (breakable) {
-    // Strengths far above anything the pull reaches (no bond breaks): the breaking kernel decides
-    // every bond at every cycle, the elastic one's work plus the failure law's.
-    for (int b = 0; b < model.bonds.size(); ++b) {
-      model.bonds.strength_radius(b) = model.particles.radius(model.bonds.first(b));
-      model.bonds.tensile_strength(b) = 1e15;
-      model.bonds.cohesion(b) = 1e15;
-    }
-  }
+  if (breakable) unreachable_strengths(model);
   omp_set_num_threads(threads);
-  ExplicitSettings settings;
-  settings.particle_order = order_named(order);
+  const ExplicitSettings settings = bench_settings(order, backend);
   ExplicitIntegrator integrator(model, settings);
   pull_with_grips(model, integrator, cycles);
   const double cpu = process_cpu_seconds();
@@ -261,6 +293,8 @@ int run_coupon(long cycles, int threads, const std::string& order, const std::st
   r["order"] = order;
   r["api"] = api;
   r["report_every"] = report_every;
+  r["backend"] = backend;
+  r["streamed_bytes_per_particle_step"] = streamed_bytes(model, integrator.breaking());
   r["unbalanced_force_ratio"] = report.unbalanced_force_ratio;
   if (timers.is_object()) r.update(timers);
   std::cout << r.dump() << "\n";
@@ -384,6 +418,14 @@ int main(int argc, char** argv) {
   layer->add_option("--lammps-data", lammps_data, "also write the layer as a LAMMPS data file");
   layer->add_option("--yade-layer", yade_layer, "also write x y z radius per particle for YADE");
   layer->add_flag("--describe", describe, "print the layer's size and parameters, run nothing");
+  std::string backend = "cpu";
+  const auto backends = CLI::IsMember({"cpu", "cuda", "emulation"});
+  layer->add_option("--backend", backend, "where the kernel runs: cpu, cuda, emulation")
+      ->check(backends)
+      ->capture_default_str();
+  bool breakable = false;
+  layer->add_flag("--breakable", breakable,
+                  "give every bond a strength it never reaches: times the breaking kernel");
   CLI::App* coupon = app.add_subcommand("coupon", "the paper's Table 2 Hex2D coupon, timed");
   coupon->add_option("--cycles", cycles, "explicit cycles")->capture_default_str();
   coupon->add_option("--threads", threads, "OpenMP threads")->capture_default_str();
@@ -399,7 +441,9 @@ int main(int argc, char** argv) {
   coupon->add_option("--api", api, "run: ExplicitIntegrator::run(); advance: advance(N) calls")
       ->check(apis)
       ->capture_default_str();
-  bool breakable = false;
+  coupon->add_option("--backend", backend, "where the kernel runs: cpu, cuda, emulation")
+      ->check(backends)
+      ->capture_default_str();
   coupon->add_flag("--breakable", breakable,
                    "give every bond a strength it never reaches: times the breaking kernel");
   CLI::App* tension =
@@ -407,6 +451,9 @@ int main(int argc, char** argv) {
   tension->add_option("--cycles", cycles, "fixed explicit cycles")->capture_default_str();
   tension->add_option("--threads", threads, "OpenMP threads")->capture_default_str();
   CLI::App* table = app.add_subcommand("table", "print JSON lines from stdin as the bench table");
+  CLI::App* copy = app.add_subcommand("copy", "the CUDA device's copy bandwidth (one JSON line)");
+  double copy_bytes = 4e9;
+  copy->add_option("--bytes", copy_bytes, "bytes per copy")->capture_default_str();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -415,10 +462,19 @@ int main(int argc, char** argv) {
   try {
     require(threads >= 1, "--threads must be at least 1");
     if (*layer)
-      return run_layer(particles, steps, threads, order, api, lammps_data, yade_layer, describe);
-    if (*coupon) return run_coupon(cycles, threads, order, api, report_every, breakable);
+      return run_layer(particles, steps, threads, order, api, lammps_data, yade_layer, describe,
+                       backend, breakable);
+    if (*coupon) return run_coupon(cycles, threads, order, api, report_every, breakable, backend);
     if (*tension) return run_tension(cycles, threads);
     if (*table) return print_table();
+    if (*copy) {
+      require(copy_bytes >= 1e6, "--bytes must be at least 1e6");
+      nlohmann::json r;
+      r["copy_bytes"] = copy_bytes;
+      r["copy_bandwidth"] = cuda_copy_bandwidth(static_cast<std::size_t>(copy_bytes));
+      std::cout << r.dump() << "\n";
+      return 0;
+    }
   } catch (const std::exception& e) {
     std::cerr << "plydem_kernel_bench: error: " << e.what() << "\n";
     return 2;

@@ -36,6 +36,7 @@
 #include <new>
 #include <vector>
 
+#include "contacts/half_bond.hpp"
 #include "core/bond_failure.hpp"
 #include "core/model.hpp"
 #include "core/parallel_bond.hpp"
@@ -61,46 +62,6 @@ BondPass compute_bond_forces(Particles& particles, const Bonds& bonds);
 /// none).
 double bond_strain_energy(const Particles& particles, const Bonds& bonds);
 
-/// A bond's deformation as the failure law reads it: the four magnitudes the section stresses
-/// depend on (core/bond_failure.hpp), the same seen from either end.
-struct BondDeformation {
-  double normal = 0;  ///< du_n = n.du, extension positive [m]
-  double shear = 0;   ///< |du - du_n n| [m]
-  double twist = 0;   ///< dtheta_n [rad]
-  double bend = 0;    ///< |dtheta - dtheta_n n| [rad]
-};
-
-/// A bond's intact stiffnesses (its current ones are 1 - damage times these).
-struct BondStiffness {
-  double normal = 0;     ///< k_n [N/m]
-  double shear = 0;      ///< k_s [N/m]
-  double bending = 0;    ///< k_b [N m/rad]
-  double twisting = 0;   ///< k_t [N m/rad]
-};
-
-/// The deformation from the contact point's relative displacement `du`, the relative rotation
-/// `dtheta` and the unit normal `n`, as seen from one end. Seen from the other end all three are
-/// negated exactly, and the result is the same to the bit: every product keeps its value
-/// ((-a)(-b) = ab), every difference is negated (RN(-x) = -RN(x)), and du_n, the norms and the
-/// sums are computed in the same order, with or without fused multiply-adds.
-[[gnu::always_inline]] inline BondDeformation deformation_of(const double du[3],
-                                                             const double dtheta[3],
-                                                             const double n[3]) {
-  BondDeformation d;
-  d.normal = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
-  d.twist = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
-  double shear2 = 0, bend2 = 0;
-  for (int c = 0; c < 3; ++c) {
-    const double s = du[c] - d.normal * n[c];
-    const double b = dtheta[c] - d.twist * n[c];
-    shear2 += s * s;
-    bend2 += b * b;
-  }
-  d.shear = std::sqrt(shear2);
-  d.bend = std::sqrt(bend2);
-  return d;
-}
-
 /// Bond b's deformation at the particles' current state, for the reference loop. The lever term
 /// (s_i theta_i + s_j theta_j) x n is written as (sigma (theta_i + theta_j) + delta (theta_j -
 /// theta_i)) x n with sigma = (s_i + s_j) / 2 and delta = (s_j - s_i) / 2, the form the fused kernel
@@ -108,70 +69,6 @@ struct BondStiffness {
 /// writes du and dtheta there.
 BondDeformation bond_deformation(const Particles& particles, const Bonds& bonds, int b,
                                  double* du_out = nullptr, double* dtheta_out = nullptr);
-
-/// What the failure law does to one bond at one cycle (update_bond_damage).
-struct BondDamageUpdate {
-  bool changed = false;  ///< damage or kappa moved
-  bool broken = false;   ///< the bond breaks: damage 1, state = mode, from the next cycle on
-  BondState mode = BondState::kIntact;
-  double damage = 0;       ///< after this cycle
-  double kappa = 1;        ///< largest utilisation so far (softening), after this cycle
-  double utilisation = 0;  ///< U at this cycle (intact-equivalent stresses)
-};
-
-/// The one failure law applied to a bond of intact stiffnesses `intact`, damage `damage` and
-/// softening history `kappa` (1 for a bond that never softened) at deformation `d`: the section
-/// stresses with the current stiffness (1 - damage) x intact (section_stresses), made
-/// intact-equivalent (intact_stresses), their utilisation() against `strength`. A brittle bond
-/// (ductility 1) breaks at U >= 1 in the mode utilisation() names; a softening one raises kappa
-/// to U when U > kappa, takes damage softening_damage(kappa, ductility), and breaks when it
-/// reaches 1. A mixed-mode bond (core/bond_failure.hpp) softens alike with the ductility of the
-/// mix at this state, kappa_u(B), its damage never falling. Both kernels decide through this
-/// function.
-inline BondDamageUpdate update_bond_damage(const BondDeformation& d, const BondStiffness& intact,
-                                           const BondStrength& strength, double damage,
-                                           double kappa) {
-  const double remaining = 1.0 - damage;
-  const BondStresses current = section_stresses(
-      (remaining * intact.normal) * d.normal, (remaining * intact.shear) * d.shear,
-      (remaining * intact.bending) * d.bend, (remaining * intact.twisting) * std::abs(d.twist),
-      strength.radius);
-  const BondStresses stresses = intact_stresses(current, damage);
-  const BondUtilisation u = utilisation(stresses, strength);
-  BondDamageUpdate r;
-  r.damage = damage;
-  r.kappa = kappa;
-  r.utilisation = u.ratio;
-  if (strength.mixed_mode()) {
-    if (u.ratio > kappa) {
-      r.changed = true;
-      r.kappa = u.ratio;
-      r.damage =
-          std::max(damage, softening_damage(u.ratio, softening_ductility(stresses, strength)));
-      if (r.damage >= 1) {
-        r.broken = true;
-        r.mode = u.mode;  // U >= kappa_u(B) >= 1: tension or shear
-        r.damage = 1;
-      }
-    }
-  } else if (!(strength.ductility > 1)) {
-    if (u.mode != BondState::kIntact) {
-      r.changed = r.broken = true;
-      r.mode = u.mode;
-      r.damage = 1;
-    }
-  } else if (u.ratio > kappa) {
-    r.changed = true;
-    r.kappa = u.ratio;
-    r.damage = softening_damage(u.ratio, strength.ductility);
-    if (r.damage >= 1) {
-      r.broken = true;
-      r.mode = u.mode;  // U >= ductility >= 1: tension or shear
-      r.damage = 1;
-    }
-  }
-  return r;
-}
 
 /// SIMD lanes: GCC vector extensions, which the compiler lowers to the instruction set of the
 /// function being compiled (one AVX-512 register, two AVX2 registers, four SSE2 registers). Values
@@ -252,23 +149,6 @@ class Array {
 
 }  // namespace lanes
 
-/// One bond as seen from one of its particles ("own"), toward the other: the parameters of the
-/// gather form. With the normal pointing from own to other, the force and moment on own are those
-/// parallel_bond_response gives the first particle (it is symmetric under swapping the two ends,
-/// which flips n, du and dtheta), written as
-///   F = k_s du + (k_n - k_s)(n.du) n,   M_own = s_own n x F + k_b dtheta + (k_t - k_b)(n.dtheta)
-///   n.
-struct HalfBondType {
-  double normal[3] = {0, 0, 0};  ///< unit, own -> other
-  double lever_own = 0;          ///< [m]
-  double lever_other = 0;        ///< [m]
-  double shear_stiffness = 0;    ///< k_s [N/m]
-  double lever_shear = 0;        ///< s_own k_s [N]
-  double normal_excess = 0;      ///< k_n - k_s [N/m]
-  double bending_stiffness = 0;  ///< k_b [N m/rad]
-  double twisting_excess = 0;    ///< k_t - k_b [N m/rad]
-};
-
 /// A HalfBondType with every parameter repeated in all lanes: what a block whose eight particles
 /// share the type of a slot loads (plain vector loads; no broadcasts in the loop).
 struct alignas(64) HalfBondLanes {
@@ -276,44 +156,6 @@ struct alignas(64) HalfBondLanes {
   lanes::Doubles lever_own, lever_other, shear_stiffness, lever_shear, normal_excess,
       bending_stiffness, twisting_excess;
 };
-
-/// What breaking adds to a half-bond type (a GatherBonds built with breaking on). The lever term
-/// of du is computed as (sigma (theta_own + theta_other) + delta (theta_other - theta_own)) x n,
-/// which both ends of a bond evaluate to the same number (gather_breaking_block). The screen
-/// constants let the kernel skip the failure law for bonds far from their strength:
-///  - alpha |du|^2 + beta |dtheta|^2 >= 1 whenever U >= 1 (a bound: |du_n|, |du_s| <= |du|,
-///    (x + y)^2 <= 2 (x^2 + y^2)), with alpha = 2 max(k_n^2 / T_t^2, (k_s + tan(phi) k_n)^2 / T_c^2),
-///    beta = 2 max((4 k_b / R)^2 / T_t^2, (2 k_t / R)^2 / T_c^2), T_t = A sigma_c and T_c = A c
-///    the section's strengths as forces; it holds for U >= kappa >= 1 too;
-///  - then, lane by lane, the tension and shear tests of core/bond_failure.hpp without square
-///    roots (F_n + (4/R)|M_b| >= kappa T_t as (kappa T_t - F_n)^2 <= (4/R)^2 |M_b|^2, and so on),
-///    against thresholds lowered by kScreenMargin, and only where one holds the exact law
-///    (update_bond_damage).
-/// All stiffnesses here are intact ones (a softening bond's current ones are 1 - damage times).
-struct HalfBondFailure {
-  double lever_mean = 0;             ///< sigma = (s_own + s_other) / 2 [m]
-  double lever_half_difference = 0;  ///< delta = (s_other - s_own) / 2 [m]
-  double normal_stiffness = 0;       ///< intact k_n [N/m]
-  double shear_stiffness = 0;        ///< intact k_s [N/m]
-  double bending_stiffness = 0;      ///< intact k_b [N m/rad]
-  double twisting_stiffness = 0;     ///< intact k_t [N m/rad]
-  /// The bond's strength; with strengths kept per slot, tensile and cohesion are the slot's.
-  BondStrength strength;
-  double screen_displacement = 0;  ///< alpha [1/m^2] (strengths per type)
-  double screen_rotation = 0;      ///< beta [1/rad^2] (strengths per type)
-  double tension_threshold = 0;    ///< (1 - kScreenMargin) T_t [N] (strengths per type)
-  double shear_threshold = 0;      ///< (1 - kScreenMargin) T_c [N] (strengths per type)
-  double shear_friction = 0;       ///< (1 - kScreenMargin) tan(phi)
-  double bending_factor = 0;       ///< (4 k_b / R)^2 [N^2/rad^2]; 0 for an unbreakable bond
-  double twisting_factor = 0;      ///< 2 k_t / R [N/rad]; 0 for an unbreakable bond
-  double shear_stiffness_squared = 0;  ///< k_s^2
-};
-
-/// How far below its strength the kernel's screen starts asking the exact law (relative): it
-/// covers the rounding between the screen's vector arithmetic and the scalar law's.
-inline constexpr double kScreenMargin = 1e-9;
-/// The first screen's bound is compared with 1 - kScreenBound.
-inline constexpr double kScreenBound = 1e-6;
 
 /// HalfBondFailure's kernel fields repeated in all lanes (a block whose particles share a type).
 struct alignas(64) HalfBondFailureLanes {
@@ -425,6 +267,11 @@ class GatherBonds {
   const double* slot_tension_threshold() const { return slot_tension_.data(); }
   const double* slot_shear_threshold() const { return slot_shear_.data(); }
   double slot_tensile_strength(std::size_t cell) const { return slot_tensile_[cell]; }
+  /// The per-cell arrays whole (a device backend copies them): slot_bond, the tensile strengths
+  /// and cohesions per slot.
+  const std::int32_t* slot_bonds() const { return slot_bond_.data(); }
+  const double* slot_tensile_strengths() const { return slot_tensile_.data(); }
+  const double* slot_cohesions() const { return slot_cohesion_.data(); }
   double slot_cohesion(std::size_t cell) const { return slot_cohesion_[cell]; }
   /// Softening (softening()): per cell, the bond's damage and kappa as this end holds them.
   double* slot_damage() { return slot_damage_.data(); }
@@ -530,82 +377,15 @@ template <bool kEnergy>
       }
     }
     // du = (u_j - u_i) - (s_i theta_i + s_j theta_j) x n  (core/parallel_bond.hpp)
-    Doubles a[3], du[3];
-    for (int c = 0; c < 3; ++c) a[c] = s_own * t_i[c] + s_other * t_j[c];
-    du[0] = (u_j[0] - u_i[0]) - (a[1] * n[2] - a[2] * n[1]);
-    du[1] = (u_j[1] - u_i[1]) - (a[2] * n[0] - a[0] * n[2]);
-    du[2] = (u_j[2] - u_i[2]) - (a[0] * n[1] - a[1] * n[0]);
-    const Doubles du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
-    const Doubles normal_part = k_n_excess * du_n;
-    // F = k_s du + (k_n - k_s) du_n n, accumulated term by term; n x F = k_s (n x du).
-    for (int c = 0; c < 3; ++c) {
-      force[c] += k_s * du[c];
-      force[c] += normal_part * n[c];
-    }
-    const Doubles n_cross_du[3] = {n[1] * du[2] - n[2] * du[1], n[2] * du[0] - n[0] * du[2],
-                                   n[0] * du[1] - n[1] * du[0]};
-    Doubles dt[3];
-    for (int c = 0; c < 3; ++c) dt[c] = t_j[c] - t_i[c];
-    const Doubles dt_n = n[0] * dt[0] + n[1] * dt[1] + n[2] * dt[2];
-    const Doubles twist_part = k_t_excess * dt_n;
-    // M_own = s_own n x F + k_b dtheta + (k_t - k_b) dtheta_n n.
-    for (int c = 0; c < 3; ++c) {
-      torque[c] += s_k_s * n_cross_du[c];
-      torque[c] += k_b * dt[c];
-      torque[c] += twist_part * n[c];
-    }
+    Doubles dt[3], a[3], f2{};
+    lever_term(s_own, s_other, t_i, t_j, dt, a);
+    HalfBondMotion<Doubles> m;
+    half_bond_response<kEnergy>(n, u_i, u_j, a, dt, k_s, s_k_s, k_n_excess, k_b, k_t_excess, force,
+                                torque, energy, f2, m);
     if constexpr (kEnergy) {
-      const Doubles du2 = du[0] * du[0] + du[1] * du[1] + du[2] * du[2];
-      const Doubles dt2 = dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2];
-      // E = 1/2 (k_s |du|^2 + (k_n - k_s) du_n^2 + k_b |dtheta|^2 + (k_t - k_b) dtheta_n^2),
-      // half of it per end.
-      energy += 0.25 * (k_s * du2 + normal_part * du_n + k_b * dt2 + twist_part * dt_n);
-      // |F|^2 = k_s^2 |du|^2 + (k_n^2 - k_s^2) du_n^2, from scalars only: no product
-      // shared with the force above, so that report cycles compute the forces with the very same
-      // instructions as the others (cycle() and advance(n) agree to the bit).
-      const Doubles f2 = k_s * k_s * du2 + normal_part * (2.0 * k_s * du_n + normal_part);
       for (int l = 0; l < kLanes; ++l) force_norm[l] += 0.5 * __builtin_sqrt(f2[l]);
     }
   }
-}
-
-/// A damage step (a break, or a softening step) that a bond's first end decided. The energy the
-/// step releases needs the bond's deformation at the next state: with q the deformation and K the
-/// intact stiffness, a step from damage d to d' decided at q_n (acting from n + 1) takes
-/// 1/2 (d' - d) q_n.K q_n+1 out of the leapfrog account exactly (the trapezoidal work of the bond
-/// over the step, less its change of energy). The event keeps K q_n for that.
-struct SlotEvent {
-  int bond = 0;    ///< model bond
-  long cycle = 0;  ///< BreakingPass::cycle of the pass
-  bool broken = false;
-  BondState mode = BondState::kIntact;  ///< how it broke
-  double damage_before = 0, damage_after = 0;
-  double force[3] = {0, 0, 0};   ///< intact force k_n du_n n + k_s du_s on the first end at q_n
-  double moment[3] = {0, 0, 0};  ///< intact moment k_t dtheta_n n + k_b dtheta_s at q_n
-  double displacement[3] = {0, 0, 0};  ///< of the bond's first particle, at q_n's state
-};
-
-/// The event of a bond whose first end saw `update` at deformation (du, dtheta) along n with
-/// intact stiffnesses `k` (both kernels build them alike).
-inline SlotEvent damage_event(int bond, long cycle, const BondDamageUpdate& update,
-                              double damage_before, const BondStiffness& k, const double du[3],
-                              const double dtheta[3], const double n[3],
-                              const double displacement[3]) {
-  SlotEvent e;
-  e.bond = bond;
-  e.cycle = cycle;
-  e.broken = update.broken;
-  e.mode = update.mode;
-  e.damage_before = damage_before;
-  e.damage_after = update.damage;
-  const double du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
-  const double dt_n = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
-  for (int c = 0; c < 3; ++c) {
-    e.force[c] = k.normal * du_n * n[c] + k.shear * (du[c] - du_n * n[c]);
-    e.moment[c] = k.twisting * dt_n * n[c] + k.bending * (dtheta[c] - dt_n * n[c]);
-    e.displacement[c] = displacement[c];
-  }
-  return e;
 }
 
 /// What one thread's breaking pass writes besides forces.
@@ -798,38 +578,20 @@ template <bool kEnergy, bool kSoften, bool kSlotStrength>
       k_t_excess = remaining * k_t_excess;
     }
     // du = (u_j - u_i) - a x n with a = sigma (theta_i + theta_j) + delta dtheta (see above).
-    Doubles dt[3], a[3], du[3];
-    for (int c = 0; c < 3; ++c) dt[c] = t_j[c] - t_i[c];
-    for (int c = 0; c < 3; ++c) a[c] = sigma * (t_i[c] + t_j[c]) + delta * dt[c];
-    du[0] = (u_j[0] - u_i[0]) - (a[1] * n[2] - a[2] * n[1]);
-    du[1] = (u_j[1] - u_i[1]) - (a[2] * n[0] - a[0] * n[2]);
-    du[2] = (u_j[2] - u_i[2]) - (a[0] * n[1] - a[1] * n[0]);
-    const Doubles du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
-    const Doubles normal_part = k_n_excess * du_n;
-    for (int c = 0; c < 3; ++c) {
-      force[c] += k_s * du[c];
-      force[c] += normal_part * n[c];
-    }
-    const Doubles n_cross_du[3] = {n[1] * du[2] - n[2] * du[1], n[2] * du[0] - n[0] * du[2],
-                                   n[0] * du[1] - n[1] * du[0]};
-    const Doubles dt_n = n[0] * dt[0] + n[1] * dt[1] + n[2] * dt[2];
-    const Doubles twist_part = k_t_excess * dt_n;
-    for (int c = 0; c < 3; ++c) {
-      torque[c] += s_k_s * n_cross_du[c];
-      torque[c] += k_b * dt[c];
-      torque[c] += twist_part * n[c];
-    }
-    const Doubles du2 = du[0] * du[0] + du[1] * du[1] + du[2] * du[2];
-    const Doubles dt2 = dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2];
+    Doubles dt[3], a[3], f2{};
+    symmetric_lever_term(sigma, delta, t_i, t_j, dt, a);
+    HalfBondMotion<Doubles> m;
+    half_bond_response<kEnergy>(n, u_i, u_j, a, dt, k_s, s_k_s, k_n_excess, k_b, k_t_excess, force,
+                                torque, energy, f2, m);
     if constexpr (kEnergy) {
-      energy += 0.25 * (k_s * du2 + normal_part * du_n + k_b * dt2 + twist_part * dt_n);
-      const Doubles f2 = k_s * k_s * du2 + normal_part * (2.0 * k_s * du_n + normal_part);
       for (int l = 0; l < kLanes; ++l) force_norm[l] += 0.5 * __builtin_sqrt(f2[l]);
     }
-    const Mask near = alpha * du2 + beta * dt2 >= screen_bound;
+    Doubles measure;
+    screen_measure(alpha, beta, m, measure);
+    const Mask near = measure >= screen_bound;
     if (__builtin_expect(lanes::any(near), 0)) {
-      screen_slot<kSoften, kSlotStrength>(g, first, slot, uniform_type, n, du, dt, du_n, dt_n,
-                                          n_cross_du, du2, dt2, near, u_i, pass);
+      screen_slot<kSoften, kSlotStrength>(g, first, slot, uniform_type, n, m.du, dt, m.du_n, m.dt_n,
+                                          m.n_cross_du, m.du2, m.dt2, near, u_i, pass);
     }
   }
 }

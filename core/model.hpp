@@ -16,6 +16,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "core/bond_state.hpp"
+
 namespace plydem {
 
 using Vector3Array = Eigen::Array<double, Eigen::Dynamic, 3>;
@@ -27,10 +29,7 @@ enum class BoundaryGroup : int { kFree = 0, kLeftGrip = 1, kRightGrip = 2 };
 /// plies (strategies/laminate.hpp). Stored as int in Bonds::kind.
 enum class BondKind : int { kInPly = 0, kInterface = 1 };
 
-/// Whether a bond still holds, or how it broke (core/bond_failure.hpp). Stored as int in
-/// Bonds::state. A broken bond keeps its row (its identity: family, kind, ends) with zero
-/// stiffness.
-enum class BondState : int { kIntact = 0, kBrokenTension = 1, kBrokenShear = 2 };
+// BondState (core/bond_state.hpp): whether a bond still holds, or how it broke.
 
 /// What one row of a field holds.
 enum class FieldKind { kVector3, kScalar, kInt };

@@ -16,6 +16,7 @@
 #include "contacts/bond_kernel.hpp"
 #include "contacts/particle_ordering.hpp"
 #include "core/error.hpp"
+#include "solvers/device_backend.hpp"
 
 // The fused step is compiled for three instruction sets and the best one the processor has is
 // picked when the program starts (GCC function multi-versioning): one binary runs everywhere and
@@ -65,6 +66,10 @@ void validate(const ExplicitSettings& settings) {
   require(std::isfinite(settings.time_step) && settings.time_step >= 0,
           fmt::format("time step must be >= 0 (0 = automatic), got {}", settings.time_step));
   settings.contact.validate();
+  require(settings.backend == ExplicitBackend::kCpu || settings.kernel == ExplicitKernel::kFused,
+          fmt::format("the {} backend runs the fused kernel only: the reference kernel runs on the "
+                      "host (backend cpu)",
+                      to_string(settings.backend)));
   require(settings.strength_storage == StrengthStorage::kAutomatic ||
               settings.strength_storage == StrengthStorage::kTypes ||
               settings.strength_storage == StrengthStorage::kSlots,
@@ -73,15 +78,7 @@ void validate(const ExplicitSettings& settings) {
 
 namespace {
 
-// What a prescribed motion does to a particle of its group: per component, a mask (-1 fixed,
-// 0 free) and the imposed value.
-struct MotionClass {
-  std::int64_t fix_velocity[3] = {0, 0, 0};
-  std::int64_t fix_angular_velocity[3] = {0, 0, 0};
-  double velocity[3] = {0, 0, 0};
-  double angular_velocity[3] = {0, 0, 0};
-  std::int64_t free = -1;  // no translation fixed: counts in the unbalanced force
-};
+// MotionClass and KernelMode: solvers/particle_step.hpp (the device backends share them).
 
 // The fused kernel's data, in kernel order (particle k is model particle order[k]), padded to
 // whole lane blocks. Displacements and rotations are double-buffered: a cycle reads buffer
@@ -108,6 +105,13 @@ struct FusedState {
   lanes::Array work_sum, damping_sum;
   std::vector<std::vector<SlotEvent>> thread_events;
   std::vector<int> changed_flags;
+  // A device backend (ExplicitSettings::backend), its report's forces in kernel order, its last
+  // report sums, and the table as it came back.
+  std::unique_ptr<DeviceBackend> device;
+  lanes::Array device_force[3], device_torque[3];
+  double device_sums[kParticlePartials] = {};
+  std::vector<std::int32_t> device_types;
+  bool motions_changed = false;
 
   std::size_t bytes() const {
     std::size_t arrays = 0;
@@ -125,16 +129,6 @@ struct FusedState {
 };
 
 constexpr int kPartials = 6;
-
-// The fused step's variants: elastic, or breaking with strengths per type or per slot, brittle or
-// softening.
-enum KernelMode : int {
-  kElasticMode = 0,
-  kBrittleTypes = 1,
-  kBrittleSlots = 2,
-  kSofteningTypes = 3,
-  kSofteningSlots = 4
-};
 
 struct StepArgs {
   FusedState* state = nullptr;
@@ -353,6 +347,53 @@ PLYDEM_TARGET_CLONES void step_blocks(const StepArgs& a, bool report, int begin_
 // Below this many blocks per thread a cycle is too short to share.
 constexpr int kMinBlocksPerThread = 32;
 
+// The host arrays a device backend mirrors (solvers/device_backend.hpp).
+DeviceArrays device_arrays(FusedState& k, int mode) {
+  DeviceArrays a;
+  GatherBonds& g = k.bonds;
+  a.particles = k.particles;
+  a.padded = g.padded_count();
+  a.width = g.width();
+  a.type_count = g.type_count();
+  a.mode = mode;
+  for (int b = 0; b < 2; ++b)
+    for (int c = 0; c < 3; ++c) {
+      a.displacement[b][c] = k.displacement[b][c].data();
+      a.rotation[b][c] = k.rotation[b][c].data();
+    }
+  for (int c = 0; c < 3; ++c) {
+    a.velocity[c] = k.velocity[c].data();
+    a.angular_velocity[c] = k.angular_velocity[c].data();
+    a.force[c] = k.device_force[c].data();
+    a.torque[c] = k.device_torque[c].data();
+  }
+  a.inverse_mass = k.inverse_mass.data();
+  a.inverse_inertia = k.inverse_inertia.data();
+  a.motion = k.motion.data();
+  a.classes = k.classes.data();
+  a.class_count = static_cast<int>(k.classes.size());
+  a.neighbour = g.neighbours(0);
+  a.type = g.types(0);
+  a.types = &g.type(0);
+  if (mode != kElasticMode) {
+    a.failure = &g.failure(0);
+    a.slot_bond = g.slot_bonds();
+    a.work_sum = k.work_sum.data();
+    a.damping_sum = k.damping_sum.data();
+  }
+  if (mode == kBrittleSlots || mode == kSofteningSlots) {
+    a.slot_alpha = g.slot_screen_displacement();
+    a.slot_beta = g.slot_screen_rotation();
+    a.slot_tensile = g.slot_tensile_strengths();
+    a.slot_cohesion = g.slot_cohesions();
+  }
+  if (mode == kSofteningTypes || mode == kSofteningSlots) {
+    a.slot_damage = g.slot_damage();
+    a.slot_kappa = g.slot_kappa();
+  }
+  return a;
+}
+
 }  // namespace
 
 struct ExplicitIntegrator::Fused {
@@ -447,6 +488,14 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     }
     k.motion.assign(padded, 0);
     k.partial.assign(static_cast<std::size_t>(k.blocks) * kPartials, 0.0);
+    if (settings.backend == ExplicitBackend::kCuda) k.device = make_cuda_backend();
+    if (settings.backend == ExplicitBackend::kDeviceEmulation) k.device = make_emulation_backend();
+    if (k.device) {
+      for (int c = 0; c < 3; ++c) {
+        k.device_force[c] = lanes::Array(padded);
+        k.device_torque[c] = lanes::Array(padded);
+      }
+    }
   }
   set_prescribed_motions({});
   if (breaking_) start_breaking();
@@ -479,6 +528,11 @@ void ExplicitIntegrator::start_breaking() {
 
 void ExplicitIntegrator::make_contacts() {
   if (!settings_.contacts) return;
+  require(!fused_ || !fused_->state.device,
+          fmt::format("the {} backend has no contacts between unbonded particles yet: a run whose "
+                      "bonds can break (or that keeps the energy account) needs contacts off "
+                      "(ExplicitSettings::contacts = false), or backend cpu",
+                      to_string(settings_.backend)));
   const Particles& p = model_.particles;
   std::vector<int> index(static_cast<std::size_t>(p.size()));
   ContactState s;
@@ -559,6 +613,7 @@ void ExplicitIntegrator::set_prescribed_motions(const std::vector<PrescribedMoti
     }
   }
   require(k.classes.size() <= 256, "more than 255 boundary groups have prescribed motions");
+  k.motions_changed = true;
   for (int i = 0; i < k.particles; ++i) {
     const auto it = class_of_group.find(p.group(k.order[i]));
     k.motion[i] = static_cast<std::uint8_t>(it == class_of_group.end() ? 0 : it->second);
@@ -619,6 +674,10 @@ void ExplicitIntegrator::load_kernel() {
       k.velocity[c][i] = p.velocity(m, c);
       k.angular_velocity[c][i] = p.angular_velocity(m, c);
     }
+  }
+  if (k.device) {
+    k.device->upload(device_arrays(k, kernel_mode()));
+    k.motions_changed = false;
   }
 }
 
@@ -713,9 +772,13 @@ CycleReport ExplicitIntegrator::step(long cycles) {
   }
   // Block sums in block order: the report does not depend on the number of threads.
   double sums[kPartials] = {0, 0, 0, 0, 0, 0};
-  for (int b = 0; b < k.blocks; ++b)
-    for (int q = 0; q < kPartials; ++q)
-      sums[q] += k.partial[static_cast<std::size_t>(b) * kPartials + q];
+  if (k.device) {
+    std::copy(k.device_sums, k.device_sums + kPartials, sums);  // reduced on the device
+  } else {
+    for (int b = 0; b < k.blocks; ++b)
+      for (int q = 0; q < kPartials; ++q)
+        sums[q] += k.partial[static_cast<std::size_t>(b) * kPartials + q];
+  }
   CycleReport report;
   report.strain_energy = sums[0];
   report.kinetic_energy = 0.5 * sums[2];
@@ -730,15 +793,54 @@ CycleReport ExplicitIntegrator::step(long cycles) {
   return report;
 }
 
+long ExplicitIntegrator::device_cycles(long cycles, bool report_last) {
+  FusedState& k = fused_->state;
+  const DeviceArrays arrays = device_arrays(k, kernel_mode());
+  if (k.motions_changed) {
+    k.device->upload_motions(arrays);
+    k.motions_changed = false;
+  }
+  DeviceBatch batch = k.device->run_cycles(cycles, k.parity, report_last, cycles_, time_step_,
+                                           settings_.local_damping);
+  k.parity = static_cast<int>((k.parity + batch.cycles) & 1);
+  k.device->download_state(arrays);
+  if (breaking_) {
+    // The slots the device emptied are emptied here too (with their blocks' tables).
+    k.device->download_table(arrays, k.device_types);
+    GatherBonds& g = k.bonds;
+    const std::size_t padded = static_cast<std::size_t>(g.padded_count());
+    for (std::size_t cell = 0; cell < k.device_types.size(); ++cell)
+      if (k.device_types[cell] == 0 && g.holds(cell))
+        g.clear_slot(static_cast<int>(cell % padded), static_cast<int>(cell / padded));
+    k.thread_events.assign(1, std::move(batch.events));
+  }
+  if (batch.reported) {
+    std::copy(batch.sums, batch.sums + kPartials, k.device_sums);
+    Particles& p = model_.particles;
+    for (int c = 0; c < 3; ++c)
+      for (int i = 0; i < k.particles; ++i) {
+        p.force(k.order[i], c) = k.device_force[c][i];
+        p.torque(k.order[i], c) = k.device_torque[c][i];
+      }
+  }
+  return batch.cycles;
+}
+
+int ExplicitIntegrator::kernel_mode() const {
+  if (!breaking_) return kElasticMode;
+  const bool slots = fused_ && fused_->state.bonds.slot_strengths();
+  return (softening_ ? kSofteningTypes : kBrittleTypes) + (slots ? 1 : 0);
+}
+
 long ExplicitIntegrator::fused_cycles(long cycles, bool report_last) {
   FusedState& k = fused_->state;
+  if (k.device) return device_cycles(cycles, report_last);
   Particles& p = model_.particles;
   StepArgs args;
   args.state = &k;
   args.dt = time_step_;
   args.alpha = settings_.local_damping;
-  if (breaking_)
-    args.mode = (softening_ ? kSofteningTypes : kBrittleTypes) + (k.bonds.slot_strengths() ? 1 : 0);
+  args.mode = kernel_mode();
   for (int c = 0; c < 3; ++c) {
     args.force_out[c] = p.force.col(c).data();
     args.torque_out[c] = p.torque.col(c).data();
@@ -1121,6 +1223,9 @@ void ExplicitIntegrator::break_bond(int bond, BondState mode) {
       if (cell < 0 || !g.holds(static_cast<std::size_t>(cell))) continue;
       g.clear_slot(static_cast<int>(cell % padded), static_cast<int>(cell / padded));
     }
+    // From a hook: the device holds the run's arrays, and the host copy is current; copy it in.
+    FusedState& k = fused_->state;
+    if (k.device && running_) k.device->upload(device_arrays(k, kernel_mode()));
   }
   bonds.state(bond) = static_cast<int>(mode);
   bonds.damage(bond) = 1;

@@ -30,6 +30,13 @@
 /// end. Particles no intact bond joins interact by contacts (contacts/unbonded_contacts.hpp), and
 /// the run keeps an energy account (energy()). The model's bonds get their new state, damage and
 /// stiffness as breaks happen and at the end of each run; the broken bonds keep their rows.
+///
+/// Backends (ExplicitSettings::backend). The fused kernel's cycles run on the host or on a device
+/// (solvers/device_backend.hpp: CUDA, or its code emulated on the host), which holds the kernel's
+/// arrays for the whole run and runs solvers/particle_step.hpp, the same half-bond math and failure
+/// law, once per particle: same motions, damping, breaks in the same order, and reports reduced on
+/// the device in a fixed order. The host copy is brought up to date after every batch of cycles,
+/// so checks, hooks, gather() and the break log read it as they read the host kernel's.
 
 #include <Eigen/Dense>
 #include <array>
@@ -46,6 +53,7 @@
 #include "core/bond_failure.hpp"
 #include "core/checkpoint.hpp"
 #include "core/model.hpp"
+#include "solvers/device_backend.hpp"
 
 namespace plydem {
 
@@ -71,6 +79,10 @@ struct ExplicitSettings {
   ContactSettings contact;
   /// Where the fused kernel keeps breakable bonds' strengths (contacts/bond_kernel.hpp).
   StrengthStorage strength_storage = StrengthStorage::kAutomatic;
+  /// Where the fused kernel runs (solvers/device_backend.hpp): the host, a CUDA device, or the
+  /// device's code emulated on the host. A device backend runs the fused kernel only, and no
+  /// contacts between unbonded particles yet (a breaking run needs `contacts` off).
+  ExplicitBackend backend = ExplicitBackend::kCpu;
 };
 
 /// Throws plydem::Error naming the first setting out of range.
@@ -302,6 +314,10 @@ class ExplicitIntegrator {
   void start_breaking();
   void make_contacts();
   long fused_cycles(long cycles, bool report_last);
+  // fused_cycles on a device backend; the host copy brought up to date after the batch.
+  long device_cycles(long cycles, bool report_last);
+  // The fused step's KernelMode (solvers/particle_step.hpp) for the bonds as they are.
+  int kernel_mode() const;
   // Resolves damage steps against the state after their cycle: the energy each released
   // (SlotEvent), breaks logged; the steps of `report_cycle` are counted at the next step.
   void resolve_events(std::vector<SlotEvent>& events, long report_cycle);

@@ -99,6 +99,7 @@ struct TensionOptions : CouponOptions {
   double safety = 0.8;
   double grip_velocity_mm_s = 0;
   std::string solver = "static";
+  std::string backend = "cpu";  // --backend: where explicit dynamics run
   CheckpointFlags checkpoint;
   bool fem = false;  // CalculiX of the same coupon beside the DEM
   std::string ccx = "ccx";
@@ -229,7 +230,7 @@ void refuse_inapplicable(const CLI::App& app, const TensionOptions& o) {
   if (o.solver == "static") {
     refuse_given(app,
                  {"--stages", "--ramp-cycles", "--cycles", "--max-cycles", "--tolerance",
-                  "--damping", "--safety", "--grip-velocity-mm-s"},
+                  "--damping", "--safety", "--grip-velocity-mm-s", "--backend"},
                  "it is a setting of explicit dynamics, and the static solver (--solver static, "
                  "the default) solves once at the target strain (add --solver explicit)");
   } else if (o.cycles > 0) {
@@ -266,6 +267,16 @@ void refuse_inapplicable(const CLI::App& app, const StrengthCommandOptions& o) {
                  "the edge strengths are made consistent with the bulk under uniform grips only "
                  "(--grips uniform, the default)");
   }
+}
+
+// --backend cpu|cuda: where the explicit integrator's kernel runs (solvers/device_backend.hpp).
+void add_backend_option(CLI::App& app, std::string& backend, const std::string& needs) {
+  app.add_option("--backend", backend,
+                 "where explicit dynamics run (" + needs +
+                     "): cpu (SIMD kernel, OpenMP threads) or cuda (one CUDA device; a build "
+                     "with -DPLYDEM_CUDA=ON)")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
 }
 
 void add_tension_options(CLI::App& app, TensionOptions& o) {
@@ -314,6 +325,7 @@ void add_tension_options(CLI::App& app, TensionOptions& o) {
   app.add_option("--fem-threads", o.fem_threads, "threads CalculiX may use (--fem)")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
+  add_backend_option(app, o.backend, "--solver explicit");
 }
 
 void add_strength_options(CLI::App& app, StrengthCommandOptions& o) {
@@ -431,6 +443,7 @@ plydem::TensionSettings to_settings(const TensionOptions& o) {
       o.solver == "static" ? plydem::TensionSolver::kStatic : plydem::TensionSolver::kExplicit;
   s.explicit_settings.local_damping = o.damping;
   s.explicit_settings.safety_factor = o.safety;
+  s.explicit_settings.backend = plydem::parse_backend(o.backend);
   s.checkpoint = to_checkpoint(o.checkpoint);
   s.validate();  // checkpoints with the static solver fail here, before any work
   return s;

@@ -229,7 +229,7 @@ class LaminaStrategiesExperiment : public Experiment {
     c.require_known_keys(
         known_keys({"strategies", "angle_deg", "explicit.cycles", "explicit.quick_cycles",
                     "explicit.tolerance", "explicit.ramp_cycles", "explicit.load_stages",
-                    "explicit.max_cycles", "explicit.time_limit_s"}));
+                    "explicit.max_cycles", "explicit.time_limit_s", "explicit.backend"}));
     const std::string name = c.name();
     const bool quick = context.quick;
     const CouponSpec coupon = coupon_from_config(c, quick);
@@ -249,6 +249,8 @@ class LaminaStrategiesExperiment : public Experiment {
     base.coupon.ply_angle = radians(angle_deg);
     base.grips = grips_from_config(c);
     base.solver = TensionSolver::kStatic;
+    // Where the explicit runs' cycles run: cpu or cuda (solvers/device_backend.hpp).
+    base.explicit_settings.backend = parse_backend(c.string("explicit.backend", "cpu"));
     const Values clt = values_of(in_plane_constants(
         rotate_reduced_stiffness(reduced_stiffness(coupon.material), base.coupon.ply_angle)));
 
