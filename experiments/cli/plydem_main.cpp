@@ -459,7 +459,14 @@ int run_tension(const TensionOptions& o) {
     spdlog::info("{}: {} cycles, unbalanced-force ratio {:.3g}, {:.0f} s{}", p.phase, p.cycles,
                  p.ratio, p.elapsed_seconds, left);
   });
-  const plydem::TensionResult result = test.run();
+  plydem::TensionResult result;
+  try {
+    result = test.run();
+  } catch (const plydem::UnreachableStiffness& e) {
+    if (o.json)
+      std::cout << nlohmann::json{{"refused", plydem::refusal_json(e.refusal())}}.dump(2) << "\n";
+    throw;
+  }
   log_build_statistics();
   if (o.json) {
     std::cout << plydem::tension_json(result, settings).dump(2) << "\n";  // with "warnings"
@@ -526,8 +533,15 @@ int run_calibrate(const TensionOptions& o, bool json) {
   const plydem::Material material = plydem::load_material(o.material);
   const double angle = o.angle_deg * std::numbers::pi / 180.0;
   const std::unique_ptr<plydem::Strategy> strategy = make_strategy(o);
-  const plydem::Calibration calibration =
-      strategy->calibrate(material, angle, o.thickness_mm * 1e-3);
+  plydem::Calibration calibration;
+  try {
+    calibration = strategy->calibrate(material, angle, o.thickness_mm * 1e-3);
+  } catch (const plydem::UnreachableStiffness& e) {
+    // The refusal's numbers on stdout; its sentence on stderr and exit status 2 as any error.
+    if (json)
+      std::cout << nlohmann::json{{"refused", plydem::refusal_json(e.refusal())}}.dump(2) << "\n";
+    throw;
+  }
   if (json) {
     nlohmann::json j = plydem::calibration_json(calibration);
     j["strategy"] = o.strategy;
