@@ -2,10 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <fmt/ranges.h>
+
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/error.hpp"
+#include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {
@@ -150,6 +154,104 @@ RelaxedCalibration nearest_non_negative_layer(const UnitCell& cell, const Eigen:
   result.relaxed = current;
   result.relative_error = (current - target).norm() / target.norm();
   return result;
+}
+
+Eigen::VectorXd non_negative_least_squares(const Eigen::MatrixXd& a, const Eigen::VectorXd& b) {
+  const int n = static_cast<int>(a.cols());
+  require(n <= 16,
+          fmt::format("non-negative least squares by active sets: {} unknowns (at most 16)", n));
+  Eigen::VectorXd best = Eigen::VectorXd::Zero(n);
+  double best_residual = b.norm();
+  for (unsigned support = 1; support < (1u << n); ++support) {
+    std::vector<int> free;
+    for (int k = 0; k < n; ++k) {
+      if (support & (1u << k)) free.push_back(k);
+    }
+    Eigen::MatrixXd reduced(a.rows(), static_cast<int>(free.size()));
+    for (int c = 0; c < static_cast<int>(free.size()); ++c) reduced.col(c) = a.col(free[c]);
+    const Eigen::VectorXd x = reduced.completeOrthogonalDecomposition().solve(b);
+    if ((x.array() < 0).any()) continue;
+    const double residual = (reduced * x - b).norm();
+    if (residual < best_residual) {
+      best_residual = residual;
+      best.setZero();
+      for (int c = 0; c < static_cast<int>(free.size()); ++c) best(free[c]) = x(c);
+    }
+  }
+  return best;
+}
+
+Eigen::Matrix<double, 6, 1> frobenius_entries(const Eigen::Matrix3d& c) {
+  const double r2 = std::numbers::sqrt2;
+  Eigen::Matrix<double, 6, 1> v;
+  v << c(0, 0), c(1, 1), r2 * c(0, 1), r2 * c(0, 2), r2 * c(1, 2), c(2, 2);
+  return v;
+}
+
+namespace {
+
+constexpr int kEntryRows[6] = {0, 1, 0, 0, 1, 2}, kEntryCols[6] = {0, 1, 1, 2, 2, 2};
+constexpr const char* kEntryNames[6] = {"C11", "C22", "C12", "C16", "C26", "C66"};
+
+// An entry is missed when it is off by more than 0.1% of itself (of 1e-3 |target| if it is 0).
+bool entry_missed(const Eigen::Matrix3d& reached, const Eigen::Matrix3d& target, int e) {
+  const double t = target(kEntryRows[e], kEntryCols[e]);
+  const double miss = std::abs(reached(kEntryRows[e], kEntryCols[e]) - t);
+  return miss > 1e-3 * std::max(std::abs(t), 1e-3 * target.norm());
+}
+
+}  // namespace
+
+double Unreachable::relative_error() const {
+  return (nearest - target).norm() / target.norm();
+}
+
+std::string Unreachable::message() const {
+  std::string entries;
+  for (int e = 0; e < 6; ++e) {
+    const double t = target(kEntryRows[e], kEntryCols[e]);
+    const double r = nearest(kEntryRows[e], kEntryCols[e]);
+    // + 0.0 turns -0 into 0 for printing; an entry whose target is 0 gets its miss in GPa.
+    const std::string error =
+        std::abs(t) > 1e-9 * target.norm()
+            ? fmt::format("{:+.2f}%", 100 * (r - t) / std::abs(t))
+            : fmt::format("target 0, off by {:.2g} GPa", std::abs(r - t) * 1e-9);
+    entries += fmt::format("{}{} {:.4g} ({})", e ? ", " : "", kEntryNames[e], r * 1e-9 + 0.0,
+                           std::abs(t) > 1e-9 * target.norm()
+                               ? fmt::format("target {:.4g}, {}", t * 1e-9, error)
+                               : error);
+  }
+  std::string strategies;
+  if (!looked_up) {
+    strategies = "(Other strategies not tried.)";
+  } else if (representing.empty()) {
+    strategies = "No registered strategy represents this ply exactly.";
+  } else {
+    strategies = fmt::format("Strategies that represent this ply exactly: {}.",
+                             fmt::join(representing, ", "));
+  }
+  return fmt::format(
+      "{} cannot represent material '{}' at {:.4g} deg: {} cannot be reached ({}). Nearest "
+      "reachable stiffness in GPa ({}): {}; relative error {:.3g} (Frobenius). {}",
+      strategy, material, ply_angle * 180 / std::numbers::pi,
+      components.empty() ? std::string("the target")
+                         : fmt::format("{}", fmt::join(components, ", ")),
+      reason, frame, entries, relative_error(), strategies);
+}
+
+void refuse_unreachable(Unreachable refusal, const Material& material, double thickness) {
+  refusal.components.clear();
+  for (int e = 0; e < 6; ++e) {
+    if (entry_missed(refusal.nearest, refusal.target, e)) {
+      refusal.components.push_back(kEntryNames[e]);
+    }
+  }
+  refusal.looked_up = !inside_representation_lookup();
+  if (refusal.looked_up) {
+    refusal.representing = strategies_representing(default_registry(), material, refusal.ply_angle,
+                                                   thickness, refusal.strategy);
+  }
+  throw UnreachableStiffness(std::move(refusal));
 }
 
 std::string describe_unreachable(const Eigen::Matrix3d& reached, const Eigen::Matrix3d& target) {

@@ -262,18 +262,20 @@ Calibration HcpStrategy::calibrate(const Material& material, double ply_angle,
   const UnitCell cell = grouped_cell(lattice_frame.unit_cell(thickness));
   const FamilyStiffnessRule rule = parallel_bond_rule(0.5);
   const Eigen::VectorXd start = affine_fit(cell, target_lattice, rule);
-  const std::string ply =
-      fmt::format("material '{}' at {:.4g} deg", material.name, ply_angle / kDegree);
-
   // Unreachable targets (negative springs, an unstable cell) are refused with the nearest
   // stiffness non-negative springs can give.
   auto refuse = [&](const std::string& why) {
     const RelaxedCalibration nearest =
         nearest_non_negative_layer(cell, target_lattice, groups_of(start, rule), rule);
-    return Error(
-        fmt::format("hcp cannot represent {} with non-negative springs ({}): {} (fibre "
-                    "frame)",
-                    ply, why, describe_unreachable(nearest.relaxed, target_lattice)));
+    Unreachable refusal;
+    refusal.strategy = "hcp";
+    refusal.material = material.name;
+    refusal.ply_angle = ply_angle;
+    refusal.reason = fmt::format("non-negative springs cannot give it: {}", why);
+    refusal.frame = "fibre frame";
+    refusal.target = target_lattice;
+    refusal.nearest = nearest.relaxed;
+    refuse_unreachable(std::move(refusal), material, thickness);
   };
   RelaxedCalibration relaxed;
   try {
@@ -288,19 +290,23 @@ Calibration HcpStrategy::calibrate(const Material& material, double ply_angle,
             start(2 * g), start(2 * g + 1), kGroupNames[g]);
       }
     }
-    throw refuse(why);
+    refuse(why);
   }
   for (int g = 0; g < kGroupCount; ++g) {
     const FamilyStiffness& k = relaxed.families[g];
     if (!(k.normal > 0 && k.shear >= 0)) {
-      throw refuse(fmt::format("the {} bonds would need k_n = {:.4g} N/m, k_s = {:.4g} N/m",
-                               kGroupNames[g], k.normal, k.shear));
+      refuse(fmt::format("the {} bonds would need k_n = {:.4g} N/m, k_s = {:.4g} N/m",
+                         kGroupNames[g], k.normal, k.shear));
     }
   }
-  require(relaxed.relative_error < 1e-9,
-          fmt::format("hcp: the relaxed calibration of {} did not converge (relative error {:.3g} "
-                      "after {} iterations)",
-                      ply, relaxed.relative_error, relaxed.iterations));
+  if (!(relaxed.relative_error < 1e-9)) {
+    // Gauss-Newton stopped short with non-negative springs: the least-squares minimum of the
+    // relaxed stiffness is not the target (a reachable target converges: tests/test_calibration).
+    refuse(
+        fmt::format("the relaxed lamina's least squares stops at relative error {:.3g} with "
+                    "non-negative springs",
+                    relaxed.relative_error));
+  }
   finish_calibration(cal, HcpLamina(1.0, 0.5 * layer_spacing_radii_, cal.lattice_angle), thickness,
                      relaxed.families);
   return cal;

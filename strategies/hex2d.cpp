@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
@@ -46,6 +48,51 @@ std::array<FamilyStiffness, 3> hexagonal_springs_eq27_as_printed(const Eigen::Ma
   return k;
 }
 
+HexagonalRelaxedSprings hexagonal_springs_relaxed(const Eigen::Matrix3d& c, double thickness) {
+  const std::array<FamilyStiffness, 3> affine = hexagonal_springs_eq27(c, thickness);
+  HexagonalRelaxedSprings k;
+  const double sum = affine[0].shear + affine[1].shear + affine[2].shear;
+  for (int i = 0; i < 3; ++i) {
+    k.normal[i] = affine[i].normal;
+    k.weight[i] = (2 * sum / 3 - affine[i].shear) / 3;
+  }
+  k.reachable = std::all_of(k.normal.begin(), k.normal.end(), [](double v) { return v > 0; }) &&
+                std::all_of(k.weight.begin(), k.weight.end(), [](double v) { return v > 0; });
+  if (!k.reachable) return k;
+  // w_jk = k_j k_k / K gives k_i^2 / K = w_ij w_ik / w_jk.
+  std::array<double, 3> root{};
+  for (int i = 0; i < 3; ++i) {
+    root[i] = std::sqrt(k.weight[(i + 1) % 3] * k.weight[(i + 2) % 3] / k.weight[i]);
+  }
+  const double sqrt_total = root[0] + root[1] + root[2];
+  for (int i = 0; i < 3; ++i) k.shear[i] = sqrt_total * root[i];
+  return k;
+}
+
+std::string hexagonal_relaxed_limits(const Eigen::Matrix3d& c) {
+  const double c11 = c(0, 0) * 1e-9, c22 = c(1, 1) * 1e-9, c12 = c(0, 1) * 1e-9,
+               c66 = c(2, 2) * 1e-9;
+  std::string violated;
+  auto check = [&](bool holds, const std::string& condition) {
+    if (!holds) violated += fmt::format("{}{}", violated.empty() ? "" : "; ", condition);
+  };
+  // In the fibre frame (C16 = C26 = 0): k_n1 > 0, k_n2,3 > 0, w_1 > 0, w_2,3 > 0.
+  check(3 * c11 + 2 * c12 > c22,
+        fmt::format("3*C11 + 2*C12 > C22 (here {:.4g} <= {:.4g} GPa)", 3 * c11 + 2 * c12, c22));
+  check(c12 + c22 > 0, fmt::format("C12 + C22 > 0 (here {:.4g} GPa)", c12 + c22));
+  check(c66 < c22 - 2 * c12,
+        fmt::format("C66 < C22 - 2*C12 (here C66 = {:.4g} >= {:.4g} GPa: the fibre bonds' shear "
+                    "springs would have to stop the spin, which freely spinning particles only "
+                    "approach as k_s1 grows without bound)",
+                    c66, c22 - 2 * c12));
+  check(4 * c66 > c22 + c12,
+        fmt::format("4*C66 > C22 + C12 (here {:.4g} <= {:.4g} GPa)", 4 * c66, c22 + c12));
+  return fmt::format(
+      "a hexagonal layer of spinning particles with the fibre along a bond family needs, in the "
+      "fibre frame, {}",
+      violated.empty() ? std::string("every spring positive") : violated);
+}
+
 std::string Hex2dStrategy::description() const {
   return "extended 2D hexagonal layer (paper Sec. 3.3): 6 neighbours, family 1 along the fibre, "
          "corrected eq. (27) then relaxed calibration";
@@ -58,7 +105,7 @@ Calibration Hex2dStrategy::calibrate(const Material& material, double ply_angle,
   require(std::isfinite(thickness) && thickness > 0,
           fmt::format("ply thickness must be positive, got {} m", thickness));
   Calibration cal;
-  cal.method = "hex2d: corrected eq. (27), relaxed on the unit cell";
+  cal.method = "hex2d: corrected eq. (27) inverted for spinning particles (closed form)";
   cal.lattice_angle = ply_angle;  // family 1 along the fibre
   cal.target = rotate_reduced_stiffness(reduced_stiffness(material), ply_angle);
   // In the lattice frame the target is the ply's own Q whatever the ply angle.
@@ -66,47 +113,56 @@ Calibration Hex2dStrategy::calibrate(const Material& material, double ply_angle,
   const HexagonalLayer lattice_frame(1.0, 0.0);  // stiffness is independent of the spacing
   const UnitCell cell = lattice_frame.unit_cell(thickness);
   const FamilyStiffnessRule rule = parallel_bond_rule(0.5);
-  const auto start = hexagonal_springs_eq27(target_lattice, thickness);
-  std::vector<FamilyStiffness> start_families;
-  for (const FamilyStiffness& k : start) start_families.push_back(rule(k.normal, k.shear));
-  const std::string ply =
-      fmt::format("material '{}' at {:.4g} deg", material.name, ply_angle / kDegree);
-  // eq. (27) in the lattice frame: k_s1 >= 0 needs 3 C66 >= C22, k_s2,3 >= 0 need C22 >= 3 C12.
-  const std::string limits = fmt::format(
-      "a hexagonal layer needs 3*C66 >= C22 and C22 >= 3*C12 in the fibre frame; here C66 = "
-      "{:.4g}, "
-      "C22 = {:.4g}, C12 = {:.4g} GPa",
-      target_lattice(2, 2) * 1e-9, target_lattice(1, 1) * 1e-9, target_lattice(0, 1) * 1e-9);
-  // Unreachable targets (negative springs, an unstable cell) are refused with the nearest
-  // stiffness non-negative springs can give.
-  auto refuse = [&](const std::string& why) {
-    const RelaxedCalibration nearest =
-        nearest_non_negative_layer(cell, target_lattice, start_families, rule);
-    return Error(
-        fmt::format("hex2d cannot represent {} with a stable lattice ({}): {} (fibre frame); {}",
-                    ply, why, describe_unreachable(nearest.relaxed, target_lattice), limits));
-  };
-  RelaxedCalibration relaxed;
-  try {
-    relaxed = calibrate_relaxed_layer(cell, target_lattice, start_families, rule);
-  } catch (const Error& e) {
-    throw refuse(e.what());
+  const HexagonalRelaxedSprings springs = hexagonal_springs_relaxed(target_lattice, thickness);
+  if (!springs.reachable) {
+    // The nearest reachable stiffness: the relaxed layer's stiffness is linear in (k_n, w), and
+    // k_n, w >= 0 is the closure of what non-negative springs give, so the nearest is a
+    // non-negative least squares (w at 0 is the limit of a fibre family's k_s growing without
+    // bound).
+    Eigen::Matrix3d basis[6];
+    Eigen::Matrix<double, 6, 6> a;
+    for (int j = 0; j < 6; ++j) {
+      std::vector<FamilyStiffness> k(3);
+      for (int f = 0; f < 3; ++f) {
+        if (j < 3) k[f].normal = f == j ? 1.0 : 0.0;
+        // w opposite family j - 3: the affine shear springs D_i = 2(w_ij + w_ik) - w_jk.
+        if (j >= 3) k[f].shear = f == j - 3 ? -1.0 : 2.0;
+      }
+      basis[j] = in_plane_block(affine_stiffness(cell, k));
+      a.col(j) = frobenius_entries(basis[j]);
+    }
+    const Eigen::VectorXd x = non_negative_least_squares(a, frobenius_entries(target_lattice));
+    Unreachable refusal;
+    refusal.strategy = "hex2d";
+    refusal.material = material.name;
+    refusal.ply_angle = ply_angle;
+    refusal.frame = "fibre frame";
+    refusal.target = target_lattice;
+    for (int j = 0; j < 6; ++j) refusal.nearest += x(j) * basis[j];
+    refusal.reason = hexagonal_relaxed_limits(target_lattice);
+    refuse_unreachable(std::move(refusal), material, thickness);
   }
-
+  std::vector<FamilyStiffness> start_families;
+  for (int f = 0; f < 3; ++f) {
+    start_families.push_back(rule(springs.normal[f], springs.shear[f]));
+  }
+  // The closed form is exact; Gauss-Newton only polishes its round-off.
+  const RelaxedCalibration relaxed =
+      calibrate_relaxed_layer(cell, target_lattice, start_families, rule);
   const char* names[3] = {"1 (0 deg, fibre)", "2 (+60 deg)", "3 (+120 deg)"};
   for (int f = 0; f < 3; ++f) {
-    const FamilyStiffness& k = relaxed.families[f];
-    if (!(k.normal > 0 && k.shear >= 0)) {
-      throw refuse(fmt::format("bond family {} would need k_n = {:.4g} N/m, k_s = {:.4g} N/m",
-                               names[f], k.normal, k.shear));
-    }
-    cal.families.push_back({names[f], cal.lattice_angle + f * std::numbers::pi / 3.0, k});
+    cal.families.push_back(
+        {names[f], cal.lattice_angle + f * std::numbers::pi / 3.0, relaxed.families[f]});
   }
-  require(
-      relaxed.relative_error < 1e-9,
-      fmt::format("hex2d: the relaxed calibration of {} did not converge (relative error {:.3g} "
-                  "after {} iterations)",
-                  ply, relaxed.relative_error, relaxed.iterations));
+  // A reachable target is reached: anything else is a bug, not the user's ply.
+  if (!(relaxed.relative_error < 1e-9) ||
+      !std::all_of(relaxed.families.begin(), relaxed.families.end(),
+                   [](const FamilyStiffness& k) { return k.normal > 0 && k.shear > 0; })) {
+    throw std::logic_error(fmt::format(
+        "hex2d: the relaxed inverse of eq. (27) missed material '{}' at {:.4g} deg (relative "
+        "error {:.3g})",
+        material.name, ply_angle / kDegree, relaxed.relative_error));
+  }
   cal.affine = rotate_reduced_stiffness(in_plane_block(affine_stiffness(cell, relaxed.families)),
                                         cal.lattice_angle);
   cal.relaxed = rotate_reduced_stiffness(relaxed.relaxed, cal.lattice_angle);

@@ -24,6 +24,29 @@ std::array<FamilyStiffness, 3> hexagonal_springs_eq27(const Eigen::Matrix3d& c, 
 std::array<FamilyStiffness, 3> hexagonal_springs_eq27_as_printed(const Eigen::Matrix3d& c,
                                                                  double thickness);
 
+/// The springs of a hexagonal layer whose particles spin freely (as the engine simulates them)
+/// with the plane-stress stiffness `c` (lattice frame), in closed form. With spins relaxed the
+/// shear springs' energy is sum_f k_f (a_f - a)^2, a_f the tangential strain of family f and a
+/// their k-weighted mean (the common spin). The three a_f sum to zero, so this is the energy of
+/// the triangle of families with edge weights w_jk = k_j k_k / K (K = k_1 + k_2 + k_3), which
+/// equals the affine energy of shear springs D_i = 2 (w_ij + w_ik) - w_jk. Hence from eq. (27)'s
+/// shear springs D: w_jk = (2/3 sum D - D_i) / 3, and k_i = sqrt(K w_ij w_ik / w_jk) with
+/// sqrt(K) = sum_i sqrt(w_ij w_ik / w_jk). The normal springs are eq. (27)'s (spins do not load
+/// them). Positive springs exist if and only if every k_n and every w is positive; in the fibre
+/// frame (C16 = C26 = 0) w_1 > 0 reads C66 < C22 - 2 C12, which carbon/epoxy plies break
+/// (T300/914C: C66 = 5.5 GPa, C22 - 2 C12 = 4.87 GPa).
+struct HexagonalRelaxedSprings {
+  std::array<double, 3> normal{};  ///< k_n of families 1..3 [N/m]
+  std::array<double, 3> weight{};  ///< w_i: the shear weight of the two families other than i
+  std::array<double, 3> shear{};   ///< k_s of families 1..3 [N/m], where reachable
+  bool reachable = false;          ///< every k_n and every w positive
+};
+HexagonalRelaxedSprings hexagonal_springs_relaxed(const Eigen::Matrix3d& c, double thickness);
+
+/// The conditions hexagonal_springs_relaxed() needs, in the fibre frame, with the ones `c` (fibre
+/// frame) violates and their numbers in GPa: the reason of hex2d's refusal.
+std::string hexagonal_relaxed_limits(const Eigen::Matrix3d& c);
+
 class Hex2dStrategy : public Strategy {
  public:
   /// `edge_equilibrium` (strategies/boundary_cells.hpp): 1 (default) or 0.

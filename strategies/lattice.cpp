@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "core/parallel_bond.hpp"
 #include "core/progress.hpp"
+#include "strategies/calibration.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/specimen.hpp"
 
@@ -872,7 +873,7 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
 }
 
 void LatticeStrategy::check_reached(const LatticeCalibration& cal, const Material& material,
-                                    double ply_angle) const {
+                                    double ply_angle, double thickness) const {
   if (!corrected_) return;  // lattice-paper reports its error; it does not promise the target
   const InPlaneConstants reached = in_plane_constants(cal.calibration.relaxed);
   const InPlaneConstants target = in_plane_constants(cal.calibration.target);
@@ -896,12 +897,19 @@ void LatticeStrategy::check_reached(const LatticeCalibration& cal, const Materia
     }
   }
   if (!missed.empty()) {
-    throw Error(fmt::format(
-        "lattice: material '{}' at {:.4g} deg cannot be reached by the random packing with "
-        "non-negative bonds: after the automatic correction ({} steps) the sample has {} (the "
-        "nearest the orientation law reaches; tolerance max_error = {:.3g}, which "
-        "--strategy-option max_error=... relaxes)",
-        material.name, ply_angle / kDegree, cal.iterations, missed, max_error_));
+    Unreachable refusal;
+    refusal.strategy = "lattice";
+    refusal.material = material.name;
+    refusal.ply_angle = ply_angle;
+    refusal.reason = fmt::format(
+        "the random packing with non-negative bonds: after the automatic correction ({} steps) "
+        "the sample has {} (the nearest the orientation law reaches; tolerance max_error = "
+        "{:.3g}, which --strategy-option max_error=... relaxes)",
+        cal.iterations, missed, max_error_);
+    refusal.frame = "specimen frame";
+    refusal.target = cal.calibration.target;
+    refusal.nearest = cal.calibration.relaxed;
+    refuse_unreachable(std::move(refusal), material, thickness);
   }
 }
 
@@ -909,7 +917,7 @@ Calibration LatticeStrategy::calibrate(const Material& material, double ply_angl
                                        double thickness) const {
   const LatticeCalibration cal =
       calibrate_lattice(material, ply_angle, thickness, particle_diameter_);
-  check_reached(cal, material, ply_angle);
+  check_reached(cal, material, ply_angle, thickness);
   return cal.calibration;
 }
 
@@ -933,7 +941,7 @@ Calibration LatticeStrategy::calibrate_coupon(const CouponSpec& coupon) const {
                                                        coupon.thickness, coupon.particle_diameter);
     // A target the law cannot reach on the small sample is refused before the coupon's own,
     // slower correction.
-    check_reached(start, coupon.material, coupon.ply_angle);
+    check_reached(start, coupon.material, coupon.ply_angle, coupon.thickness);
     cal = calibrate_lattice(coupon.material, coupon.ply_angle, coupon.thickness,
                             coupon.particle_diameter, &size, &start.moduli);
     cal.iterations += start.iterations;
@@ -942,7 +950,7 @@ Calibration LatticeStrategy::calibrate_coupon(const CouponSpec& coupon) const {
     cal = calibrate_lattice(coupon.material, coupon.ply_angle, coupon.thickness,
                             coupon.particle_diameter, &size);
   }
-  check_reached(cal, coupon.material, coupon.ply_angle);
+  check_reached(cal, coupon.material, coupon.ply_angle, coupon.thickness);
   auto law = std::make_shared<LatticeLaw>();
   law->moduli = cal.moduli;
   law->volume_per_bond = cal.volume_per_bond;

@@ -181,10 +181,10 @@ class LatticeStrategy : public Strategy {
   double tolerance_ = 1e-9;             ///< relative error at which the correction stops
   double max_error_ = 0.02;             ///< largest accepted error of an engineering constant
 
-  /// Throws plydem::Error naming the engineering constants the corrected sample misses by more
-  /// than max_error_ (nothing for lattice-paper).
-  void check_reached(const LatticeCalibration& cal, const Material& material,
-                     double ply_angle) const;
+  /// Throws UnreachableStiffness (strategies/calibration.hpp) naming the engineering constants
+  /// the corrected sample misses by more than max_error_ (nothing for lattice-paper).
+  void check_reached(const LatticeCalibration& cal, const Material& material, double ply_angle,
+                     double thickness) const;
 };
 
 }  // namespace plydem

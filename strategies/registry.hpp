@@ -37,6 +37,19 @@ class Registry {
   std::map<std::string, Entry> entries_;
 };
 
+/// The names of the strategies in `registry` (but `except`) whose calibrate(), with their default
+/// options, reaches the ply exactly: no refusal, and a relaxed stiffness within 1e-6 (relative,
+/// Frobenius) of the target. The "-paper" strategies, which report an error rather than refuse,
+/// count only where they are exact. A refusal inside this lookup does not look up again (no
+/// recursion). Remembered per registry and ply for the life of the process: the random lattice
+/// takes seconds to refuse.
+std::vector<std::string> strategies_representing(const Registry& registry, const Material& material,
+                                                 double ply_angle, double thickness,
+                                                 const std::string& except = "");
+
+/// True while strategies_representing() is calibrating on this thread.
+bool inside_representation_lookup();
+
 /// Calls every built-in strategy's register_<name>() (generated from CMakeLists.txt).
 void register_builtin_strategies(Registry& registry);
 

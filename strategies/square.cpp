@@ -295,26 +295,33 @@ Calibration SquareStrategy::calibrate(const Material& material, double ply_angle
     // square_springs_non_negative returns eq. (33) itself whenever that is non-negative.
     const bool is_eq33 = all_non_negative(square_springs_eq33(target_lattice, thickness));
     const UnitCell cell = SquareLayer(1.0, 0.0).unit_cell(thickness);
+    // The springs above are exact for the affine lattice sum; where unequal shear springs let
+    // the spins relax, Gauss-Newton re-solves them. Should that fail, the offset is refused with
+    // the rest (never "did not converge").
     RelaxedCalibration relaxed;
+    std::string failed;
     try {
       relaxed = calibrate_relaxed_layer(cell, target_lattice, with_rule(*start, rule), rule);
-    } catch (const Error& e) {
-      throw Error(fmt::format("square: the relaxed calibration of {} failed: {}", ply, e.what()));
-    }
-    for (int f = 0; f < SquareLayer::kFamilyCount; ++f) {
-      const FamilyStiffness& k = relaxed.families[f];
-      if (!(k.normal >= 0 && k.shear >= 0)) {
-        throw Error(
-            fmt::format("square: the relaxed calibration of {} gives bond family {} "
-                        "k_n = {:.4g} N/m, k_s = {:.4g} N/m (negative stiffness)",
-                        ply, family_name(f), k.normal, k.shear));
+      for (int f = 0; f < SquareLayer::kFamilyCount && failed.empty(); ++f) {
+        const FamilyStiffness& k = relaxed.families[f];
+        if (!(k.normal >= 0 && k.shear >= 0)) {
+          failed = fmt::format("bond family {} would need k_n = {:.4g} N/m, k_s = {:.4g} N/m",
+                               family_name(f), k.normal, k.shear);
+        }
       }
+      if (failed.empty() && !(relaxed.relative_error < 1e-9)) {
+        failed = fmt::format(
+            "with spinning particles the least squares stops at relative error "
+            "{:.3g}",
+            relaxed.relative_error);
+      }
+    } catch (const Error& e) {
+      failed = e.what();
     }
-    if (!(relaxed.relative_error < 1e-9)) {
-      throw Error(
-          fmt::format("square: the relaxed calibration of {} did not converge (relative "
-                      "error {:.3g} after {} iterations)",
-                      ply, relaxed.relative_error, relaxed.iterations));
+    if (!failed.empty()) {
+      reasons += fmt::format("{}with the fibre at {:g} deg from the lattice x axis {}",
+                             reasons.empty() ? "" : "; ", offset, failed);
+      continue;
     }
     Calibration cal;
     cal.method = fmt::format(
@@ -343,9 +350,15 @@ Calibration SquareStrategy::calibrate(const Material& material, double ply_angle
       nearest = c;
     }
   }
-  throw Error(
-      fmt::format("square cannot represent {} with non-negative springs: {}. {} (fibre frame)", ply,
-                  reasons, describe_unreachable(nearest, q)));
+  Unreachable refusal;
+  refusal.strategy = "square";
+  refusal.material = material.name;
+  refusal.ply_angle = ply_angle;
+  refusal.reason = fmt::format("non-negative springs cannot give it: {}", reasons);
+  refusal.frame = "fibre frame";
+  refusal.target = q;
+  refusal.nearest = nearest;
+  refuse_unreachable(std::move(refusal), material, thickness);
 }
 
 Model SquareStrategy::assemble(const CouponSpec& coupon, const Calibration& calibration) const {

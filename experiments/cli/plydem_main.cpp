@@ -529,7 +529,14 @@ int run_tension(const TensionOptions& o) {
     spdlog::info("{}: {} cycles, unbalanced-force ratio {:.3g}, {:.0f} s{}", p.phase, p.cycles,
                  p.ratio, p.elapsed_seconds, left);
   });
-  const plydem::TensionResult result = test.run();
+  plydem::TensionResult result;
+  try {
+    result = test.run();
+  } catch (const plydem::UnreachableStiffness& e) {
+    if (o.json)
+      std::cout << nlohmann::json{{"refused", plydem::refusal_json(e.refusal())}}.dump(2) << "\n";
+    throw;
+  }
   log_build_statistics();
   std::optional<plydem::SameCouponReference> fem;
   if (o.fem) fem = same_coupon_fem(o, settings, result);
@@ -611,7 +618,15 @@ int run_calibrate(const TensionOptions& o, bool json) {
   coupon.thickness = o.thickness_mm * 1e-3;
   coupon.particle_diameter = o.diameter_mm * 1e-3;
   coupon.validate();
-  const plydem::Calibration calibration = strategy->calibrate_coupon(coupon);
+  plydem::Calibration calibration;
+  try {
+    calibration = strategy->calibrate_coupon(coupon);
+  } catch (const plydem::UnreachableStiffness& e) {
+    // The refusal's numbers on stdout; its sentence on stderr and exit status 2 as any error.
+    if (json)
+      std::cout << nlohmann::json{{"refused", plydem::refusal_json(e.refusal())}}.dump(2) << "\n";
+    throw;
+  }
   if (json) {
     nlohmann::json j = plydem::calibration_json(calibration);
     j["strategy"] = o.strategy;

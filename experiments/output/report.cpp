@@ -216,6 +216,21 @@ nlohmann::json same_coupon_json(const TensionResult& r, const SameCouponReferenc
   return j;
 }
 
+nlohmann::json refusal_json(const Unreachable& r) {
+  return {{"strategy", r.strategy},
+          {"material", r.material},
+          {"angle_deg", r.ply_angle / kDegree},
+          {"reason", r.reason},
+          {"frame", r.frame},
+          {"components", r.components},
+          {"target", matrix_json(r.target)},
+          {"nearest", matrix_json(r.nearest)},
+          {"relative_error", r.relative_error()},
+          {"representing", r.representing},
+          {"representing_looked_up", r.looked_up},
+          {"message", r.message()}};
+}
+
 nlohmann::json calibration_json(const Calibration& c) {
   nlohmann::json families = nlohmann::json::array();
   for (const FamilyCalibration& f : c.families) {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "experiments/protocols/tension_test.hpp"
+#include "strategies/calibration.hpp"
 
 namespace plydem {
 
@@ -35,6 +36,12 @@ nlohmann::json same_coupon_json(const TensionResult& result, const SameCouponRef
 /// The calibration as JSON (SI units): method, lattice orientation, every family's stiffnesses,
 /// the target, affine and relaxed 3x3 stiffness and the relaxed relative error.
 nlohmann::json calibration_json(const Calibration& calibration);
+
+/// A refused ply (strategies/calibration.hpp) as JSON (SI units): strategy, reason, frame, the
+/// components that cannot be reached, target and nearest reachable 3x3 stiffness, the nearest's
+/// relative error and the strategies that represent the ply. `plydem calibrate --json` and
+/// `plydem tension --json` print it under "refused" when the strategy refuses.
+nlohmann::json refusal_json(const Unreachable& refusal);
 
 /// The calibration as a table for `plydem calibrate`.
 std::string format_calibration(const Calibration& calibration, const std::string& strategy,
