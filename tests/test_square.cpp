@@ -337,7 +337,7 @@ TEST_CASE(
   const Eigen::Matrix3d q = qbar_by_hand(m, 0.0);
   const double nearest_gpa = (2 * q(0, 1) + q(2, 2)) / 3 * 1e-9;
   CHECK_THROWS_WITH_AS(strategy->calibrate(m, 30 * kDeg, 0.2e-3),
-                       doctest::Contains(fmt::format("C66 = {:.4g} GPa", nearest_gpa).c_str()),
+                       doctest::Contains(fmt::format("C66 {:.4g} (target", nearest_gpa).c_str()),
                        Error);
   CHECK_THROWS_AS(default_registry().create("square-paper")->calibrate(m, 0.0, 0.2e-3), Error);
 }
