@@ -1078,6 +1078,22 @@ FemSolution run_calculix(const FemSpecimen& specimen, const FemSettings& setting
 
 namespace {
 
+// The pulls along x and along y (every ply turned by -90 deg), and CLT; only the message when
+// ccx is missing.
+FemTensionResult run_both_pulls(const FemSpecimen& specimen, const FemSettings& settings) {
+  FemTensionResult result;
+  result.theory = laminate_constants(specimen.plies);
+  result.along_x = run_calculix(specimen, settings);
+  if (!result.along_x.available) {
+    result.message = result.along_x.message;
+    return result;
+  }
+  FemSpecimen turned = specimen;
+  for (Ply& ply : turned.plies) ply.angle -= 0.5 * std::numbers::pi;
+  result.along_y = run_calculix(turned, settings);
+  return result;
+}
+
 // Ex, nu_xy, gamma_xy/eps_x from the pull along x; Ey, nu_yx from the one along y.
 void set_moduli_from_pulls(FemTensionResult& result) {
   for (const FemSolution* pull : {&result.along_x, &result.along_y}) {
@@ -1102,16 +1118,8 @@ FemTensionResult fem_tension_test(const FemSpecimen& specimen, const FemSettings
   settings.validate();
   require(specimen.hole_diameter == 0,
           "the FEM tension test measures moduli on a coupon without a hole");
-  FemTensionResult result;
-  result.theory = laminate_constants(specimen.plies);
-  result.along_x = run_calculix(specimen, settings);
-  if (!result.along_x.available) {
-    result.message = result.along_x.message;
-    return result;
-  }
-  FemSpecimen turned = specimen;
-  for (Ply& ply : turned.plies) ply.angle -= 0.5 * std::numbers::pi;
-  result.along_y = run_calculix(turned, settings);
+  FemTensionResult result = run_both_pulls(specimen, settings);
+  if (!result.along_x.available) return result;
   set_moduli_from_pulls(result);
   return result;
 }
@@ -1187,16 +1195,8 @@ FemTensionResult fem_twin_tension_test(const TensionSettings& settings, const Te
   fem.executable = twin.executable;
   fem.threads = twin.threads;
 
-  FemTensionResult result;
-  result.theory = laminate_constants(specimen.plies);
-  result.along_x = run_calculix(specimen, fem);
-  if (!result.along_x.available) {
-    result.message = result.along_x.message;
-    return result;
-  }
-  FemSpecimen turned = specimen;
-  for (Ply& ply : turned.plies) ply.angle -= 0.5 * std::numbers::pi;
-  result.along_y = run_calculix(turned, fem);
+  FemTensionResult result = run_both_pulls(specimen, fem);
+  if (!result.along_x.available) return result;
   fit_at_points(result.along_x,
                 gauge_points(*dem.along_x.model, settings, fem.loading.grip_length));
   fit_at_points(result.along_y,
