@@ -42,8 +42,8 @@ inline Material eglass() {
 }
 
 /// The built-in T300/914C carbon/epoxy ply (WWFE-I: E1 138, E2 11, G12 5.5 GPa, nu12 0.28, nu23
-/// 0.4; XT 1500, YT 27, S12 80 MPa; XC 900, YC 200 MPa): a strongly orthotropic ply for the strength
-/// tests, far from E-glass in XT / YT and S12 / YT.
+/// 0.4; XT 1500, YT 27, S12 80 MPa; XC 900, YC 200 MPa): a strongly orthotropic ply for the
+/// strength tests, far from E-glass in XT / YT and S12 / YT.
 inline Material carbon_ply() {
   return load_material("t300-914c");
 }
