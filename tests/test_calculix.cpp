@@ -12,18 +12,13 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "experiments/fem/calculix.hpp"
+#include "support/have_ccx.hpp"
 #include "support/test_support.hpp"
 
 using namespace plydem;
 using namespace plydem::test;
 
 namespace {
-
-bool have_ccx() {
-  const CalculixAvailability ccx = calculix_availability();
-  if (!ccx.available) skip(ccx.message);
-  return ccx.available;
-}
 
 double relative(double value, double reference) {
   return std::abs(value / reference - 1.0);

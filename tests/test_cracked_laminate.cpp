@@ -18,6 +18,7 @@
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
+#include "support/have_ccx.hpp"
 #include "support/test_support.hpp"
 
 using namespace plydem;
@@ -27,12 +28,6 @@ namespace {
 
 constexpr double kPly = 0.2e-3;       // ply thickness [m]
 constexpr double kDiameter = 0.1e-3;  // particle diameter [m]
-
-bool have_ccx() {
-  const CalculixAvailability ccx = calculix_availability();
-  if (!ccx.available) skip(ccx.message);
-  return ccx.available;
-}
 
 struct CrossPly {
   Model model;

@@ -15,18 +15,13 @@
 #include "experiments/fem/calculix.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "strategies/laminate.hpp"
+#include "support/have_ccx.hpp"
 #include "support/test_support.hpp"
 
 using namespace plydem;
 using namespace plydem::test;
 
 namespace {
-
-bool have_ccx() {
-  const CalculixAvailability ccx = calculix_availability();
-  if (!ccx.available) skip(ccx.message);
-  return ccx.available;
-}
 
 double relative(double value, double reference) {
   return value / reference - 1.0;
