@@ -278,15 +278,19 @@ namespace {
 // kAuto: the hand-written symbolic analysis decides (see the header).
 class AutoSolver final : public LinearSolver {
  public:
+  void set_layout(const UnknownLayout& layout) override { layout_ = layout; }
+  int iterations() const override { return cholmod_ ? cholmod_->iterations() : 0; }
   void factor(const SparseMatrix& lower, double pivot_tolerance) override {
     cholmod_.reset();
     direct_.emplace();
     direct_->analyze(lower);
     const double fill = static_cast<double>(direct_->factor_entries()) /
                         std::max<double>(1.0, static_cast<double>(lower.rows()));
-    if (fill > kAutoCholmodFill && optimized_blas()) {
+    if (fill > kAutoCholmodFill && (petsc_available() || optimized_blas())) {
       direct_.reset();  // its symbolic structure is large too
-      cholmod_ = std::make_unique<CholmodSolver>();
+      cholmod_ = petsc_available() ? make_linear_solver(LinearSolverKind::kPetsc)
+                                   : std::make_unique<CholmodSolver>();
+      cholmod_->set_layout(layout_);
       cholmod_->factor(lower, pivot_tolerance);
     } else {
       direct_->factorize(lower, pivot_tolerance);
@@ -314,8 +318,9 @@ class AutoSolver final : public LinearSolver {
   }
 
  private:
+  UnknownLayout layout_;
   std::optional<SupernodalCholesky> direct_;
-  std::unique_ptr<CholmodSolver> cholmod_;
+  std::unique_ptr<LinearSolver> cholmod_;  // CHOLMOD or PETSc, where the factor fills in much
 };
 
 }  // namespace

@@ -19,9 +19,11 @@
 ///   (set_petsc_options, `--petsc-options`). The hierarchy is built once by factor() and reused by
 ///   every solve. Under `mpiexec -n N` the matrix is a distributed PETSc matrix, each rank owning
 ///   a contiguous block of particles (see ParallelSession). Built when PETSc is found (optional).
-/// kAuto chooses after the hand-written solver's symbolic analysis, which costs little: CHOLMOD
-/// where the factor fills in densely (more than kAutoCholmodFill entries per unknown, as in a
-/// stacked laminate, whose factor is a band the width of its cross-section) and CHOLMOD's BLAS
+/// kAuto chooses after the hand-written solver's symbolic analysis, which costs little: where the
+/// factor fills in densely (more than kAutoCholmodFill entries per unknown, as in a stacked
+/// laminate, whose factor is a band the width of its cross-section), PETSc where it is built
+/// (on the [0/45/-45/90]s coupon: 8.7 s CPU and 393 MiB, against CHOLMOD's 7.2 s and 1272 MiB
+/// with OpenBLAS, 35 s with the reference BLAS, README Benchmarks), else CHOLMOD where its BLAS
 /// is an optimized one (OpenBLAS); the hand-written one otherwise. Measured on one thread
 /// (README, Benchmarks): on single plies (64-100 entries per unknown) the hand-written solver is
 /// as fast or faster at every size; on the [0/45/-45/90]s coupon (880 per unknown) CHOLMOD with

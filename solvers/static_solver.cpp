@@ -564,12 +564,8 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold
     // that grows with the size. The factorization collects every zero pivot in one pass.
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
-    // Where the unknowns sit, for PETSc's rigid-body near-null space (free_dofs increase when
-    // the order is the identity, as it is for PETSc).
-    UnknownLayout layout;
-    if (std::is_sorted(m.free_dofs.begin(), m.free_dofs.end()))
-      layout = {m.free_dofs, m.s, p.reference_position};
-    m.cholesky->set_layout(layout);
+    // Where the unknowns sit, for PETSc's rigid-body near-null space.
+    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position});
     m.cholesky->factor(m.a, threshold);
     ++m.factorizations;
     if (!m.cholesky->zero_pivots().empty())
