@@ -286,10 +286,9 @@ class AutoSolver final : public LinearSolver {
     direct_->analyze(lower);
     const double fill = static_cast<double>(direct_->factor_entries()) /
                         std::max<double>(1.0, static_cast<double>(lower.rows()));
-    if (fill > kAutoCholmodFill && (petsc_available() || optimized_blas())) {
+    if (fill > kAutoCholmodFill && optimized_blas()) {
       direct_.reset();  // its symbolic structure is large too
-      cholmod_ = petsc_available() ? make_linear_solver(LinearSolverKind::kPetsc)
-                                   : std::make_unique<CholmodSolver>();
+      cholmod_ = std::make_unique<CholmodSolver>();
       cholmod_->set_layout(layout_);
       cholmod_->factor(lower, pivot_tolerance);
     } else {
@@ -320,7 +319,7 @@ class AutoSolver final : public LinearSolver {
  private:
   UnknownLayout layout_;
   std::optional<SupernodalCholesky> direct_;
-  std::unique_ptr<LinearSolver> cholmod_;  // CHOLMOD or PETSc, where the factor fills in much
+  std::unique_ptr<LinearSolver> cholmod_;
 };
 
 }  // namespace

@@ -19,12 +19,14 @@
 ///   (set_petsc_options, `--petsc-options`). The hierarchy is built once by factor() and reused by
 ///   every solve. Under `mpiexec -n N` the matrix is a distributed PETSc matrix, each rank owning
 ///   a contiguous block of particles (see ParallelSession). Built when PETSc is found (optional).
-/// kAuto chooses after the hand-written solver's symbolic analysis, which costs little: where the
-/// factor fills in densely (more than kAutoCholmodFill entries per unknown, as in a stacked
-/// laminate, whose factor is a band the width of its cross-section), PETSc where it is built
-/// (on the [0/45/-45/90]s coupon: 8.7 s CPU and 393 MiB, against CHOLMOD's 7.2 s and 1272 MiB
-/// with OpenBLAS, 35 s with the reference BLAS, README Benchmarks), else CHOLMOD where its BLAS
-/// is an optimized one (OpenBLAS); the hand-written one otherwise. Measured on one thread
+/// kAuto chooses after the hand-written solver's symbolic analysis, which costs little: CHOLMOD
+/// where the factor fills in densely (more than kAutoCholmodFill entries per unknown, as in a
+/// stacked laminate, whose factor is a band the width of its cross-section) and CHOLMOD's BLAS
+/// is an optimized one (OpenBLAS); the hand-written one otherwise. It never picks PETSc (yet):
+/// the events solver (solvers/bond_events.hpp) reuses the static system's factor for its
+/// Woodbury updates, many solves that want a direct factor, and it asks for kAuto. On the
+/// [0/45/-45/90]s coupon PETSc takes 8.7 s CPU and 393 MiB, CHOLMOD 7.2 s and 1272 MiB with
+/// OpenBLAS, 35 s with the reference BLAS (README Benchmarks): ask for it with kPetsc. Measured on one thread
 /// (README, Benchmarks): on single plies (64-100 entries per unknown) the hand-written solver is
 /// as fast or faster at every size; on the [0/45/-45/90]s coupon (880 per unknown) CHOLMOD with
 /// METIS and OpenBLAS is 2.4x faster, while with the reference BLAS it is 2x slower.
