@@ -231,9 +231,11 @@ int main(int argc, char** argv) {
       j["peak_rss_mib"] = rss;
       std::cout << j.dump() << '\n';
     } else if (markdown) {
-      const std::string method_cell = r.method == plydem::StaticMethod::kDirect
-                                          ? r.method_name
-                                          : fmt::format("CG ({} iterations)", r.iterations);
+      const std::string method_cell =
+          r.method != plydem::StaticMethod::kDirect
+              ? fmt::format("CG ({} iterations)", r.iterations)
+          : r.iterations > 0 ? fmt::format("{} ({} iterations)", r.method_name, r.iterations)
+                             : r.method_name;
       const std::string best =
           repeat > 1 ? fmt::format("{:.4f} / {:.4f} ({} runs)", best_wall, best_cpu, repeat - 1)
                      : std::string("-");

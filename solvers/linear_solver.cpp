@@ -5,11 +5,15 @@
 #include <cholmod.h>
 #include <dlfcn.h>
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <optional>
 
 #include "core/error.hpp"
 #include "solvers/sparse_cholesky.hpp"
+#ifdef PLYDEM_HAVE_PETSC
+#include "solvers/petsc_solver.hpp"
+#endif
 
 namespace plydem {
 namespace {
@@ -195,6 +199,8 @@ const char* linear_solver_name(LinearSolverKind kind) {
       return "direct";
     case LinearSolverKind::kCholmod:
       return "cholmod";
+    case LinearSolverKind::kPetsc:
+      return "petsc";
   }
   return "?";
 }
@@ -203,11 +209,61 @@ LinearSolverKind parse_linear_solver(std::string_view name) {
   for (LinearSolverKind kind :
        {LinearSolverKind::kAuto, LinearSolverKind::kDirect, LinearSolverKind::kCholmod})
     if (name == linear_solver_name(kind)) return kind;
-  if (name == "petsc")
+  if (name == "petsc") {
+    if (petsc_available()) return LinearSolverKind::kPetsc;
     throw Error(
-        "linear solver 'petsc': PETSc is not built into plydem yet (issue 15); use auto, direct "
+        "linear solver 'petsc': this plydem was built without PETSc (install petsc-dev, "
+        "scripts/setup, and configure again; the sanitizer build never has it); use auto, direct "
         "or cholmod");
-  throw Error(fmt::format("unknown linear solver '{}': use auto, direct or cholmod", name));
+  }
+  throw Error(fmt::format("unknown linear solver '{}': use auto, direct, cholmod or petsc", name));
+}
+
+bool petsc_available() {
+#ifdef PLYDEM_HAVE_PETSC
+  return true;
+#else
+  return false;
+#endif
+}
+
+void set_petsc_options(const std::string& options) {
+#ifdef PLYDEM_HAVE_PETSC
+  insert_petsc_options(options);
+#else
+  throw Error(fmt::format("PETSc options \"{}\": this plydem was built without PETSc", options));
+#endif
+}
+
+ParallelSession::ParallelSession([[maybe_unused]] int* argc, [[maybe_unused]] char*** argv) {
+#ifdef PLYDEM_HAVE_PETSC
+  // Only under mpiexec (OpenMPI, MPICH and hydra set these): a single process starts PETSc
+  // when a kPetsc solver is first made, and other commands never pay for MPI's start.
+  if (std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMI_SIZE"))
+    start_petsc_session(argc, argv);
+#endif
+}
+
+ParallelSession::~ParallelSession() {
+#ifdef PLYDEM_HAVE_PETSC
+  end_petsc_session();
+#endif
+}
+
+int mpi_rank() {
+#ifdef PLYDEM_HAVE_PETSC
+  return petsc_rank();
+#else
+  return 0;
+#endif
+}
+
+int mpi_size() {
+#ifdef PLYDEM_HAVE_PETSC
+  return petsc_size();
+#else
+  return 1;
+#endif
 }
 
 bool optimized_blas() {
@@ -222,6 +278,8 @@ namespace {
 // kAuto: the hand-written symbolic analysis decides (see the header).
 class AutoSolver final : public LinearSolver {
  public:
+  void set_layout(const UnknownLayout& layout) override { layout_ = layout; }
+  int iterations() const override { return cholmod_ ? cholmod_->iterations() : 0; }
   void factor(const SparseMatrix& lower, double pivot_tolerance) override {
     cholmod_.reset();
     direct_.emplace();
@@ -231,6 +289,7 @@ class AutoSolver final : public LinearSolver {
     if (fill > kAutoCholmodFill && optimized_blas()) {
       direct_.reset();  // its symbolic structure is large too
       cholmod_ = std::make_unique<CholmodSolver>();
+      cholmod_->set_layout(layout_);
       cholmod_->factor(lower, pivot_tolerance);
     } else {
       direct_->factorize(lower, pivot_tolerance);
@@ -258,8 +317,9 @@ class AutoSolver final : public LinearSolver {
   }
 
  private:
+  UnknownLayout layout_;
   std::optional<SupernodalCholesky> direct_;
-  std::unique_ptr<CholmodSolver> cholmod_;
+  std::unique_ptr<LinearSolver> cholmod_;
 };
 
 }  // namespace
@@ -270,6 +330,12 @@ std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind) {
       return std::make_unique<AutoSolver>();
     case LinearSolverKind::kCholmod:
       return std::make_unique<CholmodSolver>();
+    case LinearSolverKind::kPetsc:
+#ifdef PLYDEM_HAVE_PETSC
+      return make_petsc_solver();
+#else
+      throw Error("linear solver 'petsc': this plydem was built without PETSc");
+#endif
     case LinearSolverKind::kDirect:
       break;
   }

@@ -6,15 +6,27 @@
 /// factor for every solve with the same matrix and prescribed dofs (the specimen stiffness' three
 /// strain cases, experiments/protocols/stiffness_test.cpp).
 ///
-/// Two implementations:
+/// Three implementations:
 /// - kDirect: plydem's own supernodal multifrontal Cholesky (solvers/sparse_cholesky.hpp), in the
 ///   order the matrix is given (the static solver orders particles with AMD);
 /// - kCholmod: CHOLMOD (SuiteSparse), supernodal LL^T, with the fill-reducing order CHOLMOD
-///   chooses itself (AMD, METIS where AMD fills in much, on the dofs).
+///   chooses itself (AMD, METIS where AMD fills in much, on the dofs);
+/// - kPetsc: PETSc's conjugate gradient preconditioned by its smoothed-aggregation algebraic
+///   multigrid (GAMG), block size 6 (a particle's six dofs), with the six rigid-body modes of the
+///   particles as near-null space, rotation dofs included (translation: u = e, theta = 0;
+///   rotation: u = e x (x - x0), theta = e). Tuned as issue 15 measured it (threshold -1,
+///   Chebyshev-Jacobi smoothing, relative tolerance 1e-12); any PETSc option overrides these
+///   (set_petsc_options, `--petsc-options`). The hierarchy is built once by factor() and reused by
+///   every solve. Under `mpiexec -n N` the matrix is a distributed PETSc matrix, each rank owning
+///   a contiguous block of particles (see ParallelSession). Built when PETSc is found (optional).
 /// kAuto chooses after the hand-written solver's symbolic analysis, which costs little: CHOLMOD
 /// where the factor fills in densely (more than kAutoCholmodFill entries per unknown, as in a
 /// stacked laminate, whose factor is a band the width of its cross-section) and CHOLMOD's BLAS
-/// is an optimized one (OpenBLAS); the hand-written one otherwise. Measured on one thread
+/// is an optimized one (OpenBLAS); the hand-written one otherwise. It never picks PETSc (yet):
+/// the events solver (solvers/bond_events.hpp) reuses the static system's factor for its
+/// Woodbury updates, many solves that want a direct factor, and it asks for kAuto. On the
+/// [0/45/-45/90]s coupon PETSc takes 8.7 s CPU and 393 MiB, CHOLMOD 7.2 s and 1272 MiB with
+/// OpenBLAS, 35 s with the reference BLAS (README Benchmarks): ask for it with kPetsc. Measured on one thread
 /// (README, Benchmarks): on single plies (64-100 entries per unknown) the hand-written solver is
 /// as fast or faster at every size; on the [0/45/-45/90]s coupon (880 per unknown) CHOLMOD with
 /// METIS and OpenBLAS is 2.4x faster, while with the reference BLAS it is 2x slower.
@@ -35,19 +47,57 @@
 namespace plydem {
 
 enum class LinearSolverKind {
-  kAuto,    ///< by the fill of the factor and the BLAS (see the file comment)
-  kDirect,  ///< SupernodalCholesky (solvers/sparse_cholesky.hpp)
-  kCholmod  ///< CHOLMOD's supernodal Cholesky (SuiteSparse)
+  kAuto,     ///< by the fill of the factor and the BLAS (see the file comment)
+  kDirect,   ///< SupernodalCholesky (solvers/sparse_cholesky.hpp)
+  kCholmod,  ///< CHOLMOD's supernodal Cholesky (SuiteSparse)
+  kPetsc     ///< PETSc CG + GAMG with the rigid-body near-null space (needs petsc_available())
 };
 
 /// Entries of the hand-written factor per unknown above which kAuto factors with CHOLMOD.
 inline constexpr double kAutoCholmodFill = 300;
 
-/// "auto", "direct" or "cholmod".
+/// "auto", "direct", "cholmod" or "petsc".
 const char* linear_solver_name(LinearSolverKind kind);
-/// Parses "auto", "direct" or "cholmod". Throws plydem::Error for anything else, and says so
-/// explicitly for "petsc", which is not built in (issue 15).
+/// Parses "auto", "direct", "cholmod" or "petsc". Throws plydem::Error for anything else, and for
+/// "petsc" in a build without PETSc.
 LinearSolverKind parse_linear_solver(std::string_view name);
+/// Whether this build has PETSc (found at configure time, not in the sanitizer build).
+bool petsc_available();
+/// Adds PETSc options (e.g. "-ksp_rtol 1e-10 -pc_type hypre") to PETSc's options database, read
+/// by every later kPetsc factor(); they override plydem's defaults (file comment). Throws
+/// plydem::Error without PETSc or for options PETSc cannot parse.
+void set_petsc_options(const std::string& options);
+
+/// PETSc and MPI for the life of a program (construct first thing in main): initializes them with
+/// the program's arguments, finalizes them at the end. Without PETSc, or without this object,
+/// there is one rank. Under `mpiexec -n N`, every rank runs the whole program on the same input
+/// (model building, assembly of the free-free matrix and right-hand sides are replicated,
+/// deterministically); each rank hands only its own contiguous block of particles' rows to PETSc,
+/// which distributes the matrix, the AMG hierarchy and the CG iterations, and gathers the
+/// solution back to every rank. Only rank 0 should print (is_root()).
+class ParallelSession {
+ public:
+  ParallelSession(int* argc, char*** argv);
+  ~ParallelSession();
+  ParallelSession(const ParallelSession&) = delete;
+  ParallelSession& operator=(const ParallelSession&) = delete;
+};
+/// This process' rank and the number of ranks (0 and 1 without an MPI run).
+int mpi_rank();
+int mpi_size();
+inline bool is_root() {
+  return mpi_rank() == 0;
+}
+
+/// Where the unknowns of a static solve sit, for the solvers that build the rigid-body modes
+/// (kPetsc): unknown k is dof `dofs[k]` = 6 * particle + component (increasing), its value is
+/// the physical one divided by `scale[k]` (the static solver's Jacobi scaling); `position` holds
+/// every particle's reference position [m].
+struct UnknownLayout {
+  std::vector<int> dofs;
+  Eigen::VectorXd scale;
+  Eigen::Array<double, Eigen::Dynamic, 3> position;
+};
 /// Whether the BLAS that CHOLMOD calls is an optimized one (OpenBLAS, found at run time: the
 /// Debian alternative libblas.so.3 or LD_LIBRARY_PATH decide which one is loaded).
 bool optimized_blas();
@@ -62,6 +112,11 @@ class LinearSolver {
   /// below `pivot_tolerance` times its diagonal entry is a zero pivot (see the file comment).
   /// Throws plydem::Error if the library fails (out of memory, say).
   virtual void factor(const SparseMatrix& lower, double pivot_tolerance) = 0;
+  /// Tells the solver where the unknowns of the next factor() sit; the direct solvers ignore it,
+  /// kPetsc needs it (it treats the unknowns as single dofs without it).
+  virtual void set_layout(const UnknownLayout& /*layout*/) {}
+  /// Krylov iterations of the last solve (0 for the direct solvers).
+  virtual int iterations() const { return 0; }
   /// The unknowns whose pivot was zero, in the matrix's numbering, increasing; empty for a
   /// positive definite matrix.
   virtual const std::vector<int>& zero_pivots() const = 0;
@@ -79,7 +134,9 @@ class LinearSolver {
 };
 
 /// A solver of `kind`. The hand-written one and kAuto factor in the order the matrix is given
-/// (give it a fill-reducing one); CHOLMOD orders it itself.
+/// (give it a fill-reducing one); CHOLMOD orders it itself; kPetsc wants the particles' own order
+/// (contiguous blocks of it are the ranks' shares). Throws plydem::Error for kPetsc without
+/// PETSc.
 std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind);
 
 }  // namespace plydem

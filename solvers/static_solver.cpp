@@ -514,9 +514,11 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   // fill-reducing order of the particles (counted with the factorization); CHOLMOD orders the
   // dofs itself and CG needs none.
   start = Clock::now();
-  m.order = m.direct && nf > 0 && kind != LinearSolverKind::kCholmod
-                ? EliminationOrder::minimum_degree(model)
-                : EliminationOrder::identity(n);
+  // PETSc keeps the particles' own order: its ranks own contiguous blocks of particles.
+  m.order =
+      m.direct && nf > 0 && kind != LinearSolverKind::kCholmod && kind != LinearSolverKind::kPetsc
+          ? EliminationOrder::minimum_degree(model)
+          : EliminationOrder::identity(n);
   const double ordering_seconds = seconds_since(start);
 
   start = Clock::now();
@@ -562,6 +564,8 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold
     // that grows with the size. The factorization collects every zero pivot in one pass.
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
+    // Where the unknowns sit, for PETSc's rigid-body near-null space.
+    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position});
     m.cholesky->factor(m.a, threshold);
     ++m.factorizations;
     if (!m.cholesky->zero_pivots().empty())
@@ -665,6 +669,7 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
   if (nf > 0 && m.direct) {
     y = b;
     m.cholesky->solve_in_place(y);
+    result.iterations = m.cholesky->iterations();
   } else if (nf > 0) {
     // Warm start from the current state: successive load stages then take few iterations.
     for (int f = 0; f < nf; ++f) {

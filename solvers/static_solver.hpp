@@ -92,7 +92,8 @@ Eigen::SparseMatrix<double> assemble_stiffness(const Model& model);
 
 enum class StaticMethod {
   kAuto,      ///< kDirect up to StaticSettings::direct_max_dofs free dofs, kIterative above
-  kDirect,    ///< sparse Cholesky (StaticSettings::linear_solver: solvers/linear_solver.hpp)
+  kDirect,    ///< StaticSettings::linear_solver (solvers/linear_solver.hpp): sparse Cholesky, or
+              ///< PETSc's CG + AMG (kPetsc), which likewise sets up once for many solves
   kIterative  ///< preconditioned conjugate gradient (Eigen::ConjugateGradient)
 };
 
@@ -145,7 +146,7 @@ struct StaticResult {
   int free_dofs = 0;
   int prescribed_dofs = 0;              ///< pins included
   Eigen::Index stiffness_nonzeros = 0;  ///< in the lower triangle of K_ff
-  int iterations = 0;                   ///< conjugate gradient iterations (0 for kDirect)
+  int iterations = 0;  ///< conjugate gradient iterations (0 for kDirect but with kPetsc)
   double relative_residual = 0;         ///< |A y - b| / |b| of the scaled free-free system
   double strain_energy = 0;             ///< of the solution [J]
   /// The generalized force each support applies to its particle [N, N m]: (K u) on prescribed

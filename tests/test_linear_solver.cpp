@@ -1,8 +1,9 @@
-// The linear solvers behind the static solve (solvers/linear_solver.hpp): CHOLMOD and the
-// hand-written supernodal Cholesky give the same solutions on a ply and a laminate, the same
-// mechanism diagnosis, the same tension-test moduli; one factorization serves many right-hand
-// sides exactly as fresh solves do (StaticSystem, the specimen stiffness' three solves); unknown
-// solver names are clear errors.
+// The linear solvers behind the static solve (solvers/linear_solver.hpp): CHOLMOD, PETSc's CG +
+// GAMG (where built) and the hand-written supernodal Cholesky give the same solutions on a ply and
+// a laminate, the same mechanism diagnosis, the same tension-test moduli; one factorization (or AMG
+// hierarchy) serves many right-hand sides exactly as fresh solves do (StaticSystem, the specimen
+// stiffness' three solves); PETSc on 2 MPI ranks gives the 1-process answer (its own ctest entry,
+// run with mpiexec -n 2); unknown solver names are clear errors.
 #include <doctest/doctest.h>
 
 #include <numbers>
@@ -18,6 +19,7 @@
 #include "strategies/hex2d.hpp"
 #include "strategies/laminate.hpp"
 #include "support/coupon_fixtures.hpp"
+#include "support/test_support.hpp"
 
 using namespace plydem;
 using plydem::test::contains;
@@ -78,6 +80,13 @@ DofArray state_of(const Particles& p) {
   return s;
 }
 
+// The solvers of this build: PETSc where it is built in.
+std::vector<LinearSolverKind> every_solver() {
+  std::vector<LinearSolverKind> kinds = {LinearSolverKind::kDirect, LinearSolverKind::kCholmod};
+  if (petsc_available()) kinds.push_back(LinearSolverKind::kPetsc);
+  return kinds;
+}
+
 // max |a - b| over the translations and over the rotations, each relative to b's largest.
 double relative_difference(const DofArray& a, const DofArray& b) {
   const double u =
@@ -89,15 +98,33 @@ double relative_difference(const DofArray& a, const DofArray& b) {
 
 }  // namespace
 
-TEST_CASE("names: auto, direct and cholmod parse; petsc and unknown names are clear errors") {
+TEST_CASE("names: auto, direct, cholmod and petsc parse; unknown names are clear errors") {
   for (LinearSolverKind kind :
        {LinearSolverKind::kAuto, LinearSolverKind::kDirect, LinearSolverKind::kCholmod})
     CHECK(parse_linear_solver(linear_solver_name(kind)) == kind);
-  const std::string petsc = error_message([] { parse_linear_solver("petsc"); });
-  CHECK(contains(petsc, "PETSc is not built into plydem yet"));
+  if (petsc_available()) {
+    CHECK(parse_linear_solver("petsc") == LinearSolverKind::kPetsc);
+    // Options PETSc cannot use come out as errors of the solve; a later option overrides.
+    const Model built = small_coupon();
+    const DofConstraints c = grips(built, 0.4e-6);
+    Model m = built;
+    set_petsc_options("-ksp_type nosuch");
+    const std::string bad =
+        error_message([&] { solve_static(m, c, with(LinearSolverKind::kPetsc)); });
+    CHECK(contains(bad, "PETSc's options (KSPSetFromOptions) failed"));
+    set_petsc_options("-ksp_type cg");
+    CHECK(solve_static(m, c, with(LinearSolverKind::kPetsc)).iterations > 0);
+  } else {
+    const std::string petsc = error_message([] { parse_linear_solver("petsc"); });
+    CHECK(contains(petsc, "built without PETSc"));
+    CHECK(contains(error_message([] { set_petsc_options("-ksp_rtol 1e-9"); }),
+                   "built without PETSc"));
+    CHECK(contains(error_message([] { make_linear_solver(LinearSolverKind::kPetsc); }),
+                   "built without PETSc"));
+  }
   const std::string unknown = error_message([] { parse_linear_solver("umfpack"); });
   CHECK(contains(unknown, "unknown linear solver 'umfpack'"));
-  CHECK(contains(unknown, "auto, direct or cholmod"));
+  CHECK(contains(unknown, "auto, direct, cholmod or petsc"));
 }
 
 TEST_CASE("both factorizations solve a random sparse SPD system for several right-hand sides") {
@@ -142,7 +169,7 @@ TEST_CASE("both factorizations solve a random sparse SPD system for several righ
   }
 }
 
-TEST_CASE("CHOLMOD and the hand-written Cholesky agree to 1e-10 on a ply and a laminate") {
+TEST_CASE("CHOLMOD, PETSc and the hand-written Cholesky agree on a ply and a laminate") {
   for (const bool laminate : {false, true}) {
     CAPTURE(laminate);
     const Model built = laminate ? small_laminate() : small_coupon();
@@ -159,6 +186,18 @@ TEST_CASE("CHOLMOD and the hand-written Cholesky agree to 1e-10 on a ply and a l
     const double reaction = rd.reaction.abs().maxCoeff();
     CHECK((rc.reaction - rd.reaction).abs().maxCoeff() < 1e-10 * reaction);
     CHECK(rc.relative_residual < 1e-10);
+    // PETSc's CG + GAMG (rtol 1e-12 on the scaled system): the same state to 1e-8.
+    if (petsc_available()) {
+      Model petsc = built;
+      const StaticResult rp = solve_static(petsc, c, with(LinearSolverKind::kPetsc));
+      MESSAGE(rp.method_name, ": ", rp.iterations, " iterations");
+      CHECK(contains(rp.method_name, "PETSc cg + gamg (block size 6, rigid-body near-null"));
+      CHECK(rp.iterations > 0);
+      CHECK(relative_difference(state_of(petsc.particles), state_of(direct.particles)) < 1e-8);
+      CHECK(rp.strain_energy == doctest::Approx(rd.strain_energy).epsilon(1e-10));
+      CHECK((rp.reaction - rd.reaction).abs().maxCoeff() < 1e-8 * reaction);
+      CHECK(rp.relative_residual < 1e-11);
+    }
     // kAuto (the default) keeps the hand-written solver where the factor fills in little, as in
     // these small coupons: the very same factorization.
     Model automatic = built;
@@ -168,7 +207,7 @@ TEST_CASE("CHOLMOD and the hand-written Cholesky agree to 1e-10 on a ply and a l
   }
 }
 
-TEST_CASE("a mechanism is refused with the same zero pivots by either solver") {
+TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {
   // A chain without bending springs (see test_static_solver): 8 zero pivots.
   Model m;
   Particles& p = m.particles;
@@ -191,7 +230,7 @@ TEST_CASE("a mechanism is refused with the same zero pivots by either solver") {
   DofConstraints c(5);
   c.fix_particle(0);
   c.fix(4, Dof::kUx, 1e-7);
-  for (LinearSolverKind kind : {LinearSolverKind::kDirect, LinearSolverKind::kCholmod}) {
+  for (LinearSolverKind kind : every_solver()) {
     CAPTURE(linear_solver_name(kind));
     const std::string error = error_message([&] { solve_static(m, c, with(kind)); });
     CHECK(contains(error, "8 zero pivots"));
@@ -200,7 +239,7 @@ TEST_CASE("a mechanism is refused with the same zero pivots by either solver") {
 }
 
 TEST_CASE("a factorization reused for several prescribed values equals fresh solves") {
-  for (LinearSolverKind kind : {LinearSolverKind::kDirect, LinearSolverKind::kCholmod}) {
+  for (LinearSolverKind kind : every_solver()) {
     CAPTURE(linear_solver_name(kind));
     const Model built = small_coupon(0.5);
     const DofConstraints pattern = grips(built, 0.0);
@@ -231,16 +270,18 @@ TEST_CASE("a factorization reused for several prescribed values equals fresh sol
   }
 }
 
-TEST_CASE("the specimen stiffness factors once for its three solves, by either solver") {
+TEST_CASE("the specimen stiffness factors once for its three solves, by every solver") {
   const Model built = small_coupon(0.3);
   const SpecimenStiffness direct = measure_specimen_stiffness(built, 0, LinearSolverKind::kDirect);
-  const SpecimenStiffness cholmod =
-      measure_specimen_stiffness(built, 0, LinearSolverKind::kCholmod);
   CHECK(direct.factorizations == 1);
   CHECK(direct.solves == 3);
-  CHECK(cholmod.factorizations == 1);
-  CHECK(cholmod.solves == 3);
-  CHECK((cholmod.stiffness - direct.stiffness).norm() < 1e-10 * direct.stiffness.norm());
+  for (LinearSolverKind kind : every_solver()) {
+    CAPTURE(linear_solver_name(kind));
+    const SpecimenStiffness other = measure_specimen_stiffness(built, 0, kind);
+    CHECK(other.factorizations == 1);
+    CHECK(other.solves == 3);
+    CHECK((other.stiffness - direct.stiffness).norm() < 1e-9 * direct.stiffness.norm());
+  }
 }
 
 TEST_CASE("the tension test's moduli with CHOLMOD equal the hand-written solver's to 1e-9") {
@@ -259,4 +300,37 @@ TEST_CASE("the tension test's moduli with CHOLMOD equal the hand-written solver'
   CHECK(same(cholmod.dem.Gxy, direct.dem.Gxy));
   CHECK(direct.specimen.factorizations == 1);
   CHECK(direct.specimen.solves == 3);
+}
+
+// Its own ctest entry (tests/CMakeLists.txt), run as mpiexec -n 2: each rank builds the same model
+// and hands PETSc its half of the particles' rows; the gathered solution equals the hand-written
+// Cholesky's on one process, and the tension test's moduli equal the 1-process direct ones.
+TEST_CASE("PETSc on 2 MPI ranks gives the 1-process solution") {
+  if (!petsc_available()) {
+    plydem::test::skip("this build has no PETSc");
+    return;
+  }
+  const Model built = small_laminate();
+  const DofConstraints c = grips(built, 0.4e-6);
+  Model direct = built, petsc = built;
+  solve_static(direct, c, with(LinearSolverKind::kDirect));
+  const StaticResult rp = solve_static(petsc, c, with(LinearSolverKind::kPetsc));
+  MESSAGE("rank ", mpi_rank(), " of ", mpi_size(), ": ", rp.method_name);
+  CHECK(mpi_size() == 2);
+  CHECK(contains(rp.method_name, "2 ranks"));
+  CHECK(relative_difference(state_of(petsc.particles), state_of(direct.particles)) < 1e-8);
+
+  TensionSettings settings;
+  settings.coupon = small_spec(0);
+  settings.coupon.length = 1.2e-3;
+  settings.layup = {0.0, std::numbers::pi / 2};
+  settings.linear_solver = LinearSolverKind::kDirect;
+  const TensionResult one = TensionTest(settings).run();
+  settings.linear_solver = LinearSolverKind::kPetsc;
+  const TensionResult two = TensionTest(settings).run();
+  auto same = [](double a, double b) { return std::abs(a - b) <= 1e-8 * std::abs(b); };
+  CHECK(same(two.dem.Ex, one.dem.Ex));
+  CHECK(same(two.dem.Ey, one.dem.Ey));
+  CHECK(same(two.dem.nu_xy, one.dem.nu_xy));
+  CHECK(same(two.dem.Gxy, one.dem.Gxy));
 }

@@ -38,6 +38,7 @@
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/run_experiment.hpp"
 #include "experiments/runner/strength_experiment.hpp"
+#include "solvers/linear_solver.hpp"
 #include "strategies/registry.hpp"
 
 namespace {
@@ -55,6 +56,7 @@ struct CouponOptions {
   double interface_normal = 0, interface_shear = 0;
   bool interface_transverse_shear = false;
   std::string linear_solver = "auto";
+  std::string petsc_options;
   std::vector<std::string> strategy_options;
   bool json = false;
   bool raw_edges = false;
@@ -180,9 +182,14 @@ void add_coupon_options(CLI::App& app, CouponOptions& o, const std::string& grip
       ->check(CLI::IsMember(grips))
       ->capture_default_str();
   app.add_option("--linear-solver", o.linear_solver,
-                 "factorization of the static solves: auto (by size), direct (plydem's supernodal "
-                 "Cholesky) or cholmod (SuiteSparse)")
+                 "linear solver of the static solves: auto (by size), direct (plydem's "
+                 "supernodal Cholesky), cholmod (SuiteSparse) or petsc (CG + algebraic multigrid; "
+                 "distributed under mpiexec -n N)")
       ->capture_default_str();
+  app.add_option("--petsc-options", o.petsc_options,
+                 "PETSc options for --linear-solver petsc, e.g. \"-ksp_rtol 1e-10 -pc_type "
+                 "hypre\" (they override plydem's defaults: CG, GAMG threshold -1, Chebyshev-"
+                 "Jacobi smoothing, rtol 1e-12)");
   app.add_flag("--raw-edges", o.raw_edges,
                "do not complete the boundary cells of free edges (edge bonds keep bulk stiffness)");
   app.add_flag("--json", o.json, "print one JSON object (SI units) instead of the table");
@@ -423,6 +430,7 @@ void set_coupon(const CouponOptions& o, Settings& s) {
   s.grip_length = o.grip_mm * mm;
   s.gauge_fraction = o.gauge_fraction;
   s.linear_solver = plydem::parse_linear_solver(o.linear_solver);
+  if (!o.petsc_options.empty()) plydem::set_petsc_options(o.petsc_options);
   s.force = o.force;
   make_strategy(o);  // unknown strategies and options fail here, before any work
 }
@@ -761,7 +769,9 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
   // The command, run after the plug-ins (if any) have registered their strategies.
   const auto command = [&]() -> int {
     plydem::set_progress_interval(log_options.progress_interval);
-    spdlog::set_level(log_options.quiet ? spdlog::level::warn : spdlog::level::info);
+    spdlog::set_level(!plydem::is_root()  ? spdlog::level::off
+                      : log_options.quiet ? spdlog::level::warn
+                                          : spdlog::level::info);
     if (*tension) refuse_inapplicable(*tension, tension_options);
     if (*strength) refuse_inapplicable(*strength, strength_options);
     if (*run && run_list) {
@@ -839,6 +849,13 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
 
 #ifndef PLYDEM_NO_MAIN
 int main(int argc, char** argv) {
+  // Under mpiexec -n N every rank runs the command (solvers/linear_solver.hpp, ParallelSession);
+  // only rank 0 prints.
+  const plydem::ParallelSession session(&argc, &argv);
+  if (!plydem::is_root()) {
+    std::cout.setstate(std::ios::badbit);
+    std::cerr.setstate(std::ios::badbit);
+  }
   return plydem_command_line(argc, argv, false);
 }
 #endif

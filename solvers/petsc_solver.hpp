@@ -1,0 +1,25 @@
+#pragma once
+/// \file
+/// The PETSc side of solvers/linear_solver.hpp, for linear_solver.cpp only: defined in
+/// petsc_solver.cpp, which is compiled when PETSc is found (PLYDEM_HAVE_PETSC).
+
+#include <memory>
+#include <string>
+
+#include "solvers/linear_solver.hpp"
+
+namespace plydem {
+
+/// kPetsc: CG + GAMG with the rigid-body near-null space (linear_solver.hpp).
+std::unique_ptr<LinearSolver> make_petsc_solver();
+/// PetscOptionsInsertString, initializing PETSc first if needed.
+void insert_petsc_options(const std::string& options);
+/// PetscInitialize / PetscFinalize for ParallelSession (no-ops if PETSc is already up or was
+/// started elsewhere).
+void start_petsc_session(int* argc, char*** argv);
+void end_petsc_session();
+/// MPI rank and size of PETSC_COMM_WORLD; 0 and 1 before PETSc is initialized.
+int petsc_rank();
+int petsc_size();
+
+}  // namespace plydem
