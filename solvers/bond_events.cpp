@@ -167,6 +167,7 @@ class UnitLoadSolver {
         refactor_every_change_(settings.refactor_every_event || settings.max_update_rank == 0),
         max_rank_(settings.max_update_rank) {
     if (settings_.method == StaticMethod::kAuto) settings_.method = StaticMethod::kDirect;
+    settings_.linear_solver_use = LinearSolverUse::kManySolves;  // a factor to update
   }
 
   /// The constraints with the pins and the fixed loose pieces.

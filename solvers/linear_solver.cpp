@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "core/machine_memory.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #ifdef PLYDEM_HAVE_PETSC
 #include "solvers/petsc_solver.hpp"
@@ -278,17 +279,43 @@ namespace {
 // kAuto: the hand-written symbolic analysis decides (see the header).
 class AutoSolver final : public LinearSolver {
  public:
+  explicit AutoSolver(LinearSolverUse use) : use_(use) {}
   void set_layout(const UnknownLayout& layout) override { layout_ = layout; }
   int iterations() const override { return cholmod_ ? cholmod_->iterations() : 0; }
   void factor(const SparseMatrix& lower, double pivot_tolerance) override {
     cholmod_.reset();
     direct_.emplace();
     direct_->analyze(lower);
-    const double fill = static_cast<double>(direct_->factor_entries()) /
-                        std::max<double>(1.0, static_cast<double>(lower.rows()));
-    if (fill > kAutoCholmodFill && optimized_blas()) {
+    const double unknowns = std::max<double>(1.0, static_cast<double>(lower.rows()));
+    const double fill = static_cast<double>(direct_->factor_entries()) / unknowns;
+    const double bytes = direct_factor_bytes(static_cast<double>(direct_->factor_entries()));
+    const MachineMemory memory = machine_memory();
+    const bool fits = bytes <= kAutoMemoryShare * memory.available;
+    const bool iterative_allowed = petsc_available() && use_ == LinearSolverUse::kFewSolves;
+    const bool dense = fill > kAutoCholmodFill;
+    if (iterative_allowed && (!fits || mpi_size() > 1 || (dense && !optimized_blas()))) {
+      direct_.reset();
+      cholmod_ = make_linear_solver(LinearSolverKind::kPetsc);
+      reason_ = !fits ? fmt::format("the direct factor would need {:.2f} GB", bytes / 1e9)
+                : mpi_size() > 1 ? "distributed over the MPI ranks"
+                                 : fmt::format("{:.0f} factor entries per unknown", fill);
+    } else if (!fits) {
+      throw Error(fmt::format(
+          "static solve: the direct factor of these {:.0f} unknowns needs about {:.2f} GB "
+          "(symbolic analysis: {:.3g} entries, {:.0f} per unknown, with its workspace), more "
+          "than the {:.2f} GB available ({}); {}",
+          unknowns, bytes / 1e9, static_cast<double>(direct_->factor_entries()), fill,
+          memory.available / 1e9, memory.source,
+          use_ == LinearSolverUse::kManySolves
+              ? "this solver updates a direct factor, so it cannot switch to an iterative one: "
+                "make the model smaller or the particles larger"
+              : "this plydem has no iterative linear solver (PETSc: install petsc-dev and "
+                "configure again); make the model smaller or the particles larger"));
+    } else if (dense && optimized_blas()) {
       direct_.reset();  // its symbolic structure is large too
       cholmod_ = std::make_unique<CholmodSolver>();
+    }
+    if (cholmod_) {
       cholmod_->set_layout(layout_);
       cholmod_->factor(lower, pivot_tolerance);
     } else {
@@ -309,7 +336,8 @@ class AutoSolver final : public LinearSolver {
       direct_->solve_in_place(b);
   }
   std::string name() const override {
-    return cholmod_ ? cholmod_->name() : "supernodal Cholesky (AMD on particles)";
+    if (!cholmod_) return "supernodal Cholesky (AMD on particles)";
+    return reason_.empty() ? cholmod_->name() : fmt::format("{} ({})", cholmod_->name(), reason_);
   }
   double factor_entries() const override {
     if (cholmod_) return cholmod_->factor_entries();
@@ -317,17 +345,23 @@ class AutoSolver final : public LinearSolver {
   }
 
  private:
+  LinearSolverUse use_;
   UnknownLayout layout_;
   std::optional<SupernodalCholesky> direct_;
-  std::unique_ptr<LinearSolver> cholmod_;
+  std::unique_ptr<LinearSolver> cholmod_;  // CHOLMOD or PETSc where kAuto picks one
+  std::string reason_;                     // why PETSc, for name()
 };
 
 }  // namespace
 
-std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind) {
+double direct_factor_bytes(double factor_entries) {
+  return (1 + kDirectFactorWorkspace) * factor_entries * sizeof(double);
+}
+
+std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind, LinearSolverUse use) {
   switch (kind) {
     case LinearSolverKind::kAuto:
-      return std::make_unique<AutoSolver>();
+      return std::make_unique<AutoSolver>(use);
     case LinearSolverKind::kCholmod:
       return std::make_unique<CholmodSolver>();
     case LinearSolverKind::kPetsc:

@@ -19,17 +19,24 @@
 ///   (set_petsc_options, `--petsc-options`). The hierarchy is built once by factor() and reused by
 ///   every solve. Under `mpiexec -n N` the matrix is a distributed PETSc matrix, each rank owning
 ///   a contiguous block of particles (see ParallelSession). Built when PETSc is found (optional).
-/// kAuto chooses after the hand-written solver's symbolic analysis, which costs little: CHOLMOD
-/// where the factor fills in densely (more than kAutoCholmodFill entries per unknown, as in a
-/// stacked laminate, whose factor is a band the width of its cross-section) and CHOLMOD's BLAS
-/// is an optimized one (OpenBLAS); the hand-written one otherwise. It never picks PETSc (yet):
-/// the events solver (solvers/bond_events.hpp) reuses the static system's factor for its
-/// Woodbury updates, many solves that want a direct factor, and it asks for kAuto. On the
-/// [0/45/-45/90]s coupon PETSc takes 8.7 s CPU and 393 MiB, CHOLMOD 7.2 s and 1272 MiB with
-/// OpenBLAS, 35 s with the reference BLAS (README Benchmarks): ask for it with kPetsc. Measured on one thread
-/// (README, Benchmarks): on single plies (64-100 entries per unknown) the hand-written solver is
-/// as fast or faster at every size; on the [0/45/-45/90]s coupon (880 per unknown) CHOLMOD with
-/// METIS and OpenBLAS is 2.4x faster, while with the reference BLAS it is 2x slower.
+/// kAuto chooses after the hand-written solver's symbolic analysis, which costs little (it knows
+/// the factor's size before any numeric work):
+/// - PETSc, where it is built and the caller makes few solves with the matrix
+///   (LinearSolverUse::kFewSolves: a static solve, the specimen stiffness' three), when the
+///   direct factor with its workspace would take more than kAutoMemoryShare of the available
+///   memory, under mpiexec with more than one rank, or when the factor fills in densely (more
+///   than kAutoCholmodFill entries per unknown, as in a stacked laminate, whose factor is a band
+///   the width of its cross-section) and CHOLMOD's BLAS is the reference one;
+/// - CHOLMOD where the factor fills in densely and the BLAS is an optimized one (OpenBLAS);
+/// - the hand-written one otherwise;
+/// - and it refuses, with the estimate, a factor that does not fit where PETSc cannot take over
+///   (not built, or kManySolves: the events solver, solvers/bond_events.hpp, updates the factor
+///   by Woodbury's identity, many solves that want a direct factor).
+/// Measured on one thread (README, Benchmarks): on single plies (64-100 entries per unknown) the
+/// hand-written solver is as fast or faster than CHOLMOD at every size; on the [0/45/-45/90]s
+/// paper coupon (173,251 unknowns, 880 entries per unknown) the hand-written factor takes 14 s
+/// and 1.8 GB, CHOLMOD with METIS 35 s with the reference BLAS and 7.2 s with OpenBLAS, PETSc
+/// 4.6 s to set up and 4.1 s a solve in 394 MiB.
 ///
 /// Zero pivots. Both report the same diagnosis: the dofs whose LDL^T pivot is at or below
 /// `pivot_tolerance` times their diagonal entry (sparse_cholesky.hpp). CHOLMOD stops at the first
@@ -53,8 +60,22 @@ enum class LinearSolverKind {
   kPetsc     ///< PETSc CG + GAMG with the rigid-body near-null space (needs petsc_available())
 };
 
-/// Entries of the hand-written factor per unknown above which kAuto factors with CHOLMOD.
+/// Entries of the hand-written factor per unknown above which kAuto factors with CHOLMOD (with an
+/// optimized BLAS) or hands the matrix to PETSc (with the reference BLAS, for few solves).
 inline constexpr double kAutoCholmodFill = 300;
+/// The share of the available memory (core/machine_memory.hpp) a direct factor may take under
+/// kAuto; above it kAuto takes PETSc (few solves) or refuses with the estimate.
+inline constexpr double kAutoMemoryShare = 0.8;
+/// The multifrontal workspace beside a direct factor, as a fraction of it (hcp: about 0.4
+/// measured; experiments/protocols/resource_estimate.hpp).
+inline constexpr double kDirectFactorWorkspace = 0.5;
+/// Bytes of a direct factor of `factor_entries` entries with its workspace.
+double direct_factor_bytes(double factor_entries);
+
+/// How many solves a caller makes with one factor(): kAuto picks an iterative solver (PETSc) only
+/// for few (a static solve, the specimen stiffness' three), never for the events solver, whose
+/// Woodbury updates solve with the factor for every column of every change.
+enum class LinearSolverUse { kFewSolves, kManySolves };
 
 /// "auto", "direct", "cholmod" or "petsc".
 const char* linear_solver_name(LinearSolverKind kind);
@@ -137,6 +158,7 @@ class LinearSolver {
 /// (give it a fill-reducing one); CHOLMOD orders it itself; kPetsc wants the particles' own order
 /// (contiguous blocks of it are the ranks' shares). Throws plydem::Error for kPetsc without
 /// PETSc.
-std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind);
+std::unique_ptr<LinearSolver> make_linear_solver(
+    LinearSolverKind kind, LinearSolverUse use = LinearSolverUse::kFewSolves);
 
 }  // namespace plydem

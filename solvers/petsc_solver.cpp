@@ -22,7 +22,11 @@
 #include <fmt/format.h>
 #include <petscksp.h>
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <numeric>
@@ -42,6 +46,9 @@ namespace {
 // chain without bending springs) leaves 0.81: r's component in the null space stays whole.
 constexpr double kProbeTolerance = 1e-6;
 constexpr double kMechanismProbe = 1e-3;
+
+// A solve longer than this many seconds reports its progress, every as many seconds again.
+constexpr double kProgressSeconds = 5;
 
 bool we_initialized = false;  // by ensure_petsc(), finalized at exit
 bool session_initialized = false;
@@ -90,6 +97,38 @@ double probe_value(std::uint64_t row) {
   return 2.0 * static_cast<double>(z >> 11) / static_cast<double>(1ULL << 53) - 1.0;
 }
 
+// The progress of one KSPSolve: residuals fall about geometrically, so the time left is the
+// decades still to go at the rate of those done.
+struct SolveProgress {
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point start = Clock::now(), last_report = start;
+  double first_residual = 0;
+  double target = 1e-12;  // relative
+  const char* what = "solve";
+};
+
+PetscErrorCode report_progress(KSP /*ksp*/, PetscInt iteration, PetscReal residual, void* context) {
+  auto& p = *static_cast<SolveProgress*>(context);
+  if (iteration == 0) {
+    p.first_residual = residual;
+    return 0;
+  }
+  const auto now = SolveProgress::Clock::now();
+  const double elapsed = std::chrono::duration<double>(now - p.start).count();
+  if (std::chrono::duration<double>(now - p.last_report).count() < kProgressSeconds) return 0;
+  p.last_report = now;
+  if (!is_root() || !(p.first_residual > 0)) return 0;
+  const double relative = residual / p.first_residual;
+  const double done = -std::log10(std::max(relative, 1e-300));
+  const double to_go = -std::log10(p.target) - done;
+  const std::string left =
+      done > 0 && to_go > 0 ? fmt::format(", about {:.0f} s left", elapsed * to_go / done) : "";
+  spdlog::info("static solve: PETSc {}, iteration {}, residual {:.2e} of the first (target {:.0e}), "
+               "{:.0f} s{}",
+               p.what, static_cast<long>(iteration), relative, p.target, elapsed, left);
+  return 0;
+}
+
 class PetscSolver final : public LinearSolver {
  public:
   PetscSolver() { ensure_petsc(); }
@@ -121,7 +160,14 @@ class PetscSolver final : public LinearSolver {
     default_option("-mg_levels_ksp_type", "chebyshev");
     default_option("-mg_levels_pc_type", "jacobi");
     check(KSPSetFromOptions(ksp_), "options (KSPSetFromOptions)");
+    check(KSPMonitorSet(ksp_, report_progress, &progress_, nullptr), "KSPMonitorSet");
+    const auto setup_start = SolveProgress::Clock::now();
     check(KSPSetUp(ksp_), "setup of the preconditioner (KSPSetUp)");
+    const double setup_seconds =
+        std::chrono::duration<double>(SolveProgress::Clock::now() - setup_start).count();
+    if (setup_seconds > kProgressSeconds && is_root())
+      spdlog::info("static solve: PETSc's AMG hierarchy for {} unknowns set up in {:.1f} s", n_,
+                   setup_seconds);
     check(MatCreateVecs(a_, &x_, &b_), "MatCreateVecs");
     check(VecScatterCreateToAll(x_, &to_all_, &all_), "VecScatterCreateToAll");
     if (probe_finds_null_space()) {
@@ -321,6 +367,7 @@ class PetscSolver final : public LinearSolver {
     check(KSPGetTolerances(ksp_, &rtol, &abstol, &dtol, &max_iterations), "KSPGetTolerances");
     check(KSPSetTolerances(ksp_, kProbeTolerance, abstol, dtol, max_iterations),
           "KSPSetTolerances");
+    start_progress("probe for mechanisms", kProbeTolerance);
     check(KSPSolve(ksp_, b_, x_), "probe solve (KSPSolve)");
     check(KSPSetTolerances(ksp_, rtol, abstol, dtol, max_iterations), "KSPSetTolerances");
     KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
@@ -342,6 +389,9 @@ class PetscSolver final : public LinearSolver {
       if (row_of_[k] >= first_ && row_of_[k] < end_) v[row_of_[k] - first_] = y(k);
     check(VecRestoreArray(b_, &v), "VecRestoreArray");
     check(VecSet(x_, 0), "VecSet");
+    PetscReal rtol = 0;
+    check(KSPGetTolerances(ksp_, &rtol, nullptr, nullptr, nullptr), "KSPGetTolerances");
+    start_progress("solve", rtol);
     check(KSPSolve(ksp_, b_, x_), "solve (KSPSolve)");
     KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
     check(KSPGetConvergedReason(ksp_, &reason), "KSPGetConvergedReason");
@@ -365,6 +415,12 @@ class PetscSolver final : public LinearSolver {
     check(VecRestoreArrayRead(all_, &all), "VecRestoreArrayRead");
   }
 
+  void start_progress(const char* what, double target) const {
+    progress_ = SolveProgress{};
+    progress_.what = what;
+    progress_.target = target;
+  }
+
   void release() {
     if (to_all_) VecScatterDestroy(&to_all_);
     if (all_) VecDestroy(&all_);
@@ -383,6 +439,7 @@ class PetscSolver final : public LinearSolver {
   VecScatter to_all_ = nullptr;
   double probe_error_ = 0;
   mutable int iterations_ = 0;
+  mutable SolveProgress progress_;  // KSPMonitorSet holds its address
   std::optional<SupernodalCholesky> fallback_;
 };
 

@@ -506,9 +506,15 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   const int dofs = m.dofs = kDofsPerParticle * n;
   m.prescribed = m.constraints.prescribed_count();
   const int nf = m.nf = dofs - m.prescribed;
-  m.direct = settings.method == StaticMethod::kDirect ||
-             (settings.method == StaticMethod::kAuto && nf <= settings.direct_max_dofs);
   const LinearSolverKind kind = settings.linear_solver;
+  // Above direct_max_dofs kAuto takes CG, unless PETSc can take over where a direct factor would
+  // not fit (kAuto's linear solver decides after its symbolic analysis).
+  const bool petsc_can_take_over =
+      petsc_available() && settings.linear_solver_use == LinearSolverUse::kFewSolves &&
+      (kind == LinearSolverKind::kAuto || kind == LinearSolverKind::kPetsc);
+  m.direct = settings.method == StaticMethod::kDirect ||
+             (settings.method == StaticMethod::kAuto &&
+              (nf <= settings.direct_max_dofs || petsc_can_take_over));
 
   // The hand-written direct solver (and kAuto, which starts with its analysis) factorizes in a
   // fill-reducing order of the particles (counted with the factorization); CHOLMOD orders the
@@ -558,7 +564,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   if (nf == 0) {
     m.method_name = "none (every dof prescribed)";
   } else if (m.direct) {
-    m.cholesky = make_linear_solver(kind);
+    m.cholesky = make_linear_solver(kind, settings.linear_solver_use);
     // Round-off leaves a zero pivot far above machine epsilon, the more so the larger the
     // system: on hex2d coupons with a free rigid mode we measured up to 4e-10 at 2.3e4 free dofs
     // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold

@@ -108,6 +108,10 @@ struct StaticSettings {
   int direct_max_dofs = 2000000;
   /// The direct method's factorization: the hand-written supernodal Cholesky, CHOLMOD, or by size.
   LinearSolverKind linear_solver = LinearSolverKind::kAuto;
+  /// Few solves per factor (kAuto may pick PETSc), or many (the events solver's updates: a direct
+  /// factor always). With PETSc built, kAuto also solves above direct_max_dofs, by PETSc where
+  /// the direct factor does not fit in memory (solvers/linear_solver.hpp).
+  LinearSolverUse linear_solver_use = LinearSolverUse::kFewSolves;
   StaticPreconditioner preconditioner = StaticPreconditioner::kIncompleteCholesky;
   /// Conjugate gradient stops when |A y - b| <= tolerance |b| on the Jacobi-scaled system.
   double cg_tolerance = 1e-13;

@@ -35,6 +35,8 @@ nlohmann::json pull_json(const PullResult& r) {
           {"bonds", r.bonds},
           {"cycles", r.cycles},
           {"final_unbalanced_ratio", r.final_ratio},
+          {"linear_solver", r.linear_solver},
+          {"linear_iterations", r.linear_iterations},
           {"time_step", r.time_step},
           {"grip_velocity", r.grip_velocity},
           {"loading_transits", r.loading_transits},
@@ -95,7 +97,11 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
   for (const PullResult* pull : {&r.along_x, &r.along_y}) {
     const std::string run =
         s.solver == TensionSolver::kStatic
-            ? fmt::format("static solve, relative residual {:.2g}", pull->final_ratio)
+            ? fmt::format("static solve ({}{}), relative residual {:.2g}", pull->linear_solver,
+                          pull->linear_iterations > 0
+                              ? fmt::format(", {} iterations", pull->linear_iterations)
+                              : std::string(),
+                          pull->final_ratio)
             : fmt::format("{} cycles (dt {:.3g} s), unbalanced ratio {:.2g}", pull->cycles,
                           pull->time_step, pull->final_ratio);
     out += fmt::format("coupon at {:>6.1f} deg: {} particles, {} bonds, {}, {:.2f} s\n",

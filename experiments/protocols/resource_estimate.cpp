@@ -48,7 +48,8 @@ double bond_row_bytes() {
 ResourceEstimate estimate_resources(const Strategy& strategy, const CouponSpec& coupon,
                                     const std::vector<double>& layup,
                                     const InterfaceStiffness& interface, SolverUse solver,
-                                    int models_held, int update_rank) {
+                                    int models_held, int update_rank,
+                                    LinearSolverKind linear_solver) {
   ResourceEstimate e;
   const std::optional<PackingEstimate> ply = strategy.estimate_packing(coupon);
   if (!ply) return e;
@@ -82,19 +83,37 @@ ResourceEstimate estimate_resources(const Strategy& strategy, const CouponSpec& 
       std::min(kFactorFillCoefficient * unknowns * coordination * layers * std::log2(columns),
                0.5 * unknowns * (unknowns + 1));
   // The factor and the multifrontal method's fronts and update stack beside it.
-  const double factor = (1 + kFactorWorkspace) * e.factor_entries * sizeof(double);
+  const double factor = direct_factor_bytes(e.factor_entries);
+  // PETSc, where a static solve may use it: kPetsc always, kAuto where the factor is larger.
+  const bool petsc = petsc_available() && solver != SolverUse::kEvents &&
+                     (linear_solver == LinearSolverKind::kAuto ||
+                      linear_solver == LinearSolverKind::kPetsc);
+  if (petsc) {
+    const double aij_entries = 36 * e.particles + 72 * e.bonds;
+    e.petsc_bytes = kPetscMemoryFactor * aij_entries * (sizeof(double) + sizeof(int));
+  }
+  const bool petsc_solves =
+      petsc && (linear_solver == LinearSolverKind::kPetsc || e.petsc_bytes < factor);
+  const double static_solver = e.matrix_bytes + (petsc_solves ? e.petsc_bytes : factor);
+  const std::string static_text =
+      petsc_solves
+          ? fmt::format("stiffness matrix {}, PETSc's matrix and AMG hierarchy {}{}",
+                        bytes_text(e.matrix_bytes), bytes_text(e.petsc_bytes),
+                        linear_solver == LinearSolverKind::kAuto
+                            ? fmt::format(" (a sparse Cholesky factor would take {}, bound)",
+                                          bytes_text(factor))
+                            : std::string())
+          : fmt::format("stiffness matrix {}, sparse Cholesky factor {} (bound, workspace included)",
+                        bytes_text(e.matrix_bytes), bytes_text(factor));
   switch (solver) {
     case SolverUse::kStatic:
-      e.solver_bytes = e.matrix_bytes + factor;
-      e.solver =
-          fmt::format("stiffness matrix {}, sparse Cholesky factor {} (bound, workspace included)",
-                      bytes_text(e.matrix_bytes), bytes_text(factor));
+      e.solver_bytes = static_solver;
+      e.solver = static_text;
       break;
     case SolverUse::kExplicit:
       // The integrator's copy, and the static solves of the specimen stiffness after it.
-      e.solver_bytes = std::max(model, e.matrix_bytes + factor);
-      e.solver = fmt::format("explicit integrator {}, or stiffness matrix {} and factor {} (bound)",
-                             bytes_text(model), bytes_text(e.matrix_bytes), bytes_text(factor));
+      e.solver_bytes = std::max(model, static_solver);
+      e.solver = fmt::format("explicit integrator {}, or {}", bytes_text(model), static_text);
       break;
     case SolverUse::kEvents: {
       const double woodbury = 2 * unknowns * std::max(0, update_rank) * sizeof(double);

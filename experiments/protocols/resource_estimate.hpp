@@ -18,16 +18,23 @@
 ///    c n z l log2(m) with n unknowns, z the mean coordination (2 bonds / particles), l the
 ///    particle layers through the thickness (all plies), m = particles / l, and c =
 ///    kFactorFillCoefficient, above every factor measured: hex2d plies 0.94 (the paper's coupon)
-///    and 1.41 (20 x 5 mm), [0/90/0] 1.35, [0/45/-45/90]s 0.98, hcp 1.79; and kFactorWorkspace of
+///    and 1.41 (20 x 5 mm), [0/90/0] 1.35, [0/45/-45/90]s 0.98, hcp 1.79; and kDirectFactorWorkspace of
 ///    it again for the fronts and the update stack. Against the peak RSS of `plydem tension`: the
 ///    paper's coupon 56 / 38 MB, 20 x 5 mm 855 / 524 MB, [0/90/0] 3 x 1 mm 181 / 129 MB, hcp 5 x 2
 ///    mm 808 / 687 MB, [0/45/-45/90]s 4 x 1.5 mm 2.84 / 2.12 GB (estimate / measured);
 ///  - explicit dynamics: the integrator's own copy of the particles and bonds (kernel order);
-///  - the events solver: the factor plus its Woodbury update, two n x max_update_rank blocks.
+///  - the events solver: the factor plus its Woodbury update, two n x max_update_rank blocks;
+///  - PETSc (static solves with --linear-solver petsc, or auto where PETSc is built: it takes over
+///    where the factor does not fit, solvers/linear_solver.hpp): both triangles of K in AIJ
+///    (12 bytes per entry, 36 per particle and 72 per bond) times kPetscMemoryFactor for the AMG
+///    hierarchy, its prolongators and the Krylov vectors. Against the peak RSS of
+///    plydem_static_bench on the [0/45/-45/90]s paper coupon: 394 MiB measured, of which about
+///    250 MB PETSc's; the AIJ bound is 126 MB there (measured nonzeros: 6.7e6, the bound 1.05e7).
 
 #include <string>
 #include <vector>
 
+#include "solvers/linear_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/strategy.hpp"
 
@@ -35,8 +42,9 @@ namespace plydem {
 
 /// The coefficient c of the factor bound above.
 inline constexpr double kFactorFillCoefficient = 2.0;
-/// The multifrontal workspace beside the factor, as a fraction of it (hcp: about 0.4 measured).
-inline constexpr double kFactorWorkspace = 0.5;
+
+/// PETSc's memory as a multiple of its fine-level AIJ matrix (see the file comment).
+inline constexpr double kPetscMemoryFactor = 2.0;
 
 /// What a test does with its coupon after building it.
 enum class SolverUse {
@@ -55,6 +63,7 @@ struct ResourceEstimate {
   double model_bytes = 0;     ///< all the models held, and the build's packing
   double matrix_bytes = 0;    ///< K (static and events)
   double factor_entries = 0;  ///< of L, the bound above (static and events)
+  double petsc_bytes = 0;     ///< PETSc's matrix and AMG hierarchy, where PETSc may solve
   double solver_bytes = 0;    ///< K, L and the Woodbury blocks, or the integrator's copy
   double total_bytes = 0;
   std::string solver;  ///< what solver_bytes counts, for messages
@@ -66,12 +75,14 @@ double bond_row_bytes();
 
 /// The estimate for `coupon` (one ply) or, for a non-empty `layup`, the laminate of those plies
 /// with `interface` (its lateral radius), built by `strategy`, used by `solver` while
-/// `models_held` coupons exist; `update_rank` is the events solver's max_update_rank. Throws
-/// plydem::Error for a bad coupon.
+/// `models_held` coupons exist; `update_rank` is the events solver's max_update_rank;
+/// `linear_solver` is the static solves' (a direct factor, PETSc, or the smaller of the two for
+/// kAuto where PETSc is built). Throws plydem::Error for a bad coupon.
 ResourceEstimate estimate_resources(const Strategy& strategy, const CouponSpec& coupon,
                                     const std::vector<double>& layup,
                                     const InterfaceStiffness& interface, SolverUse solver,
-                                    int models_held, int update_rank = 0);
+                                    int models_held, int update_rank = 0,
+                                    LinearSolverKind linear_solver = LinearSolverKind::kAuto);
 
 /// One line: particles, bonds and memory with its parts, e.g. "4.6e+07 particles, 1.4e+08 bonds,
 /// about 830 GB (models 37 GB, sparse Cholesky factor 780 GB ...)".

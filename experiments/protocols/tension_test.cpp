@@ -237,7 +237,7 @@ ResourceEstimate TensionTest::estimate(const Strategy& strategy) const {
   return estimate_resources(
       strategy, settings_.coupon, settings_.layup, settings_.interface,
       settings_.solver == TensionSolver::kStatic ? SolverUse::kStatic : SolverUse::kExplicit,
-      settings_.measure_specimen_stiffness ? 4 : 3);
+      settings_.measure_specimen_stiffness ? 4 : 3, 0, settings_.linear_solver);
 }
 
 Specimen TensionTest::build_specimen(SpecimenBuilder& builder, double ply_angle) const {
@@ -444,6 +444,8 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle,
                      grip_solve_settings(s.linear_solver));
     record(sample(p));
     result.final_ratio = solved.relative_residual;
+    result.linear_solver = solved.method_name;
+    result.linear_iterations = solved.iterations;
   } else if (s.fixed_cycles > 0) {
     const double v = s.grip_velocity > 0
                          ? s.grip_velocity

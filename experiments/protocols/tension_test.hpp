@@ -103,6 +103,10 @@ struct PullResult {
   int particles = 0, bonds = 0;
   long cycles = 0;
   double final_ratio = 0;    ///< unbalanced-force ratio at the last point
+  /// The static solve's linear solver (StaticResult::method_name) and its Krylov iterations (0
+  /// for a direct factor); empty and 0 for explicit dynamics.
+  std::string linear_solver;
+  int linear_iterations = 0;
   double time_step = 0;      ///< [s]
   double grip_velocity = 0;  ///< [m/s] per grip
   double cross_section = 0;  ///< [m^2]
