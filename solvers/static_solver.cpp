@@ -506,15 +506,16 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   const int dofs = m.dofs = kDofsPerParticle * n;
   m.prescribed = m.constraints.prescribed_count();
   const int nf = m.nf = dofs - m.prescribed;
-  const LinearSolverKind kind = settings.linear_solver;
-  // Above direct_max_dofs kAuto takes CG, unless PETSc can take over where a direct factor would
-  // not fit (kAuto's linear solver decides after its symbolic analysis).
-  const bool petsc_can_take_over =
-      petsc_available() && settings.linear_solver_use == LinearSolverUse::kFewSolves &&
-      (kind == LinearSolverKind::kAuto || kind == LinearSolverKind::kPetsc);
+  // Above direct_max_dofs kAuto takes an iterative method: PETSc's CG + AMG where it is built and
+  // the caller makes few solves, Eigen's CG otherwise.
+  const bool large = settings.method == StaticMethod::kAuto && nf > settings.direct_max_dofs;
+  const bool petsc_takes_large =
+      large && petsc_available() && settings.linear_solver_use == LinearSolverUse::kFewSolves &&
+      (settings.linear_solver == LinearSolverKind::kAuto ||
+       settings.linear_solver == LinearSolverKind::kPetsc);
+  const LinearSolverKind kind = petsc_takes_large ? LinearSolverKind::kPetsc : settings.linear_solver;
   m.direct = settings.method == StaticMethod::kDirect ||
-             (settings.method == StaticMethod::kAuto &&
-              (nf <= settings.direct_max_dofs || petsc_can_take_over));
+             (settings.method == StaticMethod::kAuto && (!large || petsc_takes_large));
 
   // The hand-written direct solver (and kAuto, which starts with its analysis) factorizes in a
   // fill-reducing order of the particles (counted with the factorization); CHOLMOD orders the

@@ -91,7 +91,8 @@ std::vector<PinnedDof> pin_rigid_modes(const Model& model, DofConstraints& const
 Eigen::SparseMatrix<double> assemble_stiffness(const Model& model);
 
 enum class StaticMethod {
-  kAuto,      ///< kDirect up to StaticSettings::direct_max_dofs free dofs, kIterative above
+  kAuto,      ///< kDirect up to StaticSettings::direct_max_dofs free dofs, iterative above (PETSc
+              ///< where built, see linear_solver_use; kIterative otherwise)
   kDirect,    ///< StaticSettings::linear_solver (solvers/linear_solver.hpp): sparse Cholesky, or
               ///< PETSc's CG + AMG (kPetsc), which likewise sets up once for many solves
   kIterative  ///< preconditioned conjugate gradient (Eigen::ConjugateGradient)
@@ -109,8 +110,8 @@ struct StaticSettings {
   /// The direct method's factorization: the hand-written supernodal Cholesky, CHOLMOD, or by size.
   LinearSolverKind linear_solver = LinearSolverKind::kAuto;
   /// Few solves per factor (kAuto may pick PETSc), or many (the events solver's updates: a direct
-  /// factor always). With PETSc built, kAuto also solves above direct_max_dofs, by PETSc where
-  /// the direct factor does not fit in memory (solvers/linear_solver.hpp).
+  /// factor always). With PETSc built, kFewSolves and linear_solver kAuto or kPetsc, the method
+  /// kAuto solves above direct_max_dofs by PETSc's CG + AMG instead of Eigen's CG.
   LinearSolverUse linear_solver_use = LinearSolverUse::kFewSolves;
   StaticPreconditioner preconditioner = StaticPreconditioner::kIncompleteCholesky;
   /// Conjugate gradient stops when |A y - b| <= tolerance |b| on the Jacobi-scaled system.

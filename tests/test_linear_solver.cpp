@@ -5,7 +5,9 @@
 // stiffness' three solves); PETSc on 2 MPI ranks gives the 1-process answer (its own ctest entry,
 // run with mpiexec -n 2); unknown solver names are clear errors.
 #include <doctest/doctest.h>
+#include <fmt/format.h>
 
+#include <cstdlib>
 #include <numbers>
 #include <random>
 #include <string>
@@ -205,6 +207,46 @@ TEST_CASE("CHOLMOD, PETSc and the hand-written Cholesky agree on a ply and a lam
     CHECK(ra.method_name == rd.method_name);
     CHECK((state_of(automatic.particles) == state_of(direct.particles)).all());
   }
+}
+
+TEST_CASE("auto: a direct factor that does not fit goes to PETSc for few solves, else is refused") {
+  // The symbolic analysis knows the factor's size before any numeric work; with the available
+  // memory set below it (PLYDEM_AVAILABLE_MEMORY, core/machine_memory.hpp), kAuto must not factor.
+  const Model built = small_laminate();
+  const DofConstraints c = grips(built, 1e-6);
+  Model direct = built;
+  const StaticResult rd = solve_static(direct, c, with(LinearSolverKind::kDirect));
+  const double needed = direct_factor_bytes(rd.factor_entries);
+  REQUIRE(needed > 1e5);
+  const char* before = std::getenv("PLYDEM_AVAILABLE_MEMORY");
+  const std::string saved = before ? before : "";
+  setenv("PLYDEM_AVAILABLE_MEMORY", fmt::format("{:.0f}", needed / 2).c_str(), 1);
+
+  StaticSettings many = with(LinearSolverKind::kAuto);
+  many.linear_solver_use = LinearSolverUse::kManySolves;  // the events solver's use
+  Model m = built;
+  const std::string refused = error_message([&] { solve_static(m, c, many); });
+  CHECK(contains(refused, "direct factor"));
+  CHECK(contains(refused, fmt::format("{:.2f} GB", needed / 1e9)));
+  CHECK(contains(refused, "PLYDEM_AVAILABLE_MEMORY"));
+  CHECK(contains(refused, "updates a direct factor"));
+
+  Model few = built;
+  if (petsc_available()) {
+    const StaticResult ra = solve_static(few, c, with(LinearSolverKind::kAuto));
+    CHECK(contains(ra.method_name, "PETSc"));
+    CHECK(contains(ra.method_name, "the direct factor would need"));
+    CHECK(ra.iterations > 0);
+    CHECK(relative_difference(state_of(few.particles), state_of(direct.particles)) < 1e-8);
+  } else {
+    const std::string none =
+        error_message([&] { solve_static(few, c, with(LinearSolverKind::kAuto)); });
+    CHECK(contains(none, "no iterative linear solver"));
+  }
+  if (before)
+    setenv("PLYDEM_AVAILABLE_MEMORY", saved.c_str(), 1);
+  else
+    unsetenv("PLYDEM_AVAILABLE_MEMORY");
 }
 
 TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {

@@ -317,9 +317,17 @@ TEST_CASE("direct LDL^T and conjugate gradient agree") {
     CHECK(again.iterations <= 1);
   }
 
-  // kAuto picks CG above the threshold.
+  // kAuto picks CG above the threshold: PETSc's where it is built, Eigen's otherwise.
   StaticSettings automatic;
   automatic.direct_max_dofs = 10;
+  const StaticResult large = solve_static(m, c, automatic);
+  if (petsc_available()) {
+    CHECK(contains(large.method_name, "PETSc"));
+    CHECK(large.iterations > 0);
+  } else {
+    CHECK(large.method == StaticMethod::kIterative);
+  }
+  automatic.linear_solver_use = LinearSolverUse::kManySolves;  // no PETSc for the events solver
   CHECK(solve_static(m, c, automatic).method == StaticMethod::kIterative);
 }
 
