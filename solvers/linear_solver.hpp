@@ -158,7 +158,7 @@ class LinearSolver {
 /// (give it a fill-reducing one); CHOLMOD orders it itself; kPetsc wants the particles' own order
 /// (contiguous blocks of it are the ranks' shares). Throws plydem::Error for kPetsc without
 /// PETSc.
-std::unique_ptr<LinearSolver> make_linear_solver(
-    LinearSolverKind kind, LinearSolverUse use = LinearSolverUse::kFewSolves);
+std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind,
+                                                 LinearSolverUse use = LinearSolverUse::kFewSolves);
 
 }  // namespace plydem

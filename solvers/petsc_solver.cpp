@@ -123,9 +123,10 @@ PetscErrorCode report_progress(KSP /*ksp*/, PetscInt iteration, PetscReal residu
   const double to_go = -std::log10(p.target) - done;
   const std::string left =
       done > 0 && to_go > 0 ? fmt::format(", about {:.0f} s left", elapsed * to_go / done) : "";
-  spdlog::info("static solve: PETSc {}, iteration {}, residual {:.2e} of the first (target {:.0e}), "
-               "{:.0f} s{}",
-               p.what, static_cast<long>(iteration), relative, p.target, elapsed, left);
+  spdlog::info(
+      "static solve: PETSc {}, iteration {}, residual {:.2e} of the first (target {:.0e}), "
+      "{:.0f} s{}",
+      p.what, static_cast<long>(iteration), relative, p.target, elapsed, left);
   return 0;
 }
 

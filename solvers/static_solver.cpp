@@ -509,11 +509,12 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   // Above direct_max_dofs kAuto takes an iterative method: PETSc's CG + AMG where it is built and
   // the caller makes few solves, Eigen's CG otherwise.
   const bool large = settings.method == StaticMethod::kAuto && nf > settings.direct_max_dofs;
-  const bool petsc_takes_large =
-      large && petsc_available() && settings.linear_solver_use == LinearSolverUse::kFewSolves &&
-      (settings.linear_solver == LinearSolverKind::kAuto ||
-       settings.linear_solver == LinearSolverKind::kPetsc);
-  const LinearSolverKind kind = petsc_takes_large ? LinearSolverKind::kPetsc : settings.linear_solver;
+  const bool petsc_takes_large = large && petsc_available() &&
+                                 settings.linear_solver_use == LinearSolverUse::kFewSolves &&
+                                 (settings.linear_solver == LinearSolverKind::kAuto ||
+                                  settings.linear_solver == LinearSolverKind::kPetsc);
+  const LinearSolverKind kind =
+      petsc_takes_large ? LinearSolverKind::kPetsc : settings.linear_solver;
   m.direct = settings.method == StaticMethod::kDirect ||
              (settings.method == StaticMethod::kAuto && (!large || petsc_takes_large));
 

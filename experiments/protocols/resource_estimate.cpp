@@ -85,9 +85,9 @@ ResourceEstimate estimate_resources(const Strategy& strategy, const CouponSpec& 
   // The factor and the multifrontal method's fronts and update stack beside it.
   const double factor = direct_factor_bytes(e.factor_entries);
   // PETSc, where a static solve may use it: kPetsc always, kAuto where the factor is larger.
-  const bool petsc = petsc_available() && solver != SolverUse::kEvents &&
-                     (linear_solver == LinearSolverKind::kAuto ||
-                      linear_solver == LinearSolverKind::kPetsc);
+  const bool petsc =
+      petsc_available() && solver != SolverUse::kEvents &&
+      (linear_solver == LinearSolverKind::kAuto || linear_solver == LinearSolverKind::kPetsc);
   if (petsc) {
     const double aij_entries = 36 * e.particles + 72 * e.bonds;
     e.petsc_bytes = kPetscMemoryFactor * aij_entries * (sizeof(double) + sizeof(int));
@@ -103,8 +103,9 @@ ResourceEstimate estimate_resources(const Strategy& strategy, const CouponSpec& 
                             ? fmt::format(" (a sparse Cholesky factor would take {}, bound)",
                                           bytes_text(factor))
                             : std::string())
-          : fmt::format("stiffness matrix {}, sparse Cholesky factor {} (bound, workspace included)",
-                        bytes_text(e.matrix_bytes), bytes_text(factor));
+          : fmt::format(
+                "stiffness matrix {}, sparse Cholesky factor {} (bound, workspace included)",
+                bytes_text(e.matrix_bytes), bytes_text(factor));
   switch (solver) {
     case SolverUse::kStatic:
       e.solver_bytes = static_solver;

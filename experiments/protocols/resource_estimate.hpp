@@ -18,10 +18,11 @@
 ///    c n z l log2(m) with n unknowns, z the mean coordination (2 bonds / particles), l the
 ///    particle layers through the thickness (all plies), m = particles / l, and c =
 ///    kFactorFillCoefficient, above every factor measured: hex2d plies 0.94 (the paper's coupon)
-///    and 1.41 (20 x 5 mm), [0/90/0] 1.35, [0/45/-45/90]s 0.98, hcp 1.79; and kDirectFactorWorkspace of
-///    it again for the fronts and the update stack. Against the peak RSS of `plydem tension`: the
-///    paper's coupon 56 / 38 MB, 20 x 5 mm 855 / 524 MB, [0/90/0] 3 x 1 mm 181 / 129 MB, hcp 5 x 2
-///    mm 808 / 687 MB, [0/45/-45/90]s 4 x 1.5 mm 2.84 / 2.12 GB (estimate / measured);
+///    and 1.41 (20 x 5 mm), [0/90/0] 1.35, [0/45/-45/90]s 0.98, hcp 1.79; and
+///    kDirectFactorWorkspace of it again for the fronts and the update stack. Against the peak RSS
+///    of `plydem tension`: the paper's coupon 56 / 38 MB, 20 x 5 mm 855 / 524 MB, [0/90/0] 3 x 1 mm
+///    181 / 129 MB, hcp 5 x 2 mm 808 / 687 MB, [0/45/-45/90]s 4 x 1.5 mm 2.84 / 2.12 GB (estimate /
+///    measured);
 ///  - explicit dynamics: the integrator's own copy of the particles and bonds (kernel order);
 ///  - the events solver: the factor plus its Woodbury update, two n x max_update_rank blocks;
 ///  - PETSc (static solves with --linear-solver petsc, or auto where PETSc is built: it takes over
