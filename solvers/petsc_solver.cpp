@@ -4,8 +4,9 @@
 //
 // The matrix PETSc sees. The static solver hands over the Jacobi-scaled free-free block A (unit
 // diagonal) in its own numbering of the free dofs. AMG with block size 6 wants every particle's
-// six dofs, so the free dofs go back to their places among all 6n dofs (dof = 6 * particle +
-// component) and each prescribed dof becomes an identity row and column with a zero right-hand
+// six dofs, so the free dofs go back to their places among all 6n dofs (row = 6 * slot +
+// component, the particles' slots sorted along the model's longest extent, so that each rank
+// owns a slice of the coupon) and each prescribed dof becomes an identity row and column with a zero right-hand
 // side: the same solution on the free dofs, and whole 6 x 6 blocks for the aggregation. The
 // near-null space is the six rigid-body modes of the particles' reference positions about their
 // centroid, in the scaled unknowns (y = u / s), orthonormalized.
@@ -245,8 +246,24 @@ class PetscSolver final : public LinearSolver {
     block_ = blocks ? 6 : 1;
     const int items = blocks ? static_cast<int>(layout_.position.rows()) : n_;
     rows_ = block_ * items;
+    // Particles take their slots in the order of their coordinate along the model's longest
+    // extent: a rank's block is then a slice across it, whose faces (the ghost rows) are the
+    // smallest, where the models' own order (ply by ply) would cut through the thickness.
+    slot_of_.resize(blocks ? items : 0);
+    if (blocks) {
+      const auto& x = layout_.position;
+      const Eigen::RowVector3d extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
+      Eigen::Index axis = 0;
+      extent.maxCoeff(&axis);
+      std::vector<int> by_coordinate(items);
+      std::iota(by_coordinate.begin(), by_coordinate.end(), 0);
+      std::stable_sort(by_coordinate.begin(), by_coordinate.end(),
+                       [&](int a, int b) { return x(a, axis) < x(b, axis); });
+      for (int s = 0; s < items; ++s) slot_of_[by_coordinate[s]] = s;
+    }
     row_of_.resize(n_);
-    for (int k = 0; k < n_; ++k) row_of_[k] = blocks ? layout_.dofs[k] : k;
+    for (int k = 0; k < n_; ++k)
+      row_of_[k] = blocks ? 6 * slot_of_[layout_.dofs[k] / 6] + layout_.dofs[k] % 6 : k;
     const long rank = mpi_rank(), size = mpi_size();
     first_ = block_ * static_cast<int>(rank * items / size);
     end_ = block_ * static_cast<int>((rank + 1) * items / size);
@@ -324,12 +341,13 @@ class PetscSolver final : public LinearSolver {
     Eigen::MatrixXd modes = Eigen::MatrixXd::Zero(rows_, 6);
     for (int i = 0; i < particles; ++i) {
       const Eigen::Vector3d d = (x.row(i).matrix() - centroid).transpose();
+      const int slot = slot_of_[i];
       for (int e = 0; e < 3; ++e) {
-        modes(6 * i + e, e) = 1;  // translation along e
+        modes(6 * slot + e, e) = 1;  // translation along e
         const Eigen::Vector3d axis = Eigen::Vector3d::Unit(e);
         const Eigen::Vector3d u = axis.cross(d);  // rotation about e: u = e x (x - x0), theta = e
-        for (int c = 0; c < 3; ++c) modes(6 * i + c, 3 + e) = u(c);
-        modes(6 * i + 3 + e, 3 + e) = 1;
+        for (int c = 0; c < 3; ++c) modes(6 * slot + c, 3 + e) = u(c);
+        modes(6 * slot + 3 + e, 3 + e) = 1;
       }
     }
     modes.array().colwise() /= scale.array();
@@ -433,7 +451,8 @@ class PetscSolver final : public LinearSolver {
 
   UnknownLayout layout_;
   int n_ = 0, rows_ = 0, block_ = 1, first_ = 0, end_ = 0;
-  std::vector<int> row_of_;  // unknown -> row of the padded matrix
+  std::vector<int> row_of_;   // unknown -> row of the padded matrix
+  std::vector<int> slot_of_;  // particle -> its block of six rows (number_rows())
   Mat a_ = nullptr;
   KSP ksp_ = nullptr;
   Vec x_ = nullptr, b_ = nullptr, all_ = nullptr;

@@ -235,7 +235,7 @@ TEST_CASE("auto: a direct factor that does not fit goes to PETSc for few solves,
   if (petsc_available()) {
     const StaticResult ra = solve_static(few, c, with(LinearSolverKind::kAuto));
     CHECK(contains(ra.method_name, "PETSc"));
-    CHECK(contains(ra.method_name, "the direct factor would need"));
+    CHECK(contains(ra.method_name, "a direct factor would need"));
     CHECK(ra.iterations > 0);
     CHECK(relative_difference(state_of(few.particles), state_of(direct.particles)) < 1e-8);
   } else {
