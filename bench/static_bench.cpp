@@ -21,6 +21,9 @@
 //   plydem_static_bench --paper --json          # the paper's 10 x 0.83 mm coupon (3791 particles)
 //   plydem_static_bench --particles 100000 --method direct
 //   plydem_static_bench --paper --layup "[0/45/-45/90]s" --linear-solver cholmod
+//   plydem_static_bench --length-mm 20 --width-mm 10 --diameter-mm 0.1 --linear-solver petsc
+//       --layup "[0/45/-45/90]s"              # (one line) issue 15's 20 x 10 mm laminate
+//   mpiexec -n 2 plydem_static_bench --paper --layup "[0/45/-45/90]s" --linear-solver petsc
 //
 // --linear-solver picks the direct method's factorization (solvers/linear_solver.hpp); --layup
 // builds a laminate of hex2d plies (strategies/laminate.hpp, default interface) on the coupon
@@ -43,6 +46,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "solvers/linear_solver.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
@@ -79,12 +83,12 @@ double peak_rss_mib() {
 }
 
 // The tension test's static constraints with free grips (experiments/protocols/tension_test.cpp).
-plydem::DofConstraints tension_constraints(const plydem::Model& model) {
+plydem::DofConstraints tension_constraints(const plydem::Model& model, double diameter) {
   using plydem::Dof;
   const plydem::Particles& p = model.particles;
   const double x_min = p.reference_position.col(0).minCoeff();
   const double x_max = p.reference_position.col(0).maxCoeff();
-  const double grip = 2.0 * kDiameter;
+  const double grip = 2.0 * diameter;
   const double travel = 0.5 * kNominalStrain * (x_max - x_min);
   plydem::DofConstraints constraints(p.size());
   for (int i = 0; i < p.size(); ++i) {
@@ -102,6 +106,7 @@ plydem::DofConstraints tension_constraints(const plydem::Model& model) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const plydem::ParallelSession session(&argc, &argv);  // PETSc and MPI under mpiexec
   CLI::App app{"plydem_static_bench: time one static solve of a hex2d tension coupon"};
   double particles = 0;
   bool paper = false, json = false, markdown = false, header = false;
@@ -109,14 +114,21 @@ int main(int argc, char** argv) {
   std::string method = "auto";
   std::string linear_solver = "auto";
   std::string layup;
+  double length_mm = 0, width_mm = 0, diameter_mm = 0;
   app.add_option("--particles", particles,
                  "about this many particles, in a coupon of the paper's aspect ratio");
   app.add_flag("--paper", paper, "the paper's 10 x 0.83 mm coupon");
+  app.add_option("--length-mm", length_mm, "a coupon this long [mm] (with --width-mm)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--width-mm", width_mm, "a coupon this wide [mm] (with --length-mm)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--diameter-mm", diameter_mm, "particle diameter [mm] (default 0.05)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--method", method,
                  "auto (direct up to StaticSettings::direct_max_dofs free dofs), direct or cg")
       ->check(CLI::IsMember({"auto", "direct", "cg"}));
   app.add_option("--linear-solver", linear_solver,
-                 "the direct method's factorization: auto (by size), direct or cholmod");
+                 "the direct method's factorization: auto (by size), direct, cholmod or petsc");
   app.add_option("--layup", layup, "a laminate of hex2d plies, e.g. \"[0/45/-45/90]s\"");
   app.add_option("--repeat", repeat, "solve this many times, report the best repeat too")
       ->check(CLI::Range(1, 1000));
@@ -133,18 +145,22 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    plydem::require(paper != (particles > 0), "give either --particles N (N > 0) or --paper");
+    const bool sized = length_mm > 0 || width_mm > 0;
+    plydem::require(static_cast<int>(paper) + (particles > 0) + sized == 1,
+                    "give one of --particles N (N > 0), --paper, or --length-mm with --width-mm");
+    plydem::require(!sized || (length_mm > 0 && width_mm > 0),
+                    "--length-mm and --width-mm go together");
     plydem::CouponSpec spec;
     spec.material = plydem::load_material("eglass-my750");
     spec.ply_angle = 0;
-    spec.particle_diameter = kDiameter;
-    spec.length = kPaperLength;
-    spec.width = kPaperWidth;
-    if (!paper) {
+    spec.particle_diameter = diameter_mm > 0 ? diameter_mm * 1e-3 : kDiameter;
+    spec.length = sized ? length_mm * 1e-3 : kPaperLength;
+    spec.width = sized ? width_mm * 1e-3 : kPaperWidth;
+    if (particles > 0) {
       // Sites of the hexagonal layer (at 0 deg, first site at (R, R)) with centres at least one
       // radius inside an L x W rectangle: rows sqrt(3)/2 d apart, every other row shifted by d/2.
       // Bisection on L for the smallest coupon of the paper's shape holding `particles`.
-      const double aspect = kPaperLength / kPaperWidth, d = kDiameter;
+      const double aspect = kPaperLength / kPaperWidth, d = spec.particle_diameter;
       auto sites = [&](double length) {
         const double width = length / aspect;
         const double rows = std::floor((width - d) / (std::sqrt(3.0) / 2 * d) + 1e-9) + 1;
@@ -171,7 +187,7 @@ int main(int argc, char** argv) {
             ? hex2d->build(spec).model
             : plydem::build_laminate(*hex2d, {spec, plydem::parse_layup(layup), {}}).model;
     const double build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    const plydem::DofConstraints constraints = tension_constraints(built);
+    const plydem::DofConstraints constraints = tension_constraints(built, spec.particle_diameter);
     plydem::StaticSettings settings;
     settings.pin_rigid_modes = true;
     if (method == "direct") settings.method = plydem::StaticMethod::kDirect;
@@ -202,12 +218,14 @@ int main(int argc, char** argv) {
     const double rss = peak_rss_mib();
 
     const plydem::StaticTimings& t = r.seconds;
+    if (!plydem::is_root()) return 0;  // under mpiexec, rank 0 reports (its own time and memory)
     if (json) {
       nlohmann::json j;
       j["coupon_mm"] = {spec.length * 1e3, spec.width * 1e3};
       j["particles"] = built.particles.size();
       j["bonds"] = built.bonds.size();
       j["free_dofs"] = r.free_dofs;
+      j["ranks"] = plydem::mpi_size();
       j["nonzeros"] = r.stiffness_nonzeros;
       j["method"] = r.method == plydem::StaticMethod::kDirect ? "direct" : "CG";
       j["solver"] = r.method_name;
