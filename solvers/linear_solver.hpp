@@ -118,6 +118,10 @@ struct UnknownLayout {
   std::vector<int> dofs;
   Eigen::VectorXd scale;
   Eigen::Array<double, Eigen::Dynamic, 3> position;
+  /// The matrix is positive definite by construction (StaticSystem: the bonds let each bonded
+  /// cluster move freely only as a rigid body, see free_motions_are_rigid in static_solver.cpp,
+  /// and each cluster's rigid modes are prescribed); kPetsc then skips its mechanism probe.
+  bool positive_definite = false;
 };
 /// Whether the BLAS that CHOLMOD calls is an optimized one (OpenBLAS, found at run time: the
 /// Debian alternative libblas.so.3 or LD_LIBRARY_PATH decide which one is loaded).

@@ -17,7 +17,9 @@
 // component in it. Where max |x - r| > kMechanismProbe max |r|, or the probe does not converge,
 // the matrix is factored by the hand-written Cholesky, which names the zero pivots as the direct
 // solvers do (and solves, should it find none), unless its factor would not fit in memory: then
-// the error says so, with the estimate.
+// the error says so, with the estimate. A matrix the layout calls positive definite by
+// construction (UnknownLayout::positive_definite: every bond resists all six relative motions and
+// the clusters' rigid modes are prescribed) has no mechanism and skips the probe.
 #include "solvers/petsc_solver.hpp"
 
 #include <fmt/format.h>
@@ -172,7 +174,7 @@ class PetscSolver final : public LinearSolver {
                    setup_seconds);
     check(MatCreateVecs(a_, &x_, &b_), "MatCreateVecs");
     check(VecScatterCreateToAll(x_, &to_all_, &all_), "VecScatterCreateToAll");
-    if (probe_finds_null_space()) {
+    if (!layout_.positive_definite && probe_finds_null_space()) {
       // The hand-written Cholesky names the zero pivots, in the order given (the particles' own,
       // with more fill than a fill-reducing one): its symbolic analysis says first whether the
       // factor fits.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <string>
 #include <utility>
@@ -312,6 +313,86 @@ std::string join(const std::vector<std::string>& items) {
 
 }  // namespace
 
+// Whether the bonds leave each bonded cluster free to move only as a rigid body, so that, with the
+// clusters' rigid modes prescribed (free_rigid_modes), the free-free stiffness is positive
+// definite and there is no mechanism to look for. A sufficient test, from the bonds alone:
+// - a full bond (k_n, k_s, the out-of-plane shear, k_b and k_t all positive) resists every
+//   relative motion of its two particles: particles joined by full bonds move as one rigid body;
+// - a point bond (k_n and both shears positive, k_b or k_t zero, as the laminates' interface
+//   bonds) ties the two particles' material points at its contact (x_first + lever_first n =
+//   x_second - lever_second n); two rigid bodies tied at three or more non-collinear contact
+//   points move as one, and merging repeats until nothing merges;
+// - any other bond, or bodies left apart within one bonded cluster: false (the probe decides).
+bool free_motions_are_rigid(const Model& model) {
+  const Bonds& b = model.bonds;
+  const auto& x = model.particles.reference_position;
+  const int n = model.particles.size();
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  auto join = [&](int i, int j) {
+    const int a = root(i), c = root(j);
+    if (a == c) return false;
+    parent[std::max(a, c)] = std::min(a, c);
+    return true;
+  };
+  std::vector<int> point_bonds;
+  std::vector<Eigen::Vector3d> contact;
+  double extent = 0;
+  for (int d = 0; d < 3; ++d)
+    if (n > 0) extent = std::max(extent, x.col(d).maxCoeff() - x.col(d).minCoeff());
+  for (int k = 0; k < b.size(); ++k) {
+    if (!(b.normal_stiffness(k) > 0 && b.shear_stiffness(k) > 0 &&
+          b.out_of_plane_shear_ratio(k) > 0))
+      return false;
+    if (b.bending_stiffness(k) > 0 && b.twisting_stiffness(k) > 0) {
+      join(b.first(k), b.second(k));
+      continue;
+    }
+    const Eigen::Vector3d normal = b.normal.row(k).transpose().matrix();
+    const Eigen::Vector3d on_first = x.row(b.first(k)).transpose().matrix() + b.lever_first(k) * normal;
+    const Eigen::Vector3d on_second = x.row(b.second(k)).transpose().matrix() - b.lever_second(k) * normal;
+    if ((on_first - on_second).norm() > 1e-9 * std::max(b.length(k), extent)) return false;
+    point_bonds.push_back(k);
+    contact.push_back(on_first);
+  }
+  // Merge bodies tied at three non-collinear points, until none merges.
+  const double tolerance = 1e-6 * extent;
+  for (bool merged = true; merged;) {
+    merged = false;
+    std::map<std::pair<int, int>, std::vector<int>> ties;  // body pair -> contacts
+    for (std::size_t t = 0; t < point_bonds.size(); ++t) {
+      const int a = root(b.first(point_bonds[t])), c = root(b.second(point_bonds[t]));
+      if (a != c) ties[{std::min(a, c), std::max(a, c)}].push_back(static_cast<int>(t));
+    }
+    for (const auto& [pair, points] : ties) {
+      if (points.size() < 3) continue;
+      const Eigen::Vector3d& p0 = contact[points[0]];
+      int far = points[0];
+      for (int t : points)
+        if ((contact[t] - p0).norm() > (contact[far] - p0).norm()) far = t;
+      const Eigen::Vector3d axis = contact[far] - p0;
+      if (axis.norm() <= tolerance) continue;
+      const Eigen::Vector3d unit = axis.normalized();
+      bool spread = false;
+      for (int t : points) {
+        const Eigen::Vector3d r = contact[t] - p0;
+        if ((r - r.dot(unit) * unit).norm() > tolerance) {
+          spread = true;
+          break;
+        }
+      }
+      if (spread) merged |= join(pair.first, pair.second);
+    }
+  }
+  for (int t : point_bonds)
+    if (root(b.first(t)) != root(b.second(t))) return false;
+  return true;
+}
+
 const char* dof_name(Dof dof) {
   switch (dof) {
     case Dof::kUx:
@@ -573,7 +654,8 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     // that grows with the size. The factorization collects every zero pivot in one pass.
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
     // Where the unknowns sit, for PETSc's rigid-body near-null space.
-    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position});
+    m.cholesky->set_layout(
+        {m.free_dofs, m.s, p.reference_position, free_motions_are_rigid(model)});
     m.cholesky->factor(m.a, threshold);
     ++m.factorizations;
     if (!m.cholesky->zero_pivots().empty())

@@ -131,6 +131,13 @@ struct StaticSettings {
 /// Throws plydem::Error if a setting is out of range.
 void validate(const StaticSettings& settings);
 
+/// Whether the bonds let each bonded cluster of `model` move freely only as a rigid body (a
+/// sufficient test from the bonds alone, see the .cpp): then, with the clusters' rigid modes
+/// prescribed, the free-free stiffness is positive definite, and PETSc skips its mechanism probe.
+/// False where it cannot tell (a bond with no normal or shear stiffness, point bonds at collinear
+/// contacts), not only where there is a mechanism.
+bool free_motions_are_rigid(const Model& model);
+
 /// Wall-clock seconds of each phase (std::chrono::steady_clock).
 struct StaticTimings {
   double checks = 0;         ///< input checks and the rigid-mode analysis

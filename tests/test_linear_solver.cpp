@@ -272,12 +272,35 @@ TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {
   DofConstraints c(5);
   c.fix_particle(0);
   c.fix(4, Dof::kUx, 1e-7);
+  CHECK_FALSE(free_motions_are_rigid(m));  // so PETSc probes, and finds it
   for (LinearSolverKind kind : every_solver()) {
     CAPTURE(linear_solver_name(kind));
     const std::string error = error_message([&] { solve_static(m, c, with(kind)); });
     CHECK(contains(error, "8 zero pivots"));
     CHECK(contains(error, "mechanism"));
   }
+  // With bending springs every bond resists all six relative motions: a rigid chain.
+  m.bonds.bending_stiffness.setConstant(1e-4);
+  CHECK(free_motions_are_rigid(m));
+  m.bonds.normal_stiffness(2) = 0;
+  CHECK_FALSE(free_motions_are_rigid(m));
+}
+
+TEST_CASE("free motions: plies tied by interface point bonds are one rigid body; single ties are not") {
+  // The laminate's interface bonds have no bending or twisting stiffness; hundreds of them tie
+  // each pair of plies at non-collinear points, so the laminate moves only rigidly and PETSc need
+  // not probe for mechanisms.
+  Model m = small_laminate();
+  const Bonds& b = m.bonds;
+  int point_bonds = 0;
+  for (int k = 0; k < b.size(); ++k)
+    if (!(b.bending_stiffness(k) > 0 && b.twisting_stiffness(k) > 0)) ++point_bonds;
+  REQUIRE(point_bonds > 0);
+  CHECK(free_motions_are_rigid(m));
+  // Without bending springs in the plies every pair of particles is tied at one point only: the
+  // test cannot tell (each particle may spin about its single contacts), so PETSc probes.
+  m.bonds.bending_stiffness.setZero();
+  CHECK_FALSE(free_motions_are_rigid(m));
 }
 
 TEST_CASE("a factorization reused for several prescribed values equals fresh solves") {
