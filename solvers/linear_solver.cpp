@@ -279,7 +279,7 @@ namespace {
 // kAuto: the hand-written symbolic analysis decides (see the header).
 class AutoSolver final : public LinearSolver {
  public:
-  explicit AutoSolver(LinearSolverUse use) : use_(use) {}
+  AutoSolver(LinearSolverUse use, bool force) : use_(use), force_(force) {}
   void set_layout(const UnknownLayout& layout) override { layout_ = layout; }
   int iterations() const override { return cholmod_ ? cholmod_->iterations() : 0; }
   void factor(const SparseMatrix& lower, double pivot_tolerance) override {
@@ -299,7 +299,7 @@ class AutoSolver final : public LinearSolver {
       reason_ = !fits ? fmt::format("chosen by auto: a direct factor would need {:.2f} GB", bytes / 1e9)
                 : mpi_size() > 1 ? "chosen by auto: distributed over the MPI ranks"
                                  : fmt::format("chosen by auto: a direct factor would fill {:.0f} entries per unknown", fill);
-    } else if (!fits) {
+    } else if (!fits && !force_) {
       throw Error(fmt::format(
           "static solve: the direct factor of these {:.0f} unknowns needs about {:.2f} GB "
           "(symbolic analysis: {:.3g} entries, {:.0f} per unknown, with its workspace), more "
@@ -346,6 +346,7 @@ class AutoSolver final : public LinearSolver {
 
  private:
   LinearSolverUse use_;
+  bool force_;
   UnknownLayout layout_;
   std::optional<SupernodalCholesky> direct_;
   std::unique_ptr<LinearSolver> cholmod_;  // CHOLMOD or PETSc where kAuto picks one
@@ -358,10 +359,11 @@ double direct_factor_bytes(double factor_entries) {
   return (1 + kDirectFactorWorkspace) * factor_entries * sizeof(double);
 }
 
-std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind, LinearSolverUse use) {
+std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind, LinearSolverUse use,
+                                                 bool force) {
   switch (kind) {
     case LinearSolverKind::kAuto:
-      return std::make_unique<AutoSolver>(use);
+      return std::make_unique<AutoSolver>(use, force);
     case LinearSolverKind::kCholmod:
       return std::make_unique<CholmodSolver>();
     case LinearSolverKind::kPetsc:

@@ -162,7 +162,8 @@ class LinearSolver {
 /// (give it a fill-reducing one); CHOLMOD orders it itself; kPetsc wants the particles' own order
 /// (contiguous blocks of it are the ranks' shares). Throws plydem::Error for kPetsc without
 /// PETSc.
-std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind,
-                                                 LinearSolverUse use = LinearSolverUse::kFewSolves);
+/// `force`: kAuto factors even where the factor does not fit and PETSc cannot take over.
+std::unique_ptr<LinearSolver> make_linear_solver(
+    LinearSolverKind kind, LinearSolverUse use = LinearSolverUse::kFewSolves, bool force = false);
 
 }  // namespace plydem

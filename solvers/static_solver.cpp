@@ -647,7 +647,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   if (nf == 0) {
     m.method_name = "none (every dof prescribed)";
   } else if (m.direct) {
-    m.cholesky = make_linear_solver(kind, settings.linear_solver_use);
+    m.cholesky = make_linear_solver(kind, settings.linear_solver_use, settings.force);
     // Round-off leaves a zero pivot far above machine epsilon, the more so the larger the
     // system: on hex2d coupons with a free rigid mode we measured up to 4e-10 at 2.3e4 free dofs
     // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold

@@ -113,6 +113,9 @@ struct StaticSettings {
   /// factor always). With PETSc built, kFewSolves and linear_solver kAuto or kPetsc, the method
   /// kAuto solves above direct_max_dofs by PETSc's CG + AMG instead of Eigen's CG.
   LinearSolverUse linear_solver_use = LinearSolverUse::kFewSolves;
+  /// Factor even where kAuto's symbolic analysis finds that the factor does not fit in the
+  /// available memory and PETSc cannot take over (the user's --force); refused otherwise.
+  bool force = false;
   StaticPreconditioner preconditioner = StaticPreconditioner::kIncompleteCholesky;
   /// Conjugate gradient stops when |A y - b| <= tolerance |b| on the Jacobi-scaled system.
   double cg_tolerance = 1e-13;

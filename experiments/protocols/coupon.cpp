@@ -86,8 +86,9 @@ DofConstraints uniform_grip_constraints(const Particles& p, const Eigen::Vector3
   return constraints;
 }
 
-StaticSettings grip_solve_settings(LinearSolverKind linear_solver) {
+StaticSettings grip_solve_settings(LinearSolverKind linear_solver, bool force) {
   StaticSettings settings;
+  settings.force = force;
   settings.pin_rigid_modes = true;  // free grips leave the y translation to pin
   settings.linear_solver = linear_solver;
   return settings;

@@ -55,8 +55,8 @@ DofConstraints uniform_grip_constraints(const Particles& particles, const Eigen:
                                         const std::vector<double>& ply_spin);
 
 /// Settings of the grips' static solves: the rigid modes free grips leave (the y translation) are
-/// pinned.
-StaticSettings grip_solve_settings(LinearSolverKind linear_solver);
+/// pinned; `force` is StaticSettings::force (the user's --force).
+StaticSettings grip_solve_settings(LinearSolverKind linear_solver, bool force = false);
 
 /// The central gauge section of a gripped coupon.
 struct GaugeSection {

@@ -41,7 +41,7 @@ Eigen::Vector3d window_stress(const Model& solved, const std::vector<char>& insi
 
 SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
                                              LinearSolverKind linear_solver,
-                                             double interior_margin) {
+                                             double interior_margin, bool force) {
   const auto start = std::chrono::steady_clock::now();
   const Particles& p = model.particles;
   require(p.size() >= 4, "the specimen stiffness needs at least four particles");
@@ -99,6 +99,7 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
   StaticSettings settings;
   settings.pin_rigid_modes = true;  // out-of-plane motion of a layer is not restrained by the frame
   settings.linear_solver = linear_solver;
+  settings.force = force;
   const StaticSystem system(model, constraints, settings);
 
   for (int column = 0; column < 3; ++column) {

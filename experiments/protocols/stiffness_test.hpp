@@ -58,9 +58,9 @@ struct SpecimenStiffness {
 /// plydem::Error for
 /// an empty specimen or one whose interior the frame would swallow, or when a solve is refused
 /// (solve_static names the cause). The three solves share one factorization (StaticSystem), made
-/// by `linear_solver` (solvers/linear_solver.hpp).
+/// by `linear_solver` (solvers/linear_solver.hpp); `force` is StaticSettings::force.
 SpecimenStiffness measure_specimen_stiffness(
     const Model& model, double band = 0, LinearSolverKind linear_solver = LinearSolverKind::kAuto,
-    double interior_margin = 0);
+    double interior_margin = 0, bool force = false);
 
 }  // namespace plydem

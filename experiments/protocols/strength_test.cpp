@@ -441,7 +441,7 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   result.cross_section = gauge.cross_section;
   result.span = grips.span;
 
-  const StaticSettings grip_settings = grip_solve_settings(s.linear_solver);
+  const StaticSettings grip_settings = grip_solve_settings(s.linear_solver, s.force);
   if (consistent_edges) {
     std::vector<PlyStress> ply_stress;
     for (std::size_t k = 0; k < plies.size(); ++k) {

@@ -222,7 +222,8 @@ TensionResult TensionTest::run(SpecimenBuilder& builder) const {
   result.dem.nu_yx = result.along_y.poisson;
   if (settings_.measure_specimen_stiffness) {
     // The coupon along x, as built: measure_specimen_stiffness works on a copy.
-    result.specimen = measure_specimen_stiffness(coupon_x->model, 0, settings_.linear_solver);
+    result.specimen = measure_specimen_stiffness(coupon_x->model, 0, settings_.linear_solver, 0,
+                                                 settings_.force);
     result.dem.Gxy = result.specimen.constants.Gxy;
   }
   result.coupon_x = std::move(coupon_x);
@@ -441,7 +442,7 @@ PullResult TensionTest::pull(const Specimen& specimen, double ply_angle,
     // The model is linear: one solve at the target strain, fitted through the unloaded origin.
     const StaticResult solved =
         solve_static(model, grip_constraints(p, -total_grip_travel, total_grip_travel, s.grips),
-                     grip_solve_settings(s.linear_solver));
+                     grip_solve_settings(s.linear_solver, s.force));
     record(sample(p));
     result.final_ratio = solved.relative_residual;
     result.linear_solver = solved.method_name;
