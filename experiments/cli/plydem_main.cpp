@@ -182,7 +182,8 @@ void add_coupon_options(CLI::App& app, CouponOptions& o, const std::string& grip
       ->check(CLI::IsMember(grips))
       ->capture_default_str();
   app.add_option("--linear-solver", o.linear_solver,
-                 "linear solver of the static solves: auto (by size), direct (plydem's "
+                 "linear solver of the static solves: auto (by the factor's fill and memory, "
+                 "and the MPI ranks; README, Static solves with PETSc), direct (plydem's "
                  "supernodal Cholesky), cholmod (SuiteSparse) or petsc (CG + algebraic multigrid; "
                  "distributed under mpiexec -n N)")
       ->capture_default_str();
