@@ -296,9 +296,12 @@ class AutoSolver final : public LinearSolver {
     if (iterative_allowed && (!fits || mpi_size() > 1 || (dense && !optimized_blas()))) {
       direct_.reset();
       cholmod_ = make_linear_solver(LinearSolverKind::kPetsc);
-      reason_ = !fits ? fmt::format("chosen by auto: a direct factor would need {:.2f} GB", bytes / 1e9)
-                : mpi_size() > 1 ? "chosen by auto: distributed over the MPI ranks"
-                                 : fmt::format("chosen by auto: a direct factor would fill {:.0f} entries per unknown", fill);
+      reason_ =
+          !fits ? fmt::format("chosen by auto: a direct factor would need {:.2f} GB", bytes / 1e9)
+          : mpi_size() > 1
+              ? "chosen by auto: distributed over the MPI ranks"
+              : fmt::format("chosen by auto: a direct factor would fill {:.0f} entries per unknown",
+                            fill);
     } else if (!fits && !force_) {
       throw Error(fmt::format(
           "static solve: the direct factor of these {:.0f} unknowns needs about {:.2f} GB "

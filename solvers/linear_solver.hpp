@@ -163,7 +163,8 @@ class LinearSolver {
 /// (contiguous blocks of it are the ranks' shares). Throws plydem::Error for kPetsc without
 /// PETSc.
 /// `force`: kAuto factors even where the factor does not fit and PETSc cannot take over.
-std::unique_ptr<LinearSolver> make_linear_solver(
-    LinearSolverKind kind, LinearSolverUse use = LinearSolverUse::kFewSolves, bool force = false);
+std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind,
+                                                 LinearSolverUse use = LinearSolverUse::kFewSolves,
+                                                 bool force = false);
 
 }  // namespace plydem

@@ -6,10 +6,10 @@
 // diagonal) in its own numbering of the free dofs. AMG with block size 6 wants every particle's
 // six dofs, so the free dofs go back to their places among all 6n dofs (row = 6 * slot +
 // component, the particles' slots sorted along the model's longest extent, so that each rank
-// owns a slice of the coupon) and each prescribed dof becomes an identity row and column with a zero right-hand
-// side: the same solution on the free dofs, and whole 6 x 6 blocks for the aggregation. The
-// near-null space is the six rigid-body modes of the particles' reference positions about their
-// centroid, in the scaled unknowns (y = u / s), orthonormalized.
+// owns a slice of the coupon) and each prescribed dof becomes an identity row and column with a
+// zero right-hand side: the same solution on the free dofs, and whole 6 x 6 blocks for the
+// aggregation. The near-null space is the six rigid-body modes of the particles' reference
+// positions about their centroid, in the scaled unknowns (y = u / s), orthonormalized.
 //
 // Mechanisms. CG converges on a singular but consistent system (a mechanism the load does not
 // excite) without a sign of trouble, so factor() probes the hierarchy once: it solves A x = A r

@@ -353,8 +353,10 @@ bool free_motions_are_rigid(const Model& model) {
       continue;
     }
     const Eigen::Vector3d normal = b.normal.row(k).transpose().matrix();
-    const Eigen::Vector3d on_first = x.row(b.first(k)).transpose().matrix() + b.lever_first(k) * normal;
-    const Eigen::Vector3d on_second = x.row(b.second(k)).transpose().matrix() - b.lever_second(k) * normal;
+    const Eigen::Vector3d on_first =
+        x.row(b.first(k)).transpose().matrix() + b.lever_first(k) * normal;
+    const Eigen::Vector3d on_second =
+        x.row(b.second(k)).transpose().matrix() - b.lever_second(k) * normal;
     if ((on_first - on_second).norm() > 1e-9 * std::max(b.length(k), extent)) return false;
     point_bonds.push_back(k);
     contact.push_back(on_first);
@@ -654,8 +656,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     // that grows with the size. The factorization collects every zero pivot in one pass.
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
     // Where the unknowns sit, for PETSc's rigid-body near-null space.
-    m.cholesky->set_layout(
-        {m.free_dofs, m.s, p.reference_position, free_motions_are_rigid(model)});
+    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position, free_motions_are_rigid(model)});
     m.cholesky->factor(m.a, threshold);
     ++m.factorizations;
     if (!m.cholesky->zero_pivots().empty())

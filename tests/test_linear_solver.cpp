@@ -286,7 +286,8 @@ TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {
   CHECK_FALSE(free_motions_are_rigid(m));
 }
 
-TEST_CASE("free motions: plies tied by interface point bonds are one rigid body; single ties are not") {
+TEST_CASE(
+    "free motions: plies tied by interface point bonds are one rigid body; single ties are not") {
   // The laminate's interface bonds have no bending or twisting stiffness; hundreds of them tie
   // each pair of plies at non-collinear points, so the laminate moves only rigidly and PETSc need
   // not probe for mechanisms.

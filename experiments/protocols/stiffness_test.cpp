@@ -40,8 +40,8 @@ Eigen::Vector3d window_stress(const Model& solved, const std::vector<char>& insi
 }  // namespace
 
 SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
-                                             LinearSolverKind linear_solver,
-                                             double interior_margin, bool force) {
+                                             LinearSolverKind linear_solver, double interior_margin,
+                                             bool force) {
   const auto start = std::chrono::steady_clock::now();
   const Particles& p = model.particles;
   require(p.size() >= 4, "the specimen stiffness needs at least four particles");

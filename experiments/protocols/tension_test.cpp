@@ -222,8 +222,8 @@ TensionResult TensionTest::run(SpecimenBuilder& builder) const {
   result.dem.nu_yx = result.along_y.poisson;
   if (settings_.measure_specimen_stiffness) {
     // The coupon along x, as built: measure_specimen_stiffness works on a copy.
-    result.specimen = measure_specimen_stiffness(coupon_x->model, 0, settings_.linear_solver, 0,
-                                                 settings_.force);
+    result.specimen =
+        measure_specimen_stiffness(coupon_x->model, 0, settings_.linear_solver, 0, settings_.force);
     result.dem.Gxy = result.specimen.constants.Gxy;
   }
   result.coupon_x = std::move(coupon_x);
