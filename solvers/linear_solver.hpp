@@ -18,7 +18,7 @@
 ///   Chebyshev-Jacobi smoothing, relative tolerance 1e-12); any PETSc option overrides these
 ///   (set_petsc_options, `--petsc-options`). The hierarchy is built once by factor() and reused by
 ///   every solve. Under `mpiexec -n N` the matrix is a distributed PETSc matrix, each rank owning
-///   a contiguous block of particles (see ParallelSession). Built when PETSc is found (optional).
+///   a slice of the particles along the model's longest extent (see ParallelSession). Built when PETSc is found (optional).
 /// kAuto chooses after the hand-written solver's symbolic analysis, which costs little (it knows
 /// the factor's size before any numeric work):
 /// - PETSc, where it is built and the caller makes few solves with the matrix
@@ -93,7 +93,7 @@ void set_petsc_options(const std::string& options);
 /// the program's arguments, finalizes them at the end. Without PETSc, or without this object,
 /// there is one rank. Under `mpiexec -n N`, every rank runs the whole program on the same input
 /// (model building, assembly of the free-free matrix and right-hand sides are replicated,
-/// deterministically); each rank hands only its own contiguous block of particles' rows to PETSc,
+/// deterministically); each rank hands only the rows of its own slice of particles to PETSc,
 /// which distributes the matrix, the AMG hierarchy and the CG iterations, and gathers the
 /// solution back to every rank. Only rank 0 should print (is_root()).
 class ParallelSession {
@@ -159,8 +159,8 @@ class LinearSolver {
 };
 
 /// A solver of `kind`. The hand-written one and kAuto factor in the order the matrix is given
-/// (give it a fill-reducing one); CHOLMOD orders it itself; kPetsc wants the particles' own order
-/// (contiguous blocks of it are the ranks' shares). Throws plydem::Error for kPetsc without
+/// (give it a fill-reducing one); CHOLMOD orders it itself; kPetsc numbers the particles itself
+/// (slices along the model's longest extent are the ranks' shares). Throws plydem::Error for kPetsc without
 /// PETSc.
 /// `force`: kAuto factors even where the factor does not fit and PETSc cannot take over.
 std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind,

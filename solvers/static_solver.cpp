@@ -112,19 +112,29 @@ void check_input(const Model& model, const DofConstraints& constraints) {
   }
 }
 
+// Particles joined into sets (union-find with path halving); a set's root is its lowest index.
+struct ParticleSets {
+  explicit ParticleSets(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int root(int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  // Joins the sets of i and j; false where they were one already.
+  bool join(int i, int j) {
+    const int a = root(i), b = root(j);
+    if (a == b) return false;
+    parent[std::max(a, b)] = std::min(a, b);
+    return true;
+  }
+  std::vector<int> parent;
+};
+
 // Clusters of bond-connected particles (union-find); each has its own six rigid-body modes.
 std::vector<std::vector<int>> bonded_clusters(const Model& model) {
   const int n = model.particles.size();
-  std::vector<int> parent(n);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (int k = 0; k < model.bonds.size(); ++k) {
-    const int a = root(model.bonds.first(k)), b = root(model.bonds.second(k));
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
+  ParticleSets sets(n);
+  for (int k = 0; k < model.bonds.size(); ++k) sets.join(model.bonds.first(k), model.bonds.second(k));
+  auto root = [&](int i) { return sets.root(i); };
   std::vector<int> index(n, -1);
   std::vector<std::vector<int>> clusters;
   for (int i = 0; i < n; ++i) {
@@ -327,18 +337,9 @@ bool free_motions_are_rigid(const Model& model) {
   const Bonds& b = model.bonds;
   const auto& x = model.particles.reference_position;
   const int n = model.particles.size();
-  std::vector<int> parent(n);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  auto join = [&](int i, int j) {
-    const int a = root(i), c = root(j);
-    if (a == c) return false;
-    parent[std::max(a, c)] = std::min(a, c);
-    return true;
-  };
+  ParticleSets bodies(n);
+  auto root = [&](int i) { return bodies.root(i); };
+  auto join = [&](int i, int j) { return bodies.join(i, j); };
   std::vector<int> point_bonds;
   std::vector<Eigen::Vector3d> contact;
   double extent = 0;
@@ -605,7 +606,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   // fill-reducing order of the particles (counted with the factorization); CHOLMOD orders the
   // dofs itself and CG needs none.
   start = Clock::now();
-  // PETSc keeps the particles' own order: its ranks own contiguous blocks of particles.
+  // PETSc numbers the particles itself (slices along the model's longest extent, one per rank).
   m.order =
       m.direct && nf > 0 && kind != LinearSolverKind::kCholmod && kind != LinearSolverKind::kPetsc
           ? EliminationOrder::minimum_degree(model)
@@ -656,7 +657,14 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     // that grows with the size. The factorization collects every zero pivot in one pass.
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
     // Where the unknowns sit, for PETSc's rigid-body near-null space.
-    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position, free_motions_are_rigid(model)});
+    // The rigidity test only where PETSc may solve (it spares PETSc's mechanism probe).
+    const bool petsc_may_solve =
+        petsc_available() &&
+        (kind == LinearSolverKind::kPetsc ||
+         (kind == LinearSolverKind::kAuto &&
+          settings.linear_solver_use == LinearSolverUse::kFewSolves));
+    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position,
+                            petsc_may_solve && free_motions_are_rigid(model)});
     m.cholesky->factor(m.a, threshold);
     ++m.factorizations;
     if (!m.cholesky->zero_pivots().empty())
