@@ -590,13 +590,16 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   const int dofs = m.dofs = kDofsPerParticle * n;
   m.prescribed = m.constraints.prescribed_count();
   const int nf = m.nf = dofs - m.prescribed;
-  // Above direct_max_dofs kAuto takes an iterative method: PETSc's CG + AMG where it is built and
-  // the caller makes few solves, Eigen's CG otherwise.
+  // Whether PETSc may solve: asked for, or kAuto for a caller making few solves (kAuto's linear
+  // solver then decides after its symbolic analysis).
+  const bool few_solves = settings.linear_solver_use == LinearSolverUse::kFewSolves;
+  const bool petsc_may_solve =
+      petsc_available() && (settings.linear_solver == LinearSolverKind::kPetsc ||
+                            (settings.linear_solver == LinearSolverKind::kAuto && few_solves));
+  // Above direct_max_dofs kAuto takes an iterative method: PETSc's CG + AMG where it may solve
+  // and the caller makes few solves, Eigen's CG otherwise.
   const bool large = settings.method == StaticMethod::kAuto && nf > settings.direct_max_dofs;
-  const bool petsc_takes_large = large && petsc_available() &&
-                                 settings.linear_solver_use == LinearSolverUse::kFewSolves &&
-                                 (settings.linear_solver == LinearSolverKind::kAuto ||
-                                  settings.linear_solver == LinearSolverKind::kPetsc);
+  const bool petsc_takes_large = large && petsc_may_solve && few_solves;
   const LinearSolverKind kind =
       petsc_takes_large ? LinearSolverKind::kPetsc : settings.linear_solver;
   m.direct = settings.method == StaticMethod::kDirect ||
@@ -658,11 +661,6 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
     // Where the unknowns sit, for PETSc's rigid-body near-null space.
     // The rigidity test only where PETSc may solve (it spares PETSc's mechanism probe).
-    const bool petsc_may_solve =
-        petsc_available() &&
-        (kind == LinearSolverKind::kPetsc ||
-         (kind == LinearSolverKind::kAuto &&
-          settings.linear_solver_use == LinearSolverUse::kFewSolves));
     m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position,
                             petsc_may_solve && free_motions_are_rigid(model)});
     m.cholesky->factor(m.a, threshold);
