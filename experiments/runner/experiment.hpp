@@ -13,6 +13,11 @@
 /// results.csv (one row per measured or reference value) and the figures and VTU files the
 /// experiment makes. Kinds are registered like strategies (strategies/registry.hpp), so a user adds
 /// an experiment without editing the runner.
+///
+/// A built-in kind is one file, experiments/runner/<kind>_experiment.cpp, holding its settings
+/// struct and parse -> run -> report (ExperimentSteps) and exporting
+/// `void register_<kind>_experiment(ExperimentRegistry&)`; adding `<kind>` to the CMake list
+/// PLYDEM_EXPERIMENTS compiles the file and calls the function.
 
 #include <filesystem>
 #include <functional>
@@ -105,11 +110,53 @@ class Experiment {
 
 using ExperimentFactory = std::function<std::unique_ptr<Experiment>()>;
 
+/// An experiment kind written as three steps over its own settings struct, the shape of every
+/// built-in kind (one file each, experiments/runner/<kind>_experiment.cpp):
+///   parse   the config's keys -> Settings; refuses an unknown key or a bad value with a
+///           plydem::Error naming the file and the key, before anything is built;
+///   run     Settings -> Results: the computation (build, solve, FEM);
+///   report  Settings and Results -> ExperimentOutput: report.md's section, results.csv's rows,
+///           and the figures, VTU and data files written into context.out_dir.
+/// ExperimentRegistry::add(kind, description, parse, run, report) registers one.
+template <class Settings, class Results>
+class ExperimentSteps : public Experiment {
+ public:
+  using Parse = Settings (*)(const ExperimentConfig& config, const ExperimentContext& context);
+  using Run = Results (*)(const Settings& settings, const ExperimentContext& context);
+  using Report = ExperimentOutput (*)(const Settings& settings, const Results& results,
+                                      const ExperimentContext& context);
+
+  ExperimentSteps(Parse parse, Run run, Report report)
+      : parse_(parse), run_(run), report_(report) {}
+
+  ExperimentOutput run(const ExperimentConfig& config,
+                       const ExperimentContext& context) const override {
+    const Settings settings = parse_(config, context);
+    const Results results = run_(settings, context);
+    return report_(settings, results, context);
+  }
+
+ private:
+  Parse parse_;
+  Run run_;
+  Report report_;
+};
+
 /// Experiment kinds by name, as strategies/registry.hpp does for strategies.
 class ExperimentRegistry {
  public:
   /// Throws plydem::Error if the kind is empty or taken.
   void add(const std::string& kind, const std::string& description, ExperimentFactory factory);
+  /// Registers a kind written as parse -> run -> report (ExperimentSteps).
+  template <class Settings, class Results>
+  void add(const std::string& kind, const std::string& description,
+           Settings (*parse)(const ExperimentConfig&, const ExperimentContext&),
+           Results (*run)(const Settings&, const ExperimentContext&),
+           ExperimentOutput (*report)(const Settings&, const Results&, const ExperimentContext&)) {
+    add(kind, description, [parse, run, report] {
+      return std::make_unique<ExperimentSteps<Settings, Results>>(parse, run, report);
+    });
+  }
   bool contains(const std::string& kind) const;
   /// Throws plydem::Error listing the registered kinds if `kind` is unknown.
   std::unique_ptr<Experiment> create(const std::string& kind) const;
@@ -127,8 +174,8 @@ class ExperimentRegistry {
 /// The process-wide experiment registry, filled with the built-in kinds on first use.
 ExperimentRegistry& default_experiment_registry();
 
-/// Calls every built-in experiment file's register_<kind>_experiment() (see experiments.cmake
-/// list PLYDEM_EXPERIMENTS in CMakeLists.txt).
+/// Calls every built-in experiment file's register_<kind>_experiment() (generated from the list
+/// PLYDEM_EXPERIMENTS in CMakeLists.txt).
 void register_builtin_experiments(ExperimentRegistry& registry);
 
 }  // namespace plydem
