@@ -163,306 +163,379 @@ FemCrackedStiffness fem_cracked_stiffness(const std::vector<std::vector<CrackPla
   return out;
 }
 
-class CrossplyExperiment : public Experiment {
- public:
-  ExperimentOutput run(const ExperimentConfig& c, const ExperimentContext& context) const override {
-    c.require_known_keys({"experiment",
-                          "description",
-                          "material",
-                          "strategy",
-                          "strategy_options",
-                          "layups",
-                          "weibull_modulus",
-                          "seed",
-                          "scatter",
-                          "softening",
-                          "scatter_per",
-                          "coupon.length_mm",
-                          "coupon.width_mm",
-                          "coupon.thickness_mm",
-                          "coupon.diameter_mm",
-                          "coupon.grip_mm",
-                          "quick.length_mm",
-                          "quick.width_mm",
-                          "quick.thickness_mm",
-                          "quick.diameter_mm",
-                          "quick.layups",
-                          "interface.normal",
-                          "interface.shear",
-                          "interface.strength_normal",
-                          "interface.strength_shear",
-                          "interface.transverse_shear",
-                          "fem.element_mm",
-                          "fem.elements_per_ply",
-                          "fem.threads",
-                          "events.max_events",
-                          "events.stop_fraction",
-                          "events.max_update_rank",
-                          "output.vtu_series"});
-    const std::string name = c.name();
-    const std::string origin = c.path().string();
-    StrengthSettings base;
-    base.force = context.force;
-    base.strategy = c.string("strategy", base.strategy);
-    base.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
-                                                   fmt::format("{}: strategy_options", origin));
-    base.coupon = coupon_from_config(c, context.quick);
-    base.grip_length = c.number("coupon.grip_mm", 0) * kMm;
-    base.interface.normal = c.number("interface.normal", 0);
-    base.interface.shear = c.number("interface.shear", 0);
-    base.interface.transverse_shear = c.boolean("interface.transverse_shear", true);
-    FemSettings fem;
-    fem.mesh.element_size = c.number("fem.element_mm", 0) * kMm;
-    fem.mesh.elements_per_ply = static_cast<int>(c.integer("fem.elements_per_ply", 2));
-    fem.threads = static_cast<int>(c.integer("fem.threads", 1));
-    if (fem.mesh.element_size == 0) fem.mesh.element_size = 0.5 * base.coupon.particle_diameter;
-    fem.validate();
-    const CalculixAvailability ccx = calculix_availability();
-    base.interface_strength.normal = c.number("interface.strength_normal", 0);
-    base.interface_strength.shear = c.number("interface.strength_shear", 0);
-    base.weibull_modulus = c.number("weibull_modulus", 10);
-    base.seed = static_cast<std::uint64_t>(c.integer("seed", 1));
-    const std::string scatter = c.string("scatter", "90");
-    require(scatter == "90" || scatter == "all",
-            fmt::format("{}: scatter must be \"90\" (the 90° plies only) or \"all\", got \"{}\"",
-                        origin, scatter));
-    const bool scatter_ninety = scatter == "90";
-    base.strength_options.softening = c.boolean("softening", false);
-    const std::string scatter_per = c.string("scatter_per", "site");
-    require(scatter_per == "site" || scatter_per == "bond",
-            fmt::format("{}: scatter_per must be \"site\" (one strength factor per crack site: a "
-                        "band between particle rows along the fibre) or \"bond\", got \"{}\"",
-                        origin, scatter_per));
-    base.scatter_per_crack_site = scatter_per == "site";
-    base.events.max_events = c.integer("events.max_events", base.events.max_events);
-    base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
-    base.events.max_update_rank =
-        static_cast<int>(c.integer("events.max_update_rank", base.events.max_update_rank));
-    base.record_snapshots = c.boolean("output.vtu_series", false);
-    std::vector<std::string> layups = c.strings("layups", {"[0/90]s", "[0/90_2]s", "[0/90_4]s"});
-    if (context.quick) layups = c.strings("quick.layups", layups);
-    require(!layups.empty(), fmt::format("{}: layups is empty", origin));
-    std::vector<std::pair<int, int>> counts;
-    for (const std::string& text : layups) {
-      try {
-        counts.push_back(crossply_counts(parse_layup(text), text));
-      } catch (const Error& e) {
-        throw Error(fmt::format("{}: {}", origin, e.what()));
-      }
-    }
-    require_strengths(base.coupon.material, fmt::format("{} (kind crossply)", origin));
-
-    const std::unique_ptr<Strategy> strategy = default_registry().create(base.strategy);
-    for (const auto& [option, value] : base.strategy_options) strategy->set_option(option, value);
-    SpecimenBuilder builder(*strategy);
-    const Material& material = base.coupon.material;
-    const double t = base.coupon.thickness;
-
-    ExperimentOutput out;
-    out.title =
-        fmt::format("Transverse cracking of cross-plies: {} ({})", material.name, base.strategy);
-    std::string table =
-        markdown_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
-                      "DEM vs it", "strength (MPa)", "strain at peak (%)",
-                      "90° transverse cracks per mm at the peak", "of which traction-free, per mm",
-                      "E/E0 DEM", "E/E0 shear lag", "E/E0 ply discount",
-                      "E/E0 DEM between the grips", "E/E0 CalculiX, same cracks",
-                      "cracks cut in CalculiX", "events"}) +
-        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
-    std::string fem_notes;
-    std::string sections;
-    std::vector<Curve> curves;
-    for (std::size_t k = 0; k < layups.size(); ++k) {
-      const std::string& text = layups[k];
-      const auto [m, n] = counts[k];
-      StrengthSettings s = base;
-      s.layup = parse_layup(text);
-      if (scatter_ninety)
-        for (int p = m; p < m + 2 * n; ++p) s.scatter_plies.push_back(p);
-      s.validate();
-      spdlog::info("{}: {} in tension to failure", name, text);
-      StrengthTest test(s);
-      test.on_progress([&](const EventProgress& p) {
-        spdlog::info("{}: {} events, {} broken, peak {:.4g} N, {:.0f} s", text, p.events, p.broken,
-                     p.peak_reaction, p.elapsed_seconds);
-      });
-      const StrengthResult r = test.run(builder);
-      const std::string stem = file_stem(fmt::format("{}_{}", name, text));
-      const ExperimentOutput one = strength_output(r, context.out_dir, name, text, stem);
-      out.rows.insert(out.rows.end(), one.rows.begin(), one.rows.end());
-      out.files.insert(out.files.end(), one.files.begin(), one.files.end());
-      sections += one.report_markdown;
-
-      // Secant stiffness (the path unloads to the origin) against the 90° crack density, over
-      // the free length between the grips.
-      const Model& model = *r.model;
-      const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * s.coupon.particle_diameter;
-      const double x_begin = model.particles.reference_position.col(0).minCoeff() + grip;
-      const double x_end = model.particles.reference_position.col(0).maxCoeff() - grip;
-      std::vector<int> ninety;
-      for (int p = m; p < m + 2 * n; ++p) ninety.push_back(p);
-      const double b = m * t, d = n * t;
-      const std::size_t events = r.strain.size() - 1;
-      Curve dem{fmt::format("DEM {}", text), {}, {}, true};
-      const double e0 = r.stress[1] / r.strain[1];
-      std::vector<BondBreak> so_far;
-      std::size_t next = 0;
-      double last_density = 0, last_ratio = 1;
-      std::size_t last_event = 0;
-      std::string planes_csv =
-          "event,strain,stress_MPa,crack_planes_per_mm,traction_free_per_mm,E_over_E0\n";
-      for (std::size_t j = 1; j <= kStiffnessSamples; ++j) {
-        const std::size_t e = std::max<std::size_t>(1, events * j / kStiffnessSamples);
-        if (e == last_event) continue;
-        last_event = e;
-        while (next < r.breaks.size() && r.breaks[next].at < static_cast<double>(e))
-          so_far.push_back(r.breaks[next++]);
-        // At critical state e the bonds broken before it are gone: its secant is theirs.
-        if (r.strain[e] <= 0) continue;
-        const std::vector<std::vector<CrackPlane>> planes =
-            ninety_planes(model, so_far, ninety, x_begin, x_end, s.coupon.width);
-        const double density = ninety_density(planes, x_begin, x_end);
-        const double free_density = ninety_density(planes, x_begin, x_end, true);
-        const double ratio = r.stress[e] / r.strain[e] / e0;
-        planes_csv += fmt::format("{},{:.8g},{:.6g},{:.6g},{:.6g},{:.6g}\n", e, r.strain[e],
-                                  r.stress[e] * kMPa, density * kMm, free_density * kMm, ratio);
-        dem.x.push_back(density * kMm);
-        dem.y.push_back(ratio);
-        // Up to the peak: after it the 0° plies break and the laminate is failing.
-        if (static_cast<long>(e) <= r.peak + 1) {
-          last_density = density;
-          last_ratio = ratio;
-        }
-      }
-      curves.push_back(dem);
-      const fs::path planes_file = fs::path(stem + "_crack_planes.csv");
-      {
-        std::ofstream file(context.out_dir / planes_file, std::ios::binary);
-        file << planes_csv;
-        require(static_cast<bool>(file), fmt::format("crossply: could not write {}",
-                                                     (context.out_dir / planes_file).string()));
-      }
-      out.files.push_back(planes_file);
-      Curve lag{fmt::format("shear lag {}", text), {}, {}, false};
-      const double top = std::max(2.0 * last_density, 1.0 / (2.0 * t * (m + n)));
-      for (int j = 0; j <= 60; ++j) {
-        const double density = top * j / 60;
-        lag.x.push_back(density * kMm);
-        lag.y.push_back(shear_lag_stiffness_ratio(material, b, d, density));
-      }
-      curves.push_back(lag);
-      const double discount = ply_discount_stiffness_ratio(material, b, d);
-      curves.push_back(
-          {fmt::format("ply discount {}", text), {0, top * kMm}, {discount, discount}, false});
-      const double lag_ratio = shear_lag_stiffness_ratio(material, b, d, last_density);
-      // The same cracks in CalculiX, against the DEM's secant between the grips (nominal strain)
-      // at the same state.
-      FemCrackedStiffness fem_same;
-      double dem_grips = NAN;
-      if (r.peak >= 0 && static_cast<std::size_t>(r.peak) + 1 < r.stress.size()) {
-        const std::size_t e = static_cast<std::size_t>(r.peak) + 1;
-        dem_grips = (r.stress[e] / r.nominal_strain[e]) / (r.stress[1] / r.nominal_strain[1]);
-      }
-      std::vector<BondBreak> at_peak;
-      for (const BondBreak& br : r.breaks)
-        if (br.at < static_cast<double>(r.peak + 1)) at_peak.push_back(br);
-      const std::vector<std::vector<CrackPlane>> peak_planes =
-          ninety_planes(model, at_peak, ninety, x_begin, x_end, s.coupon.width);
-      const double traction_free_density = ninety_density(peak_planes, x_begin, x_end, true);
-      if (!ccx.available) {
-        fem_same.skipped = ccx.message;
-      } else {
-        FemSpecimen specimen;
-        for (double angle : s.layup) specimen.plies.push_back({material, angle, t});
-        specimen.length = x_end - x_begin;
-        specimen.width = s.coupon.width;
-        spdlog::info("{}: {}: CalculiX with the peak's transverse cracks cut in", name, text);
-        fem_same = fem_cracked_stiffness(peak_planes, ninety, specimen, x_begin,
-                                         s.coupon.particle_diameter, fem);
-      }
-      if (!fem_same.skipped.empty()) fem_notes += fmt::format("- {}: {}\n", text, fem_same.skipped);
-      double fpf = NAN;
-      for (const CriterionStrength& cs : r.theory)
-        if (cs.criterion == FailureCriterion::kMaxStress && cs.strength) fpf = *cs.strength;
-      table += markdown_row({text, fmt::format("{:.2f}", r.first_failure_stress * kMPa),
-                             fmt::format("{:.2f}", fpf * kMPa),
-                             fmt::format("{:+.2f}%", 100 * (r.first_failure_stress / fpf - 1)),
-                             fmt::format("{:.1f}", r.strength * kMPa),
-                             fmt::format("{:.3f}", r.strain_at_peak * 100),
-                             fmt::format("{:.3g}", last_density * kMm),
-                             fmt::format("{:.3g}", traction_free_density * kMm),
-                             fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
-                             fmt::format("{:.3f}", discount), fmt::format("{:.3f}", dem_grips),
-                             fem_same.skipped.empty() ? fmt::format("{:.3f}", fem_same.ratio) : "-",
-                             fmt::format("{}", fem_same.cracks), fmt::format("{}", r.events)});
-      auto row = [&](const std::string& quantity, const std::string& source, double value,
-                     const std::string& unit) {
-        if (std::isfinite(value)) out.rows.push_back({name, text, quantity, source, value, unit});
-      };
-      row("first ply failure stress", "clt max-stress", fpf * kMPa, "MPa");
-      row("crack density 90 at peak", fmt::format("dem {}", r.strategy), last_density * kMm,
-          "1/mm");
-      row("stiffness ratio at peak", fmt::format("dem {}", r.strategy), last_ratio, "1");
-      row("stiffness ratio at peak", "shear lag", lag_ratio, "1");
-      row("stiffness ratio", "ply discount", discount, "1");
-      row("stiffness ratio at peak between grips", fmt::format("dem {}", r.strategy), dem_grips,
-          "1");
-      row("traction-free crack density 90 at peak", fmt::format("dem {}", r.strategy),
-          traction_free_density * kMm, "1/mm");
-      if (fem_same.skipped.empty()) {
-        row("stiffness ratio at peak between grips", "calculix same cracks", fem_same.ratio, "1");
-        row("cracks cut in calculix", "calculix same cracks", fem_same.cracks, "1");
-      }
-    }
-    PlotAxes axes;
-    axes.key = "right top";
-    const Figure figure = plot_curves(
-        curves, context.out_dir, fmt::format("{}_stiffness", file_stem(name)),
-        fmt::format("{}: secant stiffness against the 90° crack density", material.name),
-        "cracks per mm in the 90° layer", "E / E0", axes);
-    out.files.insert(out.files.end(), figure.files.begin(), figure.files.end());
-
-    std::string& md = out.report_markdown;
-    md += fmt::format(
-        "Cross-ply laminates of {} on {:g} × {:g} mm coupons, {:g} mm plies, {:g} mm particles, "
-        "strategy {}, Weibull strength scatter m = {:g} (seed {}) in {}, uniform grips, events "
-        "(sequentially linear: each point a critical state, the path unloading to the origin, so "
-        "stress / strain there is the damaged laminate's secant stiffness). {}\n\n",
-        material.name, base.coupon.length / kMm, base.coupon.width / kMm, t / kMm,
-        base.coupon.particle_diameter / kMm, base.strategy, base.effective_weibull_modulus(),
-        base.seed,
-        scatter_ninety ? "the 90° plies (the 0° plies at their calibrated strengths)" : "every ply",
-        base.interface_strength.given()
-            ? "The interfaces break at the strengths given."
-            : "The interfaces do not break (no interface strengths given).");
-    md += fmt::format(
-        "## Summary\n\n*First failure* is the first break, beside the closed-form first-ply "
-        "failure of CLT (max-stress on each ply's stress under the mean sigma_x); the crack "
-        "density is the 90° plies' mean number of transverse cracks per mm between the grips at "
-        "the peak: gaps between particle columns with broken bonds across at least {:.0f}% of the "
-        "width (solvers/cracks.hpp transverse_crack_planes: cracks one spacing apart stay apart); "
-        "*traction-free* ones have that fraction of the bonds across them broken too (the others "
-        "still bridge, through the lattice's diagonal bonds); E/E0 is the "
-        "secant stiffness there over the intact one, beside the shear-lag model (Garrett & "
-        "Bailey 1977) at the same density and the ply-discount limit "
-        "(core/transverse_cracking.hpp). *Between the grips* is the same secant with the grips' "
-        "separation as the strain, the measure CalculiX gives: its column is CalculiX of the same "
-        "laminate between the grips (C3D8I, {:g} mm elements, {} per ply, ends moved along x and "
-        "free laterally) with the DEM's transverse crack planes at the peak cut in "
-        "(traction-free; planes of different 90° plies within a quarter diameter of each other "
-        "one crack through them), over the intact laminate's. {}\n\n{}{}\n{}\n",
-        100 * kSpanningFraction, fem.mesh.element_size / kMm, fem.mesh.elements_per_ply,
-        base.interface.transverse_shear
-            ? "The plies carry the laminate's transverse shear (G13, G23; interface "
-              "transverse_shear, strategies/laminate.hpp)."
-            : "The plies do not carry transverse shear (interface transverse_shear = false): the "
-              "DEM loses too much stiffness per crack (strategies/laminate.hpp).",
-        table, fem_notes.empty() ? "" : "\nCalculiX not run:\n\n" + fem_notes,
-        figure_markdown(figure, "Secant stiffness against crack density"));
-    md += "## Each laminate\n\n" + sections;
-    return out;
-  }
+// A `crossply` config's settings: the strength test common to every laminate, the FEM's, and
+// the laminates.
+struct CrossplySettings {
+  std::string name;  ///< the config's, naming rows and files
+  StrengthSettings base;
+  FemSettings fem;
+  bool scatter_ninety = true;  ///< scatter = "90"
+  std::vector<std::string> layups;
+  std::vector<std::pair<int, int>> counts;  ///< (m, n) of each [0_m/90_n]s
 };
+
+CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentContext& context) {
+  c.require_known_keys({"experiment",
+                        "description",
+                        "material",
+                        "strategy",
+                        "strategy_options",
+                        "layups",
+                        "weibull_modulus",
+                        "seed",
+                        "scatter",
+                        "softening",
+                        "scatter_per",
+                        "coupon.length_mm",
+                        "coupon.width_mm",
+                        "coupon.thickness_mm",
+                        "coupon.diameter_mm",
+                        "coupon.grip_mm",
+                        "quick.length_mm",
+                        "quick.width_mm",
+                        "quick.thickness_mm",
+                        "quick.diameter_mm",
+                        "quick.layups",
+                        "interface.normal",
+                        "interface.shear",
+                        "interface.strength_normal",
+                        "interface.strength_shear",
+                        "interface.transverse_shear",
+                        "fem.element_mm",
+                        "fem.elements_per_ply",
+                        "fem.threads",
+                        "events.max_events",
+                        "events.stop_fraction",
+                        "events.max_update_rank",
+                        "output.vtu_series"});
+  const std::string name = c.name();
+  const std::string origin = c.path().string();
+  StrengthSettings base;
+  base.force = context.force;
+  base.strategy = c.string("strategy", base.strategy);
+  base.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
+                                                 fmt::format("{}: strategy_options", origin));
+  base.coupon = coupon_from_config(c, context.quick);
+  base.grip_length = c.number("coupon.grip_mm", 0) * kMm;
+  base.interface.normal = c.number("interface.normal", 0);
+  base.interface.shear = c.number("interface.shear", 0);
+  base.interface.transverse_shear = c.boolean("interface.transverse_shear", true);
+  FemSettings fem;
+  fem.mesh.element_size = c.number("fem.element_mm", 0) * kMm;
+  fem.mesh.elements_per_ply = static_cast<int>(c.integer("fem.elements_per_ply", 2));
+  fem.threads = static_cast<int>(c.integer("fem.threads", 1));
+  if (fem.mesh.element_size == 0) fem.mesh.element_size = 0.5 * base.coupon.particle_diameter;
+  fem.validate();
+  base.interface_strength.normal = c.number("interface.strength_normal", 0);
+  base.interface_strength.shear = c.number("interface.strength_shear", 0);
+  base.weibull_modulus = c.number("weibull_modulus", 10);
+  base.seed = static_cast<std::uint64_t>(c.integer("seed", 1));
+  const std::string scatter = c.string("scatter", "90");
+  require(scatter == "90" || scatter == "all",
+          fmt::format("{}: scatter must be \"90\" (the 90° plies only) or \"all\", got \"{}\"",
+                      origin, scatter));
+  const bool scatter_ninety = scatter == "90";
+  base.strength_options.softening = c.boolean("softening", false);
+  const std::string scatter_per = c.string("scatter_per", "site");
+  require(scatter_per == "site" || scatter_per == "bond",
+          fmt::format("{}: scatter_per must be \"site\" (one strength factor per crack site: a "
+                      "band between particle rows along the fibre) or \"bond\", got \"{}\"",
+                      origin, scatter_per));
+  base.scatter_per_crack_site = scatter_per == "site";
+  base.events.max_events = c.integer("events.max_events", base.events.max_events);
+  base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
+  base.events.max_update_rank =
+      static_cast<int>(c.integer("events.max_update_rank", base.events.max_update_rank));
+  base.record_snapshots = c.boolean("output.vtu_series", false);
+  std::vector<std::string> layups = c.strings("layups", {"[0/90]s", "[0/90_2]s", "[0/90_4]s"});
+  if (context.quick) layups = c.strings("quick.layups", layups);
+  require(!layups.empty(), fmt::format("{}: layups is empty", origin));
+  std::vector<std::pair<int, int>> counts;
+  for (const std::string& text : layups) {
+    try {
+      counts.push_back(crossply_counts(parse_layup(text), text));
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", origin, e.what()));
+    }
+  }
+  require_strengths(base.coupon.material, fmt::format("{} (kind crossply)", origin));
+  return {name, base, fem, scatter_ninety, layups, counts};
+}
+
+// One laminate pulled to failure, its 90° plies' cracks at the peak and CalculiX with them cut in.
+struct LaminateRun {
+  std::string text;  ///< the layup as written
+  int m = 0, n = 0;
+  StrengthSettings settings;
+  StrengthResult result;
+  double x_begin = 0, x_end = 0;  ///< the free length between the grips
+  std::vector<int> ninety;        ///< the 90° plies
+  FemCrackedStiffness fem_same;
+  double dem_grips = NAN;  ///< the DEM's secant between the grips at the peak, over the intact one
+  double traction_free_density = 0;  ///< of the 90° plies' crack planes at the peak [1/m]
+};
+
+LaminateRun run_laminate(const CrossplySettings& cs, std::size_t k, SpecimenBuilder& builder,
+                         const CalculixAvailability& ccx) {
+  LaminateRun run;
+  run.text = cs.layups[k];
+  const std::string& text = run.text;
+  std::tie(run.m, run.n) = cs.counts[k];
+  const int m = run.m, n = run.n;
+  StrengthSettings& s = run.settings;
+  s = cs.base;
+  s.layup = parse_layup(text);
+  if (cs.scatter_ninety)
+    for (int p = m; p < m + 2 * n; ++p) s.scatter_plies.push_back(p);
+  s.validate();
+  spdlog::info("{}: {} in tension to failure", cs.name, text);
+  StrengthTest test(s);
+  test.on_progress([&](const EventProgress& p) {
+    spdlog::info("{}: {} events, {} broken, peak {:.4g} N, {:.0f} s", text, p.events, p.broken,
+                 p.peak_reaction, p.elapsed_seconds);
+  });
+  run.result = test.run(builder);
+  const StrengthResult& r = run.result;
+  const Model& model = *r.model;
+  const Material& material = cs.base.coupon.material;
+  const double t = cs.base.coupon.thickness;
+  const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * s.coupon.particle_diameter;
+  run.x_begin = model.particles.reference_position.col(0).minCoeff() + grip;
+  run.x_end = model.particles.reference_position.col(0).maxCoeff() - grip;
+  const double x_begin = run.x_begin, x_end = run.x_end;
+  std::vector<int>& ninety = run.ninety;
+  for (int p = m; p < m + 2 * n; ++p) ninety.push_back(p);
+  if (r.peak >= 0 && static_cast<std::size_t>(r.peak) + 1 < r.stress.size()) {
+    const std::size_t e = static_cast<std::size_t>(r.peak) + 1;
+    run.dem_grips = (r.stress[e] / r.nominal_strain[e]) / (r.stress[1] / r.nominal_strain[1]);
+  }
+  std::vector<BondBreak> at_peak;
+  for (const BondBreak& br : r.breaks)
+    if (br.at < static_cast<double>(r.peak + 1)) at_peak.push_back(br);
+  const std::vector<std::vector<CrackPlane>> peak_planes =
+      ninety_planes(model, at_peak, ninety, x_begin, x_end, s.coupon.width);
+  run.traction_free_density = ninety_density(peak_planes, x_begin, x_end, true);
+  if (!ccx.available) {
+    run.fem_same.skipped = ccx.message;
+  } else {
+    FemSpecimen specimen;
+    for (double angle : s.layup) specimen.plies.push_back({material, angle, t});
+    specimen.length = x_end - x_begin;
+    specimen.width = s.coupon.width;
+    spdlog::info("{}: {}: CalculiX with the peak's transverse cracks cut in", cs.name, text);
+    run.fem_same = fem_cracked_stiffness(peak_planes, ninety, specimen, x_begin,
+                                         s.coupon.particle_diameter, cs.fem);
+  }
+  return run;
+}
+
+std::vector<LaminateRun> run_crossply(const CrossplySettings& cs, const ExperimentContext&) {
+  const std::unique_ptr<Strategy> strategy = default_registry().create(cs.base.strategy);
+  for (const auto& [option, value] : cs.base.strategy_options) strategy->set_option(option, value);
+  SpecimenBuilder builder(*strategy);
+  const CalculixAvailability ccx = calculix_availability();
+  std::vector<LaminateRun> runs;
+  for (std::size_t k = 0; k < cs.layups.size(); ++k)
+    runs.push_back(run_laminate(cs, k, builder, ccx));
+  return runs;
+}
+
+// The secant stiffness (the path unloads to the origin) against the 90° crack density at up to
+// kStiffnessSamples critical states, over the free length between the grips.
+struct StiffnessSamples {
+  Curve dem;
+  std::string csv;                          ///< STEM_crack_planes.csv
+  double last_density = 0, last_ratio = 1;  ///< at the last sample up to the peak
+};
+
+StiffnessSamples sample_stiffness(const LaminateRun& run) {
+  const std::string& text = run.text;
+  const StrengthSettings& s = run.settings;
+  const StrengthResult& r = run.result;
+  const Model& model = *r.model;
+  const double x_begin = run.x_begin, x_end = run.x_end;
+  const std::vector<int>& ninety = run.ninety;
+  const std::size_t events = r.strain.size() - 1;
+  Curve dem{fmt::format("DEM {}", text), {}, {}, true};
+  const double e0 = r.stress[1] / r.strain[1];
+  std::vector<BondBreak> so_far;
+  std::size_t next = 0;
+  double last_density = 0, last_ratio = 1;
+  std::size_t last_event = 0;
+  std::string planes_csv =
+      "event,strain,stress_MPa,crack_planes_per_mm,traction_free_per_mm,E_over_E0\n";
+  for (std::size_t j = 1; j <= kStiffnessSamples; ++j) {
+    const std::size_t e = std::max<std::size_t>(1, events * j / kStiffnessSamples);
+    if (e == last_event) continue;
+    last_event = e;
+    while (next < r.breaks.size() && r.breaks[next].at < static_cast<double>(e))
+      so_far.push_back(r.breaks[next++]);
+    // At critical state e the bonds broken before it are gone: its secant is theirs.
+    if (r.strain[e] <= 0) continue;
+    const std::vector<std::vector<CrackPlane>> planes =
+        ninety_planes(model, so_far, ninety, x_begin, x_end, s.coupon.width);
+    const double density = ninety_density(planes, x_begin, x_end);
+    const double free_density = ninety_density(planes, x_begin, x_end, true);
+    const double ratio = r.stress[e] / r.strain[e] / e0;
+    planes_csv += fmt::format("{},{:.8g},{:.6g},{:.6g},{:.6g},{:.6g}\n", e, r.strain[e],
+                              r.stress[e] * kMPa, density * kMm, free_density * kMm, ratio);
+    dem.x.push_back(density * kMm);
+    dem.y.push_back(ratio);
+    // Up to the peak: after it the 0° plies break and the laminate is failing.
+    if (static_cast<long>(e) <= r.peak + 1) {
+      last_density = density;
+      last_ratio = ratio;
+    }
+  }
+  return {dem, planes_csv, last_density, last_ratio};
+}
+
+// One laminate's part of the report: its strength test's section, its row of the summary table,
+// its curves of the stiffness figure, the crack planes' CSV and results.csv's rows.
+void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const fs::path& out_dir,
+                     ExperimentOutput& out, std::string& table, std::string& fem_notes,
+                     std::string& sections, std::vector<Curve>& curves) {
+  const std::string& name = cs.name;
+  const std::string& text = run.text;
+  const int m = run.m, n = run.n;
+  const StrengthResult& r = run.result;
+  const Material& material = cs.base.coupon.material;
+  const double t = cs.base.coupon.thickness;
+  const FemCrackedStiffness& fem_same = run.fem_same;
+  const double dem_grips = run.dem_grips, traction_free_density = run.traction_free_density;
+  const std::string stem = file_stem(fmt::format("{}_{}", name, text));
+  const ExperimentOutput one = strength_output(r, out_dir, name, text, stem);
+  out.rows.insert(out.rows.end(), one.rows.begin(), one.rows.end());
+  out.files.insert(out.files.end(), one.files.begin(), one.files.end());
+  sections += one.report_markdown;
+  const double b = m * t, d = n * t;
+  const StiffnessSamples samples = sample_stiffness(run);
+  const double last_density = samples.last_density, last_ratio = samples.last_ratio;
+  curves.push_back(samples.dem);
+  const fs::path planes_file = fs::path(stem + "_crack_planes.csv");
+  {
+    std::ofstream file(out_dir / planes_file, std::ios::binary);
+    file << samples.csv;
+    require(static_cast<bool>(file),
+            fmt::format("crossply: could not write {}", (out_dir / planes_file).string()));
+  }
+  out.files.push_back(planes_file);
+  Curve lag{fmt::format("shear lag {}", text), {}, {}, false};
+  const double top = std::max(2.0 * last_density, 1.0 / (2.0 * t * (m + n)));
+  for (int j = 0; j <= 60; ++j) {
+    const double density = top * j / 60;
+    lag.x.push_back(density * kMm);
+    lag.y.push_back(shear_lag_stiffness_ratio(material, b, d, density));
+  }
+  curves.push_back(lag);
+  const double discount = ply_discount_stiffness_ratio(material, b, d);
+  curves.push_back(
+      {fmt::format("ply discount {}", text), {0, top * kMm}, {discount, discount}, false});
+  const double lag_ratio = shear_lag_stiffness_ratio(material, b, d, last_density);
+  if (!fem_same.skipped.empty()) fem_notes += fmt::format("- {}: {}\n", text, fem_same.skipped);
+  double fpf = NAN;
+  for (const CriterionStrength& cs : r.theory)
+    if (cs.criterion == FailureCriterion::kMaxStress && cs.strength) fpf = *cs.strength;
+  table += markdown_row({text, fmt::format("{:.2f}", r.first_failure_stress * kMPa),
+                         fmt::format("{:.2f}", fpf * kMPa),
+                         fmt::format("{:+.2f}%", 100 * (r.first_failure_stress / fpf - 1)),
+                         fmt::format("{:.1f}", r.strength * kMPa),
+                         fmt::format("{:.3f}", r.strain_at_peak * 100),
+                         fmt::format("{:.3g}", last_density * kMm),
+                         fmt::format("{:.3g}", traction_free_density * kMm),
+                         fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
+                         fmt::format("{:.3f}", discount), fmt::format("{:.3f}", dem_grips),
+                         fem_same.skipped.empty() ? fmt::format("{:.3f}", fem_same.ratio) : "-",
+                         fmt::format("{}", fem_same.cracks), fmt::format("{}", r.events)});
+  auto row = [&](const std::string& quantity, const std::string& source, double value,
+                 const std::string& unit) {
+    if (std::isfinite(value)) out.rows.push_back({name, text, quantity, source, value, unit});
+  };
+  row("first ply failure stress", "clt max-stress", fpf * kMPa, "MPa");
+  row("crack density 90 at peak", fmt::format("dem {}", r.strategy), last_density * kMm, "1/mm");
+  row("stiffness ratio at peak", fmt::format("dem {}", r.strategy), last_ratio, "1");
+  row("stiffness ratio at peak", "shear lag", lag_ratio, "1");
+  row("stiffness ratio", "ply discount", discount, "1");
+  row("stiffness ratio at peak between grips", fmt::format("dem {}", r.strategy), dem_grips, "1");
+  row("traction-free crack density 90 at peak", fmt::format("dem {}", r.strategy),
+      traction_free_density * kMm, "1/mm");
+  if (fem_same.skipped.empty()) {
+    row("stiffness ratio at peak between grips", "calculix same cracks", fem_same.ratio, "1");
+    row("cracks cut in calculix", "calculix same cracks", fem_same.cracks, "1");
+  }
+}
+
+ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<LaminateRun>& runs,
+                                 const ExperimentContext& context) {
+  const std::string& name = cs.name;
+  const StrengthSettings& base = cs.base;
+  const FemSettings& fem = cs.fem;
+  const Material& material = base.coupon.material;
+  const double t = base.coupon.thickness;
+  ExperimentOutput out;
+  out.title =
+      fmt::format("Transverse cracking of cross-plies: {} ({})", material.name, base.strategy);
+  std::string table =
+      markdown_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
+                    "DEM vs it", "strength (MPa)", "strain at peak (%)",
+                    "90° transverse cracks per mm at the peak", "of which traction-free, per mm",
+                    "E/E0 DEM", "E/E0 shear lag", "E/E0 ply discount", "E/E0 DEM between the grips",
+                    "E/E0 CalculiX, same cracks", "cracks cut in CalculiX", "events"}) +
+      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+  std::string fem_notes;
+  std::string sections;
+  std::vector<Curve> curves;
+  for (const LaminateRun& run : runs)
+    report_laminate(cs, run, context.out_dir, out, table, fem_notes, sections, curves);
+  PlotAxes axes;
+  axes.key = "right top";
+  const Figure figure =
+      plot_curves(curves, context.out_dir, fmt::format("{}_stiffness", file_stem(name)),
+                  fmt::format("{}: secant stiffness against the 90° crack density", material.name),
+                  "cracks per mm in the 90° layer", "E / E0", axes);
+  out.files.insert(out.files.end(), figure.files.begin(), figure.files.end());
+
+  std::string& md = out.report_markdown;
+  md += fmt::format(
+      "Cross-ply laminates of {} on {:g} × {:g} mm coupons, {:g} mm plies, {:g} mm particles, "
+      "strategy {}, Weibull strength scatter m = {:g} (seed {}) in {}, uniform grips, events "
+      "(sequentially linear: each point a critical state, the path unloading to the origin, so "
+      "stress / strain there is the damaged laminate's secant stiffness). {}\n\n",
+      material.name, base.coupon.length / kMm, base.coupon.width / kMm, t / kMm,
+      base.coupon.particle_diameter / kMm, base.strategy, base.effective_weibull_modulus(),
+      base.seed,
+      cs.scatter_ninety ? "the 90° plies (the 0° plies at their calibrated strengths)"
+                        : "every ply",
+      base.interface_strength.given()
+          ? "The interfaces break at the strengths given."
+          : "The interfaces do not break (no interface strengths given).");
+  md += fmt::format(
+      "## Summary\n\n*First failure* is the first break, beside the closed-form first-ply "
+      "failure of CLT (max-stress on each ply's stress under the mean sigma_x); the crack "
+      "density is the 90° plies' mean number of transverse cracks per mm between the grips at "
+      "the peak: gaps between particle columns with broken bonds across at least {:.0f}% of the "
+      "width (solvers/cracks.hpp transverse_crack_planes: cracks one spacing apart stay apart); "
+      "*traction-free* ones have that fraction of the bonds across them broken too (the others "
+      "still bridge, through the lattice's diagonal bonds); E/E0 is the "
+      "secant stiffness there over the intact one, beside the shear-lag model (Garrett & "
+      "Bailey 1977) at the same density and the ply-discount limit "
+      "(core/transverse_cracking.hpp). *Between the grips* is the same secant with the grips' "
+      "separation as the strain, the measure CalculiX gives: its column is CalculiX of the same "
+      "laminate between the grips (C3D8I, {:g} mm elements, {} per ply, ends moved along x and "
+      "free laterally) with the DEM's transverse crack planes at the peak cut in "
+      "(traction-free; planes of different 90° plies within a quarter diameter of each other "
+      "one crack through them), over the intact laminate's. {}\n\n{}{}\n{}\n",
+      100 * kSpanningFraction, fem.mesh.element_size / kMm, fem.mesh.elements_per_ply,
+      base.interface.transverse_shear
+          ? "The plies carry the laminate's transverse shear (G13, G23; interface "
+            "transverse_shear, strategies/laminate.hpp)."
+          : "The plies do not carry transverse shear (interface transverse_shear = false): the "
+            "DEM loses too much stiffness per crack (strategies/laminate.hpp).",
+      table, fem_notes.empty() ? "" : "\nCalculiX not run:\n\n" + fem_notes,
+      figure_markdown(figure, "Secant stiffness against crack density"));
+  md += "## Each laminate\n\n" + sections;
+  return out;
+}
 
 }  // namespace
 
@@ -470,7 +543,7 @@ void register_crossply_experiment(ExperimentRegistry& registry) {
   registry.add("crossply",
                "cross-ply laminates in tension to failure: first-ply failure, transverse crack "
                "density and stiffness beside shear lag and ply discount",
-               [] { return std::make_unique<CrossplyExperiment>(); });
+               parse_crossply, run_crossply, report_crossply);
 }
 
 }  // namespace plydem
