@@ -160,11 +160,11 @@ GridComparison sample_grid(const FemDisplacementField* fem, const Model& dem, in
   return out;
 }
 
+}  // namespace
+
 std::string format_mm(double metres) {
   return fmt::format("{:g}", std::round(metres * 1e6) / 1e3);
 }
-
-}  // namespace
 
 void HolePlateSettings::validate() const {
   const std::pair<const char*, double> sizes[] = {{"plate length", length},
@@ -494,78 +494,29 @@ std::string map_script(const std::string& png, const std::vector<MapPanel>& pane
   return s + "unset multiplot\n";
 }
 
-class HolePlateExperiment : public Experiment {
- public:
-  ExperimentOutput run(const ExperimentConfig& config,
-                       const ExperimentContext& context) const override;
-};
+}  // namespace
 
-ExperimentOutput HolePlateExperiment::run(const ExperimentConfig& config,
-                                          const ExperimentContext& context) const {
-  HolePlateSettings s = hole_plate_settings(config, context.quick);
-  s.calculix = context.calculix;
-  s.force = context.force;
-  const std::filesystem::path& out_dir = context.out_dir;
-  const std::string stem = config.name().empty() ? std::string("hole") : config.name();
-  const std::vector<double> angles = parse_layup(s.layup);
-  const std::string layup = format_layup(angles);
-  const std::string case_name = fmt::format("{} hole", layup);
-  const double rho =
-      s.interpolation_radius > 0 ? s.interpolation_radius : 1.5 * s.particle_diameter;
+GridComparison sample_dem_on_grid(const Model& dem, int plies, const ComparisonGrid& grid,
+                                  double hole_centre_x, double hole_centre_y, double hole_diameter,
+                                  double interpolation_radius) {
+  return sample_grid(nullptr, dem, plies, grid, hole_centre_x, hole_centre_y, hole_diameter,
+                     interpolation_radius);
+}
+
+HolePlateMaps write_hole_plate_maps(const HolePlateSettings& s, const GridComparison& plate,
+                                    const GridComparison& window, bool with_fem,
+                                    const std::filesystem::path& out_dir, const std::string& stem) {
+  HolePlateMaps maps;
+  const int plies = plate.plies;
   const double cx = 0.5 * s.length, cy = 0.5 * s.width;
-
-  const HolePlateDem dem = solve_hole_plate_dem(s);
-  const FemSolution fem = solve_hole_plate_fem(s);
-  const int plies = dem.plies;
-
-  // The full plate and a window of 4 D around the hole at half a particle diameter.
-  const ComparisonGrid plate_grid{0, s.length, 0, s.width, s.grid_spacing};
-  const double half_window = s.hole_diameter > 0 ? 2 * s.hole_diameter : 0.1 * s.width;
-  const ComparisonGrid hole_grid{std::max(0.0, cx - half_window),
-                                 std::min(s.length, cx + half_window),
-                                 std::max(0.0, cy - half_window),
-                                 std::min(s.width, cy + half_window), 0.5 * s.particle_diameter};
-  GridComparison plate, window;
-  FieldComparison at_particles;
-  if (fem.available) {
-    plate = compare_on_grid(fem.displacement, dem.model, plies, plate_grid, cx, cy, s.hole_diameter,
-                            rho);
-    window = compare_on_grid(fem.displacement, dem.model, plies, hole_grid, cx, cy, s.hole_diameter,
-                             rho);
-    at_particles = compare_displacements(fem.displacement, dem.model.particles,
-                                         0.5 * (plies - 1) * dem.model.thickness / plies);
-  } else {
-    plate = sample_grid(nullptr, dem.model, plies, plate_grid, cx, cy, s.hole_diameter, rho);
-    window = sample_grid(nullptr, dem.model, plies, hole_grid, cx, cy, s.hole_diameter, rho);
-  }
-
-  ExperimentOutput output;
-  output.title =
-      fmt::format("Hole in plate: {} {} x {} x {} mm, {} mm hole", layup, format_mm(s.length),
-                  format_mm(s.width), format_mm(s.thickness), format_mm(s.hole_diameter));
-
-  // ParaView files of the solved particle model.
-  {
-    const std::string particles = fmt::format("{}_particles.vtu", stem);
-    const std::string bonds = fmt::format("{}_bonds.vtu", stem);
-    VtkOptions vtk;
-    vtk.displacement_scale = 0;  // reference configuration; "Warp By Vector" shows the field
-    write_particles_vtu(dem.model, (out_dir / particles).string(), vtk);
-    write_bonds_vtu(dem.model, (out_dir / bonds).string(), vtk);
-    output.files.push_back(particles);
-    output.files.push_back(bonds);
-  }
-
   // Maps: DEM beside FEM, one colour scale per row.
   const std::string plate_data = fmt::format("{}_plate_map.dat", stem);
   const std::string window_data = fmt::format("{}_hole_map.dat", stem);
-  write_map_data(out_dir / plate_data, plate, fem.available);
-  write_map_data(out_dir / window_data, window, fem.available);
-  output.files.push_back(plate_data);
-  output.files.push_back(window_data);
+  write_map_data(out_dir / plate_data, plate, with_fem);
+  write_map_data(out_dir / window_data, window, with_fem);
+  maps.files.push_back(plate_data);
+  maps.files.push_back(window_data);
   const GnuplotAvailability gnuplot = gnuplot_availability();
-  std::vector<std::string> figures;
-  std::string figure_note;
   if (gnuplot.available) {
     const int top = plies - 1;
     const std::string dem_title = fmt::format("DEM ({}), top ply", s.strategy);
@@ -579,7 +530,7 @@ ExperimentOutput HolePlateExperiment::run(const ExperimentConfig& config,
         const Eigen::ArrayXXd& f = is_ux ? g->ux_fem[top] : g->uy_fem[top];
         const double shift = is_ux ? 0.0 : g->uy_shift;
         std::pair<double, double> range = range_um({&d}, shift);
-        if (fem.available) {
+        if (with_fem) {
           const std::pair<double, double> fr = range_um({&f});
           range = {std::min(range.first, fr.first), std::max(range.second, fr.second)};
         }
@@ -589,18 +540,18 @@ ExperimentOutput HolePlateExperiment::run(const ExperimentConfig& config,
                           fmt::format("{}: {}{}{}", component, dem_title, where,
                                       is_ux ? "" : " (rigid y shift removed)"),
                           range, g});
-        if (fem.available) {
+        if (with_fem) {
           panels.push_back(
               {data, fem_col, fmt::format("{}: {}{}", component, fem_title, where), range, g});
         }
       }
       const std::string png = fmt::format("{}_{}.png", stem, component);
-      run_gnuplot(map_script(png, panels, 2, fem.available ? 2 : 1, cx * 1e3, cy * 1e3,
-                             s.hole_diameter * 1e3),
-                  out_dir, fmt::format("{}_{}.gp", stem, component));
-      figures.push_back(png);
+      run_gnuplot(
+          map_script(png, panels, 2, with_fem ? 2 : 1, cx * 1e3, cy * 1e3, s.hole_diameter * 1e3),
+          out_dir, fmt::format("{}_{}.gp", stem, component));
+      maps.figures.push_back(png);
     }
-    if (fem.available) {
+    if (with_fem) {
       std::vector<MapPanel> panels;
       for (const char* component : {"ux", "uy"}) {
         const bool is_ux = component[1] == 'x';
@@ -618,155 +569,17 @@ ExperimentOutput HolePlateExperiment::run(const ExperimentConfig& config,
       const std::string png = fmt::format("{}_difference.png", stem);
       run_gnuplot(map_script(png, panels, 1, 2, cx * 1e3, cy * 1e3, s.hole_diameter * 1e3), out_dir,
                   fmt::format("{}_difference.gp", stem));
-      figures.push_back(png);
+      maps.figures.push_back(png);
     }
-    for (const std::string& f : figures) {
-      output.files.push_back(f);
-      output.files.push_back(f.substr(0, f.size() - 4) + ".gp");
+    for (const std::string& f : maps.figures) {
+      maps.files.push_back(f);
+      maps.files.push_back(f.substr(0, f.size() - 4) + ".gp");
     }
   } else {
-    figure_note = fmt::format("Figures not drawn: {}. The map data are in `{}` and `{}`.\n\n",
-                              gnuplot.message, plate_data, window_data);
+    maps.figure_note = fmt::format("Figures not drawn: {}. The map data are in `{}` and `{}`.\n\n",
+                                   gnuplot.message, plate_data, window_data);
   }
-
-  // Numbers.
-  const Material material = load_material(s.material);
-  const InPlaneConstants clt = laminate_constants(hole_plate_specimen(s).plies);
-  const double clt_stiffness = clt.Ex * s.width * s.thickness / s.length;  // no hole
-  int in_ply_bonds = 0;
-  for (int c = 0; c < dem.model.bonds.size(); ++c) in_ply_bonds += !dem.model.bonds.is_interface(c);
-  const int interface_bonds = dem.model.bonds.size() - in_ply_bonds;
-  auto max_abs = [&](const std::vector<Eigen::ArrayXXd>& fields, double shift) {
-    double m = 0;
-    for (const Eigen::ArrayXXd& a : fields)
-      for (Eigen::Index e = 0; e < a.size(); ++e)
-        if (!std::isnan(a(e))) m = std::max(m, std::abs(a(e) - shift));
-    return m;
-  };
-  const std::string dem_source = fmt::format("dem {}", s.strategy);
-  const std::string cmp_source = fmt::format("dem {} vs calculix", s.strategy);
-  auto row = [&](const std::string& quantity, const std::string& source, double value,
-                 const std::string& unit) {
-    output.rows.push_back({stem, case_name, quantity, source, value, unit});
-  };
-  row("particles", dem_source, dem.model.particles.size(), "1");
-  row("bonds", dem_source, dem.model.bonds.size(), "1");
-  row("particles removed by the hole", dem_source, dem.hole.particles, "1");
-  row("build time", dem_source, dem.build_seconds, "s");
-  row("static solve time", dem_source, dem.solve_seconds, "s");
-  row("plate stiffness", dem_source, dem.stiffness * 1e-6, "kN/mm");
-  row("plate stiffness", "clt, plate without hole", clt_stiffness * 1e-6, "kN/mm");
-  row("max ux", dem_source, max_abs(plate.ux_dem, 0) * 1e6, "um");
-  // uy about its mean: the rigid y translation is pinned differently in the two models.
-  if (fem.available) {
-    row("plate stiffness", "calculix", fem.reaction_force / fem.end_displacement * 1e-6, "kN/mm");
-    row("max ux", "calculix", max_abs(plate.ux_fem, 0) * 1e6, "um");
-    row("fem elements", "calculix", fem.elements, "1");
-    row("fem degrees of freedom", "calculix", fem.degrees_of_freedom, "1");
-    row("calculix time", "calculix", fem.solver_seconds, "s");
-    row("ux L2 error", cmp_source, 100 * plate.ux_error, "%");
-    row("uy L2 error", cmp_source, 100 * plate.uy_error, "%");
-    row("ux L2 error near the hole", cmp_source, 100 * window.ux_error, "%");
-    row("uy L2 error near the hole", cmp_source, 100 * window.uy_error, "%");
-    row("ux L2 error at the particles", cmp_source, 100 * at_particles.ux_error, "%");
-    row("uy L2 error at the particles", cmp_source, 100 * at_particles.uy_error, "%");
-  }
-
-  // The report section.
-  std::string md;
-  if (context.quick) {
-    md +=
-        "*Quick run (`--quick`): coarse particles and grids, for a first look; the numbers "
-        "below are not the experiment's.*\n\n";
-  }
-  md += fmt::format(
-      "The paper's Sec. 4 / Fig. 16 plate: {} {} (plies of {} mm), {} x {} mm, a {} mm hole "
-      "at the centre. The grips move apart by {} mm in total ({} mm each) and prescribe only ux, "
-      "so the ends contract freely; the same in both models. DEM: strategy {}, one layer per ply, "
-      "particle diameter {} mm, interface bonds {:.3g} / {:.3g} N/m^3 (normal / shear), particles "
-      "with their centre inside the hole removed, {}solved statically; its grips are the "
-      "particles within {} mm of each ply's outermost centres, each held where the rigid grip face "
-      "puts the material at its centre, ux = travel (x / L - 1/2). FEM: CalculiX, {} solid "
-      "elements, {} per ply, O-grid around the hole, grips on the end faces.\n\n",
-      layup, material.name, format_mm(s.thickness / plies), format_mm(s.length), format_mm(s.width),
-      format_mm(s.hole_diameter), format_mm(s.grip_travel), format_mm(0.5 * s.grip_travel),
-      s.strategy, format_mm(s.particle_diameter),
-      s.interface.resolved(material, s.thickness / plies).normal,
-      s.interface.resolved(material, s.thickness / plies).shear,
-      s.complete_boundary_cells ? "free edges (the hole's too) completed as boundary cells, " : "",
-      format_mm(s.grip_length > 0 ? s.grip_length : 0.6 * s.particle_diameter),
-      fem_element_name(s.fem_mesh.element), s.fem_mesh.elements_per_ply);
-  md += "| | DEM | FEM (CalculiX) |\n|---|---|---|\n";
-  const std::string na = fem.available ? "" : "not run";
-  md += fmt::format(
-      "| model | {} particles ({} removed by the hole), {} bonds ({} in plies, {} "
-      "interface) | {} |\n",
-      dem.model.particles.size(), dem.hole.particles, dem.model.bonds.size(), in_ply_bonds,
-      interface_bonds,
-      fem.available ? fmt::format("{} elements, {} nodes, {} degrees of freedom", fem.elements,
-                                  fem.nodes, fem.degrees_of_freedom)
-                    : na);
-  md += fmt::format(
-      "| solve time | build {:.2f} s, static solve {:.2f} s ({}, {} free dofs) | {} |\n",
-      dem.build_seconds, dem.solve_seconds, dem.solve.method_name, dem.solve.free_dofs,
-      fem.available
-          ? fmt::format("ccx {:.2f} s (all {:.2f} s)", fem.solver_seconds, fem.wall_seconds)
-          : na);
-  md += fmt::format("| grip force | {:.2f} N | {} |\n", dem.grip_force,
-                    fem.available ? fmt::format("{:.2f} N", fem.reaction_force) : na);
-  md += fmt::format(
-      "| plate stiffness (force / travel) | {:.3f} kN/mm | {} |\n", dem.stiffness * 1e-6,
-      fem.available ? fmt::format("{:.3f} kN/mm", fem.reaction_force / fem.end_displacement * 1e-6)
-                    : na);
-  md += fmt::format("| max ux on the grid | {:.2f} um | {} |\n", max_abs(plate.ux_dem, 0) * 1e6,
-                    fem.available ? fmt::format("{:.2f} um", max_abs(plate.ux_fem, 0) * 1e6) : na);
-  md += fmt::format(
-      "\nFor scale: the plate without the hole, by CLT (Ex = {:.3f} GPa), would "
-      "have a stiffness Ex W h / L = {:.3f} kN/mm.\n\n",
-      clt.Ex * 1e-9, clt_stiffness * 1e-6);
-  if (fem.available) {
-    md += fmt::format(
-        "Relative L2 errors of the DEM displacement against CalculiX (all plies; uy with the "
-        "rigid y translation c = {:.3g} um removed):\n\n"
-        "| where | points | ux | uy |\n|---|---|---|---|\n"
-        "| plate, grid {} x {} ({:.3g} x {:.3g} mm) | {} | {:.2f}% | {:.2f}% |\n"
-        "| near the hole, {} x {} mm, grid {} x {} | {} | {:.2f}% | {:.2f}% |\n"
-        "| at the particles | {} | {:.2f}% | {:.2f}% |\n\n",
-        plate.uy_shift * 1e6, plate.nx, plate.ny, plate.dx * 1e3, plate.dy * 1e3, plate.points,
-        100 * plate.ux_error, 100 * plate.uy_error, format_mm(hole_grid.x_max - hole_grid.x_min),
-        format_mm(hole_grid.y_max - hole_grid.y_min), window.nx, window.ny, window.points,
-        100 * window.ux_error, 100 * window.uy_error, at_particles.points,
-        100 * at_particles.ux_error, 100 * at_particles.uy_error);
-    md += fmt::format(
-        "How they are compared: a regular grid of cell centres over the plate, points inside the "
-        "hole left out. At each point and in each ply the DEM displacement is a moving "
-        "least-squares linear fit over the ply's particles within rho = {} mm (weights "
-        "(1 - r^2/rho^2)^2; exact for linear fields; 2 rho where fewer than three non-collinear "
-        "particles lie within rho, at the plate's edges); the FEM displacement is CalculiX's field "
-        "interpolated on that "
-        "ply's mid-surface. \"At the particles\" samples the FEM at each particle instead. "
-        "Maps show the top ply, the plate's surface as in the paper's Fig. 16.\n\n",
-        format_mm(rho));
-  } else {
-    md += fmt::format("**FEM column not run: {}.** The DEM field is shown alone.\n\n", fem.message);
-  }
-  md += figure_note;
-  for (const std::string& f : figures) md += fmt::format("![{}]({})\n\n", f, f);
-  md += fmt::format(
-      "ParaView: `{}_particles.vtu` (displacement, ply, group) and `{}_bonds.vtu` "
-      "(family, stiffness, force), in the reference configuration.\n",
-      stem, stem);
-  output.report_markdown = md;
-  return output;
-}
-
-}  // namespace
-
-void register_hole_experiment(ExperimentRegistry& registry) {
-  registry.add("hole",
-               "hole-in-plate (paper Fig. 16): [0/90/0] plate with a central hole, DEM "
-               "displacement field against CalculiX",
-               [] { return std::make_unique<HolePlateExperiment>(); });
+  return maps;
 }
 
 }  // namespace plydem

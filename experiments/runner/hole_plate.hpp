@@ -6,8 +6,8 @@
 /// particles inside the hole removed) is solved statically; CalculiX solves the same plate
 /// (experiments/fem/calculix.hpp), and the two displacement fields are compared on a common grid.
 ///
-/// Run it with `plydem run experiments/hole.toml` (kind `hole`); the settings and their defaults
-/// are spelled out in that file.
+/// Run it with `plydem run experiments/hole.toml` (kind `hole`, experiments/runner/
+/// hole_experiment.cpp); the settings and their defaults are spelled out in that file.
 ///
 /// Boundary conditions, the same in both models: the grips prescribe only ux, so the ends contract
 /// and shear freely; the rigid modes left are pinned without load. The FEM grips are the end
@@ -35,6 +35,7 @@
 /// compare_displacements does at the particles.
 
 #include <Eigen/Dense>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -148,7 +149,28 @@ GridComparison compare_on_grid(const FemDisplacementField& fem, const Model& dem
 /// sizes. Throws plydem::Error naming an unknown key or a bad value.
 HolePlateSettings hole_plate_settings(const ExperimentConfig& config, bool quick);
 
-/// The kind `hole` for `plydem run`.
-void register_hole_experiment(ExperimentRegistry& registry);
+/// The DEM field alone sampled on `grid` as compare_on_grid samples it (the FEM arrays NaN, no
+/// errors computed): the maps of a run without CalculiX.
+GridComparison sample_dem_on_grid(const Model& dem, int plies, const ComparisonGrid& grid,
+                                  double hole_centre_x, double hole_centre_y, double hole_diameter,
+                                  double interpolation_radius);
+
+/// What write_hole_plate_maps wrote, relative to the output folder.
+struct HolePlateMaps {
+  std::vector<std::filesystem::path> files;  ///< the map data, then each PNG and its .gp
+  std::vector<std::string> figures;          ///< the PNGs
+  std::string figure_note;  ///< why no figure was drawn (gnuplot missing), or ""
+};
+
+/// The top ply's displacement maps of the plate and of the window around the hole (`plate`,
+/// `window`; with_fem: beside CalculiX's, and DEM - FEM): STEM_plate_map.dat, STEM_hole_map.dat
+/// and, where gnuplot is installed, STEM_ux.png, STEM_uy.png, STEM_difference.png with their
+/// gnuplot scripts, in `out_dir`. Throws plydem::Error if a file cannot be written.
+HolePlateMaps write_hole_plate_maps(const HolePlateSettings& settings, const GridComparison& plate,
+                                    const GridComparison& window, bool with_fem,
+                                    const std::filesystem::path& out_dir, const std::string& stem);
+
+/// A length for the report: metres as millimetres, rounded to the micrometre ("1.5").
+std::string format_mm(double metres);
 
 }  // namespace plydem
