@@ -103,11 +103,8 @@ plydem::DofConstraints tension_constraints(const plydem::Model& model, double di
   return constraints;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  const plydem::ParallelSession session(&argc, &argv);  // PETSc and MPI under mpiexec
-  CLI::App app{"plydem_static_bench: time one static solve of a hex2d tension coupon"};
+// What the command line asked for.
+struct BenchOptions {
   double particles = 0;
   bool paper = false, json = false, markdown = false, header = false;
   int repeat = 1;
@@ -115,167 +112,221 @@ int main(int argc, char** argv) {
   std::string linear_solver = "auto";
   std::string layup;
   double length_mm = 0, width_mm = 0, diameter_mm = 0;
-  app.add_option("--particles", particles,
+};
+
+void add_options(CLI::App& app, BenchOptions& o) {
+  app.add_option("--particles", o.particles,
                  "about this many particles, in a coupon of the paper's aspect ratio");
-  app.add_flag("--paper", paper, "the paper's 10 x 0.83 mm coupon");
-  app.add_option("--length-mm", length_mm, "a coupon this long [mm] (with --width-mm)")
+  app.add_flag("--paper", o.paper, "the paper's 10 x 0.83 mm coupon");
+  app.add_option("--length-mm", o.length_mm, "a coupon this long [mm] (with --width-mm)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--width-mm", width_mm, "a coupon this wide [mm] (with --length-mm)")
+  app.add_option("--width-mm", o.width_mm, "a coupon this wide [mm] (with --length-mm)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--diameter-mm", diameter_mm, "particle diameter [mm] (default 0.05)")
+  app.add_option("--diameter-mm", o.diameter_mm, "particle diameter [mm] (default 0.05)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--method", method,
+  app.add_option("--method", o.method,
                  "auto (direct up to StaticSettings::direct_max_dofs free dofs), direct or cg")
       ->check(CLI::IsMember({"auto", "direct", "cg"}));
-  app.add_option("--linear-solver", linear_solver,
+  app.add_option("--linear-solver", o.linear_solver,
                  "the direct method's factorization: auto (by size), direct, cholmod or petsc");
-  app.add_option("--layup", layup, "a laminate of hex2d plies, e.g. \"[0/45/-45/90]s\"");
-  app.add_option("--repeat", repeat, "solve this many times, report the best repeat too")
+  app.add_option("--layup", o.layup, "a laminate of hex2d plies, e.g. \"[0/45/-45/90]s\"");
+  app.add_option("--repeat", o.repeat, "solve this many times, report the best repeat too")
       ->check(CLI::Range(1, 1000));
-  app.add_flag("--json", json, "one JSON object per line instead of text");
-  app.add_flag("--markdown", markdown, "one row of a markdown table instead of text");
-  app.add_flag("--markdown-header", header, "print the markdown table's header and exit");
+  app.add_flag("--json", o.json, "one JSON object per line instead of text");
+  app.add_flag("--markdown", o.markdown, "one row of a markdown table instead of text");
+  app.add_flag("--markdown-header", o.header, "print the markdown table's header and exit");
+}
+
+void print_markdown_header() {
+  std::cout << "| coupon [mm] | particles | bonds | free dofs | method | checks [s] | assembly [s] "
+               "| factorization [s] | solve [s] | call [s] | call CPU [s] | page faults | best "
+               "repeat: wall / CPU [s] | peak RSS [MiB] |\n"
+               "|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+}
+
+// The coupon asked for: the paper's, one of a given size, or the smallest of the paper's shape
+// holding about `particles`.
+plydem::CouponSpec coupon_of(const BenchOptions& o) {
+  const bool sized = o.length_mm > 0 || o.width_mm > 0;
+  plydem::require(static_cast<int>(o.paper) + (o.particles > 0) + sized == 1,
+                  "give one of --particles N (N > 0), --paper, or --length-mm with --width-mm");
+  plydem::require(!sized || (o.length_mm > 0 && o.width_mm > 0),
+                  "--length-mm and --width-mm go together");
+  plydem::CouponSpec spec;
+  spec.material = plydem::load_material("eglass-my750");
+  spec.ply_angle = 0;
+  spec.particle_diameter = o.diameter_mm > 0 ? o.diameter_mm * 1e-3 : kDiameter;
+  spec.length = sized ? o.length_mm * 1e-3 : kPaperLength;
+  spec.width = sized ? o.width_mm * 1e-3 : kPaperWidth;
+  if (o.particles > 0) {
+    // Sites of the hexagonal layer (at 0 deg, first site at (R, R)) with centres at least one
+    // radius inside an L x W rectangle: rows sqrt(3)/2 d apart, every other row shifted by d/2.
+    // Bisection on L for the smallest coupon of the paper's shape holding `particles`.
+    const double aspect = kPaperLength / kPaperWidth, d = spec.particle_diameter;
+    auto sites = [&](double length) {
+      const double width = length / aspect;
+      const double rows = std::floor((width - d) / (std::sqrt(3.0) / 2 * d) + 1e-9) + 1;
+      const double even = std::floor((length - d) / d + 1e-9) + 1;
+      const double odd = std::floor((length - 1.5 * d) / d + 1e-9) + 1;
+      return std::ceil(rows / 2) * even + std::floor(rows / 2) * odd;
+    };
+    double lo = 2 * d * aspect, hi = 1.0;
+    for (int k = 0; k < 100; ++k)
+      (sites(0.5 * (lo + hi)) < o.particles ? lo : hi) = 0.5 * (lo + hi);
+    spec.length = hi;
+    spec.width = hi / aspect;
+  }
+  return spec;
+}
+
+// The first solve's result and costs, and the best of the repeats.
+struct Measurement {
+  plydem::StaticResult result;
+  double build_seconds = 0;
+  double first_wall = 0, first_cpu = 0, best_wall = 1e300, best_cpu = 1e300;
+  long first_faults = 0;
+  double rss = 0;
+};
+
+// Solves `repeat` times on fresh copies of `built`.
+void time_solves(const plydem::Model& built, const plydem::CouponSpec& spec, const BenchOptions& o,
+                 Measurement& m) {
+  const plydem::DofConstraints constraints = tension_constraints(built, spec.particle_diameter);
+  plydem::StaticSettings settings;
+  settings.pin_rigid_modes = true;
+  if (o.method == "direct") settings.method = plydem::StaticMethod::kDirect;
+  if (o.method == "cg") settings.method = plydem::StaticMethod::kIterative;
+  settings.linear_solver = plydem::parse_linear_solver(o.linear_solver);
+
+  for (int k = 0; k < o.repeat; ++k) {
+    plydem::Model model = built;
+    const long faults = minor_page_faults();
+    const double cpu = cpu_seconds();
+    const auto start = Clock::now();
+    plydem::StaticResult solved = plydem::solve_static(model, constraints, settings);
+    const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+    const double used = cpu_seconds() - cpu;
+    if (k == 0) {
+      m.result = std::move(solved);
+      m.first_wall = wall;
+      m.first_cpu = used;
+      m.first_faults = minor_page_faults() - faults;
+    } else {
+      m.best_wall = std::min(m.best_wall, wall);
+      m.best_cpu = std::min(m.best_cpu, used);
+    }
+  }
+  m.rss = peak_rss_mib();
+}
+
+void print_json(const plydem::CouponSpec& spec, const plydem::Model& built, int repeat,
+                const Measurement& m) {
+  const plydem::StaticResult& r = m.result;
+  const plydem::StaticTimings& t = r.seconds;
+  nlohmann::json j;
+  j["coupon_mm"] = {spec.length * 1e3, spec.width * 1e3};
+  j["particles"] = built.particles.size();
+  j["bonds"] = built.bonds.size();
+  j["free_dofs"] = r.free_dofs;
+  j["ranks"] = plydem::mpi_size();
+  j["nonzeros"] = r.stiffness_nonzeros;
+  j["method"] = r.method == plydem::StaticMethod::kDirect ? "direct" : "CG";
+  j["solver"] = r.method_name;
+  j["factor_entries"] = r.factor_entries;
+  j["iterations"] = r.iterations;
+  j["relative_residual"] = r.relative_residual;
+  j["build_s"] = m.build_seconds;
+  j["checks_s"] = t.checks;
+  j["assembly_s"] = t.assembly;
+  j["factorization_s"] = t.factorization;
+  j["solve_s"] = t.solve;
+  j["phases_total_s"] = t.total();
+  j["call_s"] = m.first_wall;
+  j["call_cpu_s"] = m.first_cpu;
+  j["page_faults"] = m.first_faults;
+  if (repeat > 1) {
+    j["repeat"] = repeat;
+    j["best_repeat_s"] = m.best_wall;
+    j["best_repeat_cpu_s"] = m.best_cpu;
+  }
+  j["peak_rss_mib"] = m.rss;
+  std::cout << j.dump() << '\n';
+}
+
+void print_markdown_row(const plydem::CouponSpec& spec, const plydem::Model& built, int repeat,
+                        const Measurement& m) {
+  const plydem::StaticResult& r = m.result;
+  const plydem::StaticTimings& t = r.seconds;
+  const std::string method_cell =
+      r.method != plydem::StaticMethod::kDirect ? fmt::format("CG ({} iterations)", r.iterations)
+      : r.iterations > 0 ? fmt::format("{} ({} iterations)", r.method_name, r.iterations)
+                         : r.method_name;
+  const std::string best =
+      repeat > 1 ? fmt::format("{:.4f} / {:.4f} ({} runs)", m.best_wall, m.best_cpu, repeat - 1)
+                 : std::string("-");
+  std::cout << fmt::format(
+      "| {:.3g} x {:.3g} | {} | {} | {} | {} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | "
+      "{:.4f} | {} | {} | {:.0f} |\n",
+      spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(), r.free_dofs,
+      method_cell, t.checks, t.assembly, t.factorization, t.solve, m.first_wall, m.first_cpu,
+      m.first_faults, best, m.rss);
+}
+
+void print_text(const plydem::CouponSpec& spec, const plydem::Model& built, int repeat,
+                const Measurement& m) {
+  const plydem::StaticResult& r = m.result;
+  const plydem::StaticTimings& t = r.seconds;
+  std::cout << fmt::format(
+      "{:.3g} x {:.3g} mm: {} particles, {} bonds, {} free dofs, {} ({} iterations), "
+      "residual {:.2g}; build {:.3f} s\n  first solve: checks {:.4f} s, assembly {:.4f} s, "
+      "factorization {:.4f} s, solve {:.4f} s; call {:.4f} s wall, {:.4f} s CPU, {} page "
+      "faults\n",
+      spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(), r.free_dofs,
+      r.method_name, r.iterations, r.relative_residual, m.build_seconds, t.checks, t.assembly,
+      t.factorization, t.solve, m.first_wall, m.first_cpu, m.first_faults);
+  if (repeat > 1)
+    std::cout << fmt::format("  best of {} more solves: {:.4f} s wall, {:.4f} s CPU\n", repeat - 1,
+                             m.best_wall, m.best_cpu);
+  std::cout << fmt::format("  peak RSS {:.0f} MiB\n", m.rss);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const plydem::ParallelSession session(&argc, &argv);  // PETSc and MPI under mpiexec
+  CLI::App app{"plydem_static_bench: time one static solve of a hex2d tension coupon"};
+  BenchOptions o;
+  add_options(app, o);
   CLI11_PARSE(app, argc, argv);
-  if (header) {
-    std::cout
-        << "| coupon [mm] | particles | bonds | free dofs | method | checks [s] | assembly [s] "
-           "| factorization [s] | solve [s] | call [s] | call CPU [s] | page faults | best "
-           "repeat: wall / CPU [s] | peak RSS [MiB] |\n"
-           "|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+  if (o.header) {
+    print_markdown_header();
     return 0;
   }
   try {
-    const bool sized = length_mm > 0 || width_mm > 0;
-    plydem::require(static_cast<int>(paper) + (particles > 0) + sized == 1,
-                    "give one of --particles N (N > 0), --paper, or --length-mm with --width-mm");
-    plydem::require(!sized || (length_mm > 0 && width_mm > 0),
-                    "--length-mm and --width-mm go together");
-    plydem::CouponSpec spec;
-    spec.material = plydem::load_material("eglass-my750");
-    spec.ply_angle = 0;
-    spec.particle_diameter = diameter_mm > 0 ? diameter_mm * 1e-3 : kDiameter;
-    spec.length = sized ? length_mm * 1e-3 : kPaperLength;
-    spec.width = sized ? width_mm * 1e-3 : kPaperWidth;
-    if (particles > 0) {
-      // Sites of the hexagonal layer (at 0 deg, first site at (R, R)) with centres at least one
-      // radius inside an L x W rectangle: rows sqrt(3)/2 d apart, every other row shifted by d/2.
-      // Bisection on L for the smallest coupon of the paper's shape holding `particles`.
-      const double aspect = kPaperLength / kPaperWidth, d = spec.particle_diameter;
-      auto sites = [&](double length) {
-        const double width = length / aspect;
-        const double rows = std::floor((width - d) / (std::sqrt(3.0) / 2 * d) + 1e-9) + 1;
-        const double even = std::floor((length - d) / d + 1e-9) + 1;
-        const double odd = std::floor((length - 1.5 * d) / d + 1e-9) + 1;
-        return std::ceil(rows / 2) * even + std::floor(rows / 2) * odd;
-      };
-      double lo = 2 * d * aspect, hi = 1.0;
-      for (int k = 0; k < 100; ++k)
-        (sites(0.5 * (lo + hi)) < particles ? lo : hi) = 0.5 * (lo + hi);
-      spec.length = hi;
-      spec.width = hi / aspect;
-    }
+    const plydem::CouponSpec spec = coupon_of(o);
 
     // Freed memory stays with the process (no trimming, no per-allocation mmap), so that repeated
     // solves measure the arithmetic rather than the kernel's first touch of fresh pages.
     mallopt(M_MMAP_THRESHOLD, 32 << 20);
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
 
-    auto start = Clock::now();
+    Measurement m;
+    const auto start = Clock::now();
     const std::unique_ptr<plydem::Strategy> hex2d = plydem::default_registry().create("hex2d");
     const plydem::Model built =
-        layup.empty()
+        o.layup.empty()
             ? hex2d->build(spec).model
-            : plydem::build_laminate(*hex2d, {spec, plydem::parse_layup(layup), {}}).model;
-    const double build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    const plydem::DofConstraints constraints = tension_constraints(built, spec.particle_diameter);
-    plydem::StaticSettings settings;
-    settings.pin_rigid_modes = true;
-    if (method == "direct") settings.method = plydem::StaticMethod::kDirect;
-    if (method == "cg") settings.method = plydem::StaticMethod::kIterative;
-    settings.linear_solver = plydem::parse_linear_solver(linear_solver);
+            : plydem::build_laminate(*hex2d, {spec, plydem::parse_layup(o.layup), {}}).model;
+    m.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    time_solves(built, spec, o, m);
 
-    plydem::StaticResult r;
-    double first_wall = 0, first_cpu = 0, best_wall = 1e300, best_cpu = 1e300;
-    long first_faults = 0;
-    for (int k = 0; k < repeat; ++k) {
-      plydem::Model model = built;
-      const long faults = minor_page_faults();
-      const double cpu = cpu_seconds();
-      start = Clock::now();
-      plydem::StaticResult solved = plydem::solve_static(model, constraints, settings);
-      const double wall = std::chrono::duration<double>(Clock::now() - start).count();
-      const double used = cpu_seconds() - cpu;
-      if (k == 0) {
-        r = std::move(solved);
-        first_wall = wall;
-        first_cpu = used;
-        first_faults = minor_page_faults() - faults;
-      } else {
-        best_wall = std::min(best_wall, wall);
-        best_cpu = std::min(best_cpu, used);
-      }
-    }
-    const double rss = peak_rss_mib();
-
-    const plydem::StaticTimings& t = r.seconds;
     if (!plydem::is_root()) return 0;  // under mpiexec, rank 0 reports (its own time and memory)
-    if (json) {
-      nlohmann::json j;
-      j["coupon_mm"] = {spec.length * 1e3, spec.width * 1e3};
-      j["particles"] = built.particles.size();
-      j["bonds"] = built.bonds.size();
-      j["free_dofs"] = r.free_dofs;
-      j["ranks"] = plydem::mpi_size();
-      j["nonzeros"] = r.stiffness_nonzeros;
-      j["method"] = r.method == plydem::StaticMethod::kDirect ? "direct" : "CG";
-      j["solver"] = r.method_name;
-      j["factor_entries"] = r.factor_entries;
-      j["iterations"] = r.iterations;
-      j["relative_residual"] = r.relative_residual;
-      j["build_s"] = build_seconds;
-      j["checks_s"] = t.checks;
-      j["assembly_s"] = t.assembly;
-      j["factorization_s"] = t.factorization;
-      j["solve_s"] = t.solve;
-      j["phases_total_s"] = t.total();
-      j["call_s"] = first_wall;
-      j["call_cpu_s"] = first_cpu;
-      j["page_faults"] = first_faults;
-      if (repeat > 1) {
-        j["repeat"] = repeat;
-        j["best_repeat_s"] = best_wall;
-        j["best_repeat_cpu_s"] = best_cpu;
-      }
-      j["peak_rss_mib"] = rss;
-      std::cout << j.dump() << '\n';
-    } else if (markdown) {
-      const std::string method_cell =
-          r.method != plydem::StaticMethod::kDirect
-              ? fmt::format("CG ({} iterations)", r.iterations)
-          : r.iterations > 0 ? fmt::format("{} ({} iterations)", r.method_name, r.iterations)
-                             : r.method_name;
-      const std::string best =
-          repeat > 1 ? fmt::format("{:.4f} / {:.4f} ({} runs)", best_wall, best_cpu, repeat - 1)
-                     : std::string("-");
-      std::cout << fmt::format(
-          "| {:.3g} x {:.3g} | {} | {} | {} | {} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | "
-          "{:.4f} | {} | {} | {:.0f} |\n",
-          spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(),
-          r.free_dofs, method_cell, t.checks, t.assembly, t.factorization, t.solve, first_wall,
-          first_cpu, first_faults, best, rss);
+    if (o.json) {
+      print_json(spec, built, o.repeat, m);
+    } else if (o.markdown) {
+      print_markdown_row(spec, built, o.repeat, m);
     } else {
-      std::cout << fmt::format(
-          "{:.3g} x {:.3g} mm: {} particles, {} bonds, {} free dofs, {} ({} iterations), "
-          "residual {:.2g}; build {:.3f} s\n  first solve: checks {:.4f} s, assembly {:.4f} s, "
-          "factorization {:.4f} s, solve {:.4f} s; call {:.4f} s wall, {:.4f} s CPU, {} page "
-          "faults\n",
-          spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(),
-          r.free_dofs, r.method_name, r.iterations, r.relative_residual, build_seconds, t.checks,
-          t.assembly, t.factorization, t.solve, first_wall, first_cpu, first_faults);
-      if (repeat > 1)
-        std::cout << fmt::format("  best of {} more solves: {:.4f} s wall, {:.4f} s CPU\n",
-                                 repeat - 1, best_wall, best_cpu);
-      std::cout << fmt::format("  peak RSS {:.0f} MiB\n", rss);
+      print_text(spec, built, o.repeat, m);
     }
   } catch (const std::exception& e) {
     std::cerr << "plydem_static_bench: " << e.what() << '\n';

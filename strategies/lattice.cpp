@@ -703,6 +703,167 @@ PeriodicModel LatticeStrategy::periodic_sample(const OrientationModuli& moduli, 
   return periodic;
 }
 
+namespace {
+
+// Admissible laws, all linear constraints (matrix) p >= bound: E_N >= 0 along every bond of the
+// sample and along 2000 directions of a hemisphere (E_N is even in n), so that any coupon's bonds
+// are covered; E_T >= `shear_floor` in every direction, i.e. each shear coefficient >= it (a
+// particle needs some shear spring, or the spins of all particles together turn freely).
+struct LawConstraints {
+  Eigen::MatrixXd matrix;
+  Eigen::VectorXd bound;
+};
+
+LawConstraints admissible_laws(const BondLawGeometry& g, int bonds, double shear_floor) {
+  std::vector<Unknowns> rows;
+  for (const Eigen::Vector3d& d : hemisphere_directions(2000)) {
+    rows.push_back(normal_row(d(0), d(1), d(2)));
+  }
+  for (int b = 0; b < bonds; ++b) rows.push_back(normal_row(g.c(b), g.s(b), g.z(b)));
+  LawConstraints out;
+  out.matrix.resize(static_cast<Eigen::Index>(rows.size()) + 3, kUnknowns);
+  out.bound = Eigen::VectorXd::Zero(out.matrix.rows());
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    out.matrix.row(static_cast<Eigen::Index>(r)) = rows[r].transpose();
+  }
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Index r = static_cast<Eigen::Index>(rows.size()) + k;
+    out.matrix.row(r).setZero();
+    out.matrix(r, 6 + k) = 1;
+    out.bound(r) = shear_floor;
+  }
+  return out;
+}
+
+// The sample's relaxed in-plane stiffness under the law of unknowns q and, with a Jacobian, its
+// exact derivative in them: by the envelope theorem d(relaxed)/d(k) of each bond comes from the
+// relaxed bond deformations of the same solve. Counts the homogenizations in `evaluations`.
+class SampleResponse {
+ public:
+  SampleResponse(Model& model, const BondLawGeometry& g, double radius, RelaxedLayer& homogenizer,
+                 int& evaluations)
+      : model_(model),
+        g_(g),
+        radius_(radius),
+        homogenizer_(homogenizer),
+        evaluations_(evaluations) {}
+
+  Eigen::Matrix3d operator()(const Unknowns& q, Jacobian* jacobian) {
+    apply_law(moduli_of(q), g_, radius_, nullptr, model_.bonds);
+    ++evaluations_;
+    const Eigen::Matrix3d c =
+        in_plane_block(homogenizer_.relaxed(jacobian ? &sensitivity_ : nullptr, radius_));
+    if (jacobian) {
+      jacobian->setZero();
+      for (int b = 0; b < model_.bonds.size(); ++b) {
+        const Unknowns row = normal_row(g_.c(b), g_.s(b), g_.z(b));
+        const Entries dn = g_.kappa(b) * weighted_entries(sensitivity_.normal[b]);
+        const Entries ds = g_.kappa(b) * weighted_entries(sensitivity_.shear[b]);
+        *jacobian += dn * row.transpose();
+        jacobian->col(6) += g_.c(b) * g_.c(b) * ds;
+        jacobian->col(7) += g_.s(b) * g_.s(b) * ds;
+        jacobian->col(8) += g_.z(b) * g_.z(b) * ds;
+      }
+    }
+    return c;
+  }
+
+ private:
+  Model& model_;
+  const BondLawGeometry& g_;
+  double radius_;
+  RelaxedLayer& homogenizer_;
+  int& evaluations_;
+  RelaxedLayer::Sensitivity sensitivity_;
+};
+
+// What the correction reached: the law's unknowns, the sample's relaxed in-plane stiffness with
+// them, and the Gauss-Newton steps taken.
+struct LawCorrection {
+  Unknowns law;
+  Eigen::Matrix3d relaxed;
+  int iterations = 0;
+};
+
+// Gauss-Newton on the six independent entries of the relaxed in-plane stiffness (weighted to give
+// the Frobenius norm) over the eleven coefficients of the orientation law, from `origin`. The
+// system is underdetermined; each step is the smallest (relative change per coefficient) that
+// zeroes the linearized error, subject to the law staying admissible; Levenberg-Marquardt damping
+// of the relative step is raised when a step fails to lower the error, lowered when it succeeds.
+// Stops at `tolerance`, or when five steps have gained less than 0.1% of the error (the law cannot
+// get closer: the constraints hold it), or after 100 steps.
+LawCorrection correct_law(SampleResponse& evaluate, const Unknowns& origin,
+                          const LawConstraints& admissible, double shear_floor,
+                          const Eigen::Matrix3d& target, double tolerance, int particles) {
+  const double unit = origin.cwiseAbs().maxCoeff();
+  const Unknowns weight = origin.cwiseAbs().cwiseMax(0.1 * unit);
+  const Entries goal = weighted_entries(target);
+  const double goal_norm = goal.norm();
+  LawCorrection out;
+  Unknowns& p = out.law;
+  p = origin;
+  for (int k = 6; k < 9; ++k) p(k) = std::max(p(k), shear_floor);
+  Jacobian jacobian;
+  out.relaxed = evaluate(p, &jacobian);
+  Entries residual = weighted_entries(out.relaxed) - goal;
+  double damping = 1e-4;
+  int failures = 0;
+  std::vector<double> history{residual.norm()};
+  ProgressMeter meter(fmt::format("calibrating the lattice on its {}-particle sample", particles),
+                      0, "Gauss-Newton steps");
+  while (residual.norm() / goal_norm >= tolerance && out.iterations < 100 && failures < 12 &&
+         !(history.size() > 5 && history.back() > 0.999 * history[history.size() - 6])) {
+    ++out.iterations;
+    // In units of the largest paper modulus, so that the least-distance problem is well scaled.
+    Eigen::MatrixXd e(6 + kUnknowns, kUnknowns);
+    Eigen::VectorXd f(6 + kUnknowns);
+    e.topRows<6>() = jacobian * unit / goal_norm;
+    f.head<6>() = (jacobian * p - residual) / goal_norm;
+    e.bottomRows<kUnknowns>() =
+        std::sqrt(damping) * unit * weight.cwiseInverse().asDiagonal().toDenseMatrix();
+    f.tail<kUnknowns>() = std::sqrt(damping) * p.cwiseQuotient(weight);
+    const Unknowns trial =
+        unit * constrained_least_squares(e, f, admissible.matrix, admissible.bound / unit);
+    Jacobian trial_jacobian;
+    const Eigen::Matrix3d c = evaluate(trial, &trial_jacobian);
+    const Entries r = weighted_entries(c) - goal;
+    if (r.norm() < residual.norm()) {
+      p = trial;
+      out.relaxed = c;
+      residual = r;
+      jacobian = trial_jacobian;
+      damping = std::max(damping / 4, 1e-12);
+      failures = 0;
+    } else {
+      damping *= 8;
+      ++failures;
+    }
+    history.push_back(residual.norm());
+    meter.update(out.iterations, fmt::format("relative error {:.3g} (stops below {:.3g})",
+                                             residual.norm() / goal_norm, tolerance));
+  }
+  return out;
+}
+
+// The calibration's one-line account of the law and the sample.
+std::string calibration_method(const LatticeCalibration& out, bool corrected) {
+  const OrientationModuli& m = out.moduli;
+  return fmt::format(
+      "{}; E_N Bernstein coefficients (b11 b22 b33 b12 b13 b23) {:.4g} GPa, E_T (t1 t2 t3) {:.4g} "
+      "GPa, couplings {:.3g} {:.3g} GPa; periodic sample {:.3g} x {:.3g} x {:.3g} mm, {} "
+      "particles, {} bonds, coordination {:.2f}",
+      corrected ? fmt::format("lattice: eq. (15) moduli corrected on the relaxed sample in {} "
+                              "Gauss-Newton steps",
+                              out.iterations)
+                : std::string("lattice-paper: eq. (15) moduli, negative ones set to zero"),
+      fmt::join(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(m.normal.data()) * 1e-9, " "),
+      fmt::join(Eigen::Map<const Eigen::Vector3d>(m.shear.data()) * 1e-9, " "), m.coupling * 1e-9,
+      m.coupling_oblique * 1e-9, out.sample_box(0) * 1e3, out.sample_box(1) * 1e3,
+      out.sample_box(2) * 1e3, out.sample_particles, out.sample_bonds, out.sample_coordination);
+}
+
+}  // namespace
+
 LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, double ply_angle,
                                                       double thickness, double diameter,
                                                       const Eigen::Vector2d* sample_size,
@@ -737,137 +898,33 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
   const double radius = 0.5 * diameter;
 
   RelaxedLayer homogenizer(sample);
-  auto relaxed_of = [&](const OrientationModuli& moduli) {
-    apply_law(moduli, g, radius, nullptr, model.bonds);
-    ++out.evaluations;
-    return in_plane_block(homogenizer.relaxed());
-  };
-  out.relaxed_uncorrected = relaxed_of(paper);
+  apply_law(paper, g, radius, nullptr, model.bonds);
+  ++out.evaluations;
+  out.relaxed_uncorrected = in_plane_block(homogenizer.relaxed());
   out.affine_uncorrected = in_plane_block(affine_layer(model, sample.volume));
   out.moduli = paper;
   Eigen::Matrix3d relaxed = out.relaxed_uncorrected;
 
   if (corrected_) {
-    // Gauss-Newton on the six independent entries of the relaxed in-plane stiffness (weighted to
-    // give the Frobenius norm) over the eleven coefficients of the orientation law, from the
-    // paper's law. The Jacobian is exact: by the envelope theorem d(relaxed)/d(k) of each bond
-    // comes from the relaxed bond deformations of the same solve. The system is
-    // underdetermined; each step is the smallest (relative change per coefficient) that zeroes
-    // the linearized error, subject to the law staying admissible; the step is halved until the
-    // error falls.
+    // The correction starts from the paper's law (or `start_law`); the shear coefficients are
+    // held at 1% of E2 or more.
     const Unknowns origin = unknowns_of(start_law ? *start_law : paper);
-    const double unit = origin.cwiseAbs().maxCoeff();
-    const Unknowns weight = origin.cwiseAbs().cwiseMax(0.1 * unit);
-    // Admissible laws, all linear constraints: E_N >= 0 along every bond of the sample and along
-    // 2000 directions of a hemisphere (E_N is even in n), so that any coupon's bonds are covered;
-    // E_T >= 1% of E2 in every direction, i.e. each shear coefficient >= 1% of E2 (a particle
-    // needs some shear spring, or the spins of all particles together turn freely).
     const double shear_floor =
         (std::getenv("PLYDEM_FLOOR") ? std::atof(std::getenv("PLYDEM_FLOOR")) : 0.01) * material.E2;
-    std::vector<Unknowns> rows;
-    for (const Eigen::Vector3d& d : hemisphere_directions(2000)) {
-      rows.push_back(normal_row(d(0), d(1), d(2)));
-    }
-    for (int b = 0; b < model.bonds.size(); ++b) rows.push_back(normal_row(g.c(b), g.s(b), g.z(b)));
-    Eigen::MatrixXd constraint(static_cast<Eigen::Index>(rows.size()) + 3, kUnknowns);
-    Eigen::VectorXd bound = Eigen::VectorXd::Zero(constraint.rows());
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-      constraint.row(static_cast<Eigen::Index>(r)) = rows[r].transpose();
-    }
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Index r = static_cast<Eigen::Index>(rows.size()) + k;
-      constraint.row(r).setZero();
-      constraint(r, 6 + k) = 1;
-      bound(r) = shear_floor;
-    }
-    const Entries goal = weighted_entries(cal.target);
-    const double goal_norm = goal.norm();
-
-    RelaxedLayer::Sensitivity sensitivity;
-    auto evaluate = [&](const Unknowns& q, Jacobian* jacobian) {
-      apply_law(moduli_of(q), g, radius, nullptr, model.bonds);
-      ++out.evaluations;
-      const Eigen::Matrix3d c =
-          in_plane_block(homogenizer.relaxed(jacobian ? &sensitivity : nullptr, radius));
-      if (jacobian) {
-        jacobian->setZero();
-        for (int b = 0; b < model.bonds.size(); ++b) {
-          const Unknowns row = normal_row(g.c(b), g.s(b), g.z(b));
-          const Entries dn = g.kappa(b) * weighted_entries(sensitivity.normal[b]);
-          const Entries ds = g.kappa(b) * weighted_entries(sensitivity.shear[b]);
-          *jacobian += dn * row.transpose();
-          jacobian->col(6) += g.c(b) * g.c(b) * ds;
-          jacobian->col(7) += g.s(b) * g.s(b) * ds;
-          jacobian->col(8) += g.z(b) * g.z(b) * ds;
-        }
-      }
-      return c;
-    };
-    Unknowns p = origin;
-    for (int k = 6; k < 9; ++k) p(k) = std::max(p(k), shear_floor);
-    Jacobian jacobian;
-    relaxed = evaluate(p, &jacobian);
-    Entries residual = weighted_entries(relaxed) - goal;
-    // Levenberg-Marquardt damping of the relative step: raised when a step fails to lower the
-    // error, lowered when it succeeds.
-    double damping = 1e-4;
-    int failures = 0;
-    // Stops at the tolerance, or when five steps have gained less than 0.1% of the error (the law
-    // cannot get closer: the constraints hold it), or after 100 steps.
-    std::vector<double> history{residual.norm()};
-    ProgressMeter meter(
-        fmt::format("calibrating the lattice on its {}-particle sample", model.particles.size()), 0,
-        "Gauss-Newton steps");
-    while (residual.norm() / goal_norm >= tolerance_ && out.iterations < 100 && failures < 12 &&
-           !(history.size() > 5 && history.back() > 0.999 * history[history.size() - 6])) {
-      ++out.iterations;
-      // In units of the largest paper modulus, so that the least-distance problem is well scaled.
-      Eigen::MatrixXd e(6 + kUnknowns, kUnknowns);
-      Eigen::VectorXd f(6 + kUnknowns);
-      e.topRows<6>() = jacobian * unit / goal_norm;
-      f.head<6>() = (jacobian * p - residual) / goal_norm;
-      e.bottomRows<kUnknowns>() =
-          std::sqrt(damping) * unit * weight.cwiseInverse().asDiagonal().toDenseMatrix();
-      f.tail<kUnknowns>() = std::sqrt(damping) * p.cwiseQuotient(weight);
-      const Unknowns trial = unit * constrained_least_squares(e, f, constraint, bound / unit);
-      Jacobian trial_jacobian;
-      const Eigen::Matrix3d c = evaluate(trial, &trial_jacobian);
-      const Entries r = weighted_entries(c) - goal;
-      if (r.norm() < residual.norm()) {
-        p = trial;
-        relaxed = c;
-        residual = r;
-        jacobian = trial_jacobian;
-        damping = std::max(damping / 4, 1e-12);
-        failures = 0;
-      } else {
-        damping *= 8;
-        ++failures;
-      }
-      history.push_back(residual.norm());
-      meter.update(out.iterations, fmt::format("relative error {:.3g} (stops below {:.3g})",
-                                               residual.norm() / goal_norm, tolerance_));
-    }
-    out.moduli = moduli_of(p);
+    const LawConstraints admissible = admissible_laws(g, model.bonds.size(), shear_floor);
+    SampleResponse response(model, g, radius, homogenizer, out.evaluations);
+    const LawCorrection corrected = correct_law(response, origin, admissible, shear_floor,
+                                                cal.target, tolerance_, model.particles.size());
+    out.iterations = corrected.iterations;
+    relaxed = corrected.relaxed;
+    out.moduli = moduli_of(corrected.law);
     apply_law(out.moduli, g, radius, nullptr, model.bonds);
   }
   cal.relaxed = relaxed;
   cal.relaxed_error = relative_difference(relaxed, cal.target);
   cal.affine = in_plane_block(affine_layer(model, sample.volume));
   cal.families = orientation_families(model.bonds, g, ply_angle);
-  const OrientationModuli& m = out.moduli;
-  cal.method = fmt::format(
-      "{}; E_N Bernstein coefficients (b11 b22 b33 b12 b13 b23) {:.4g} GPa, E_T (t1 t2 t3) {:.4g} "
-      "GPa, couplings {:.3g} {:.3g} GPa; periodic sample {:.3g} x {:.3g} x {:.3g} mm, {} "
-      "particles, {} bonds, coordination {:.2f}",
-      corrected_ ? fmt::format("lattice: eq. (15) moduli corrected on the relaxed sample in {} "
-                               "Gauss-Newton steps",
-                               out.iterations)
-                 : std::string("lattice-paper: eq. (15) moduli, negative ones set to zero"),
-      fmt::join(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(m.normal.data()) * 1e-9, " "),
-      fmt::join(Eigen::Map<const Eigen::Vector3d>(m.shear.data()) * 1e-9, " "), m.coupling * 1e-9,
-      m.coupling_oblique * 1e-9, out.sample_box(0) * 1e3, out.sample_box(1) * 1e3,
-      out.sample_box(2) * 1e3, out.sample_particles, out.sample_bonds, out.sample_coordination);
+  cal.method = calibration_method(out, corrected_);
   out.seconds = seconds_since(start);
   return out;
 }

@@ -681,17 +681,14 @@ std::uint64_t mix64(std::uint64_t z) {
 
 }  // namespace
 
-void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
-                           const InterfaceStrength& interface, double weibull_modulus,
-                           std::uint64_t seed, const std::vector<bool>& scattered_plies,
-                           bool per_crack_site) {
+namespace {
+
+void check_strength_inputs(const Specimen& specimen, const std::vector<StrengthCalibration>& plies,
+                           const InterfaceStrength& interface, double weibull_modulus) {
   interface.validate();
   require(std::isfinite(weibull_modulus) && weibull_modulus >= 0,
           fmt::format("the Weibull modulus must be finite and >= 0 (0 = no scatter), got {}",
                       weibull_modulus));
-  Model& model = specimen.model;
-  const Particles& p = model.particles;
-  Bonds& bonds = model.bonds;
   const int ply_count = static_cast<int>(specimen.ply_calibrations.size());
   require(static_cast<int>(plies.size()) == ply_count,
           fmt::format("assign_bond_strengths: {} strength calibrations for a specimen of {} plies",
@@ -703,6 +700,92 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
                     "calibration {}",
                     k + 1, specimen.ply_calibrations[k].families.size(), plies[k].families.size()));
   }
+}
+
+// Per crack site: one Weibull draw per band parallel to a ply's fibres (bands counted from the
+// ply's lowest particle across its fibres), hashed from the seed, the ply and the band, so that
+// a bond's factor depends on where it lies, not on any order.
+class CrackSiteScatter {
+ public:
+  CrackSiteScatter(const Particles& p, const std::vector<StrengthCalibration>& plies,
+                   double weibull_modulus, double weibull_mean, std::uint64_t seed, bool active)
+      : p_(p),
+        plies_(plies),
+        weibull_modulus_(weibull_modulus),
+        weibull_mean_(weibull_mean),
+        seed_(seed),
+        across_origin_(plies.size(), std::numeric_limits<double>::infinity()) {
+    const int ply_count = static_cast<int>(plies.size());
+    if (active)
+      for (int i = 0; i < p.size(); ++i) {
+        const int k = p.ply(i);
+        if (k >= 0 && k < ply_count)
+          across_origin_[k] =
+              std::min(across_origin_[k], across(k, p.reference_position.row(i).transpose()));
+      }
+  }
+  // The factor of bond b (of ply k) in `bonds`.
+  double operator()(const Bonds& bonds, int k, int b) const {
+    const Eigen::Vector3d mid = 0.5 * (p_.reference_position.row(bonds.first(b)).transpose() +
+                                       p_.reference_position.row(bonds.second(b)).transpose());
+    const double diameter = p_.radius(bonds.first(b)) + p_.radius(bonds.second(b));
+    const long band = std::lround(2.0 * (across(k, mid) - across_origin_[k]) / diameter);
+    const std::uint64_t h =
+        mix64(seed_ ^ mix64(static_cast<std::uint64_t>(k) * 0x9e3779b97f4a7c15ULL +
+                            static_cast<std::uint64_t>(band)));
+    const double u = (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;
+    return std::pow(-std::log(u), 1.0 / weibull_modulus_) / weibull_mean_;
+  }
+
+ private:
+  double across(int k, const Eigen::Vector3d& x) const {
+    const double a = plies_[k].ply_angle;
+    return -std::sin(a) * x.x() + std::cos(a) * x.y();
+  }
+  const Particles& p_;
+  const std::vector<StrengthCalibration>& plies_;
+  double weibull_modulus_, weibull_mean_;
+  std::uint64_t seed_;
+  std::vector<double> across_origin_;
+};
+
+// An in-ply bond's strengths from its family's, scaled by its stiffness weight, its section
+// radius and its scatter factor.
+void set_ply_bond_strength(Bonds& bonds, int b, double radius, const FamilyStrength& fs,
+                           const FamilyStiffness& bulk, double scatter) {
+  // The bond's stiffness weight (boundary cells scale all four stiffnesses by it).
+  double weight = 0;
+  if (bulk.normal > 0) {
+    weight = bonds.normal_stiffness(b) / bulk.normal;
+  } else if (bulk.shear > 0) {
+    weight = bonds.shear_stiffness(b) / bulk.shear;
+  }
+  if (!(weight > 0)) return;  // the bond carries nothing
+  // Section stresses at a given strain scale as 1/R (forces as R, the section as R^2).
+  const double size = fs.radius > 0 ? fs.radius / radius : 1.0;
+  const double factor = weight * size * scatter;
+  bonds.tensile_strength(b) = fs.tensile * factor;
+  bonds.cohesion(b) = fs.cohesion * factor;
+  bonds.friction_coefficient(b) = fs.friction;
+  if (fs.fracture_energy > 0 && fs.peak_energy > 0) {
+    // kappa_u = G A_crack / E_peak: A_crack scales as weight R, E_peak as weight R^2 scatter^2.
+    bonds.ductility(b) =
+        bond_ductility(fs.fracture_energy, fs.crack_area * weight / size,
+                       fs.peak_energy * weight / (size * size) * scatter * scatter);
+  }
+}
+
+}  // namespace
+
+void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibration>& plies,
+                           const InterfaceStrength& interface, double weibull_modulus,
+                           std::uint64_t seed, const std::vector<bool>& scattered_plies,
+                           bool per_crack_site) {
+  check_strength_inputs(specimen, plies, interface, weibull_modulus);
+  Model& model = specimen.model;
+  const Particles& p = model.particles;
+  Bonds& bonds = model.bonds;
+  const int ply_count = static_cast<int>(specimen.ply_calibrations.size());
   // Interface bonds: each particle's interface area (its volume over the ply thickness) split
   // over its interface bonds, half from each end, as strategies/laminate.cpp gives them their
   // stiffness; a bond breaks when its traction F / area reaches the interface strength.
@@ -718,30 +801,8 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
   // bond's factor depends only on its row and the seed), U = (draw / 2^11 + 1/2) / 2^53 in (0, 1).
   std::mt19937_64 random(seed);
   const double weibull_mean = weibull_modulus > 0 ? std::tgamma(1.0 + 1.0 / weibull_modulus) : 1.0;
-  // Per crack site: each ply's lowest particle across its fibres, the origin of its bands.
-  std::vector<double> across_origin(ply_count, std::numeric_limits<double>::infinity());
-  auto across = [&](int k, const Eigen::Vector3d& x) {
-    const double a = plies[k].ply_angle;
-    return -std::sin(a) * x.x() + std::cos(a) * x.y();
-  };
-  if (per_crack_site && weibull_modulus > 0)
-    for (int i = 0; i < p.size(); ++i) {
-      const int k = p.ply(i);
-      if (k >= 0 && k < ply_count)
-        across_origin[k] =
-            std::min(across_origin[k], across(k, p.reference_position.row(i).transpose()));
-    }
-  auto site_scatter = [&](int k, int b) {
-    const Eigen::Vector3d mid = 0.5 * (p.reference_position.row(bonds.first(b)).transpose() +
-                                       p.reference_position.row(bonds.second(b)).transpose());
-    const double diameter = p.radius(bonds.first(b)) + p.radius(bonds.second(b));
-    const long band = std::lround(2.0 * (across(k, mid) - across_origin[k]) / diameter);
-    const std::uint64_t h =
-        mix64(seed ^ mix64(static_cast<std::uint64_t>(k) * 0x9e3779b97f4a7c15ULL +
-                           static_cast<std::uint64_t>(band)));
-    const double u = (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;
-    return std::pow(-std::log(u), 1.0 / weibull_modulus) / weibull_mean;
-  };
+  const CrackSiteScatter site_scatter(p, plies, weibull_modulus, weibull_mean, seed,
+                                      per_crack_site && weibull_modulus > 0);
   for (int b = 0; b < bonds.size(); ++b) {
     double scatter = 1.0;
     if (weibull_modulus > 0) {
@@ -774,34 +835,14 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
         !(k < static_cast<int>(scattered_plies.size()) && scattered_plies[k])) {
       scatter = 1.0;
     } else if (per_crack_site && weibull_modulus > 0) {
-      scatter = site_scatter(k, b);
+      scatter = site_scatter(bonds, k, b);
     }
     const int f = bonds.family(b);
     require(f >= 0 && f < static_cast<int>(plies[k].families.size()),
             fmt::format("assign_bond_strengths: bond {} has family {}, but ply {} has {} families",
                         b, f, k + 1, plies[k].families.size()));
-    const FamilyStrength& fs = plies[k].families[f];
-    const FamilyStiffness& bulk = specimen.ply_calibrations[k].families[f].stiffness;
-    // The bond's stiffness weight (boundary cells scale all four stiffnesses by it).
-    double weight = 0;
-    if (bulk.normal > 0) {
-      weight = bonds.normal_stiffness(b) / bulk.normal;
-    } else if (bulk.shear > 0) {
-      weight = bonds.shear_stiffness(b) / bulk.shear;
-    }
-    if (!(weight > 0)) continue;  // the bond carries nothing
-    // Section stresses at a given strain scale as 1/R (forces as R, the section as R^2).
-    const double size = fs.radius > 0 ? fs.radius / radius : 1.0;
-    const double factor = weight * size * scatter;
-    bonds.tensile_strength(b) = fs.tensile * factor;
-    bonds.cohesion(b) = fs.cohesion * factor;
-    bonds.friction_coefficient(b) = fs.friction;
-    if (fs.fracture_energy > 0 && fs.peak_energy > 0) {
-      // kappa_u = G A_crack / E_peak: A_crack scales as weight R, E_peak as weight R^2 scatter^2.
-      bonds.ductility(b) =
-          bond_ductility(fs.fracture_energy, fs.crack_area * weight / size,
-                         fs.peak_energy * weight / (size * size) * scatter * scatter);
-    }
+    set_ply_bond_strength(bonds, b, radius, plies[k].families[f],
+                          specimen.ply_calibrations[k].families[f].stiffness, scatter);
   }
 }
 
