@@ -89,7 +89,9 @@ void def_coupon_settings(py::class_<Settings>& cls) {
       .def_property(
           "linear_solver", [](const Settings& s) { return linear_solver_name(s.linear_solver); },
           [](Settings& s, const std::string& v) { s.linear_solver = parse_linear_solver(v); },
-          "static solves: 'auto' (by size), 'direct' or 'cholmod'");
+          "static solves: 'auto' (by the factor's fill and memory, and the MPI ranks), 'direct' "
+          "(plydem's supernodal Cholesky), 'cholmod' (SuiteSparse) or 'petsc' (CG + algebraic "
+          "multigrid; a build with PETSc)");
 }
 
 // The strengths and fracture energies of a laminate's interface bonds (StrengthSettings::
