@@ -56,6 +56,12 @@ void export_strength_settings(py::module_& m);  // StrengthSettings
 void export_strength_test(py::module_& m);      // strength_test
 void export_output(py::module_& m);             // write_vtu
 
+// What the backends a user chooses from are (solvers/device_backend.hpp, backend_choices()), as
+// the command line's --backend describes them.
+inline constexpr char kBackendHelp[] =
+    "'cpu' (SIMD kernel, OpenMP threads) or 'cuda' (one CUDA device; a build with "
+    "-DPLYDEM_CUDA=ON)";
+
 // A default T with the keyword arguments set as attributes (a TypeError for an unknown one).
 template <class T>
 T from_kwargs(const py::kwargs& kwargs, T value = T{}) {

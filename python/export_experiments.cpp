@@ -12,6 +12,7 @@
 #include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/strength_test.hpp"
 #include "experiments/protocols/tension_test.hpp"
+#include "solvers/device_backend.hpp"
 #include "solvers/linear_solver.hpp"
 
 namespace plydem::python {
@@ -174,6 +175,15 @@ void export_tension_test(py::module_& m) {
           "safety", [](const TensionSettings& s) { return s.explicit_settings.safety_factor; },
           [](TensionSettings& s, double v) { s.explicit_settings.safety_factor = v; },
           "explicit: time step as a fraction of the critical one")
+      .def_property(
+          "backend",
+          [](const TensionSettings& s) {
+            return std::string(to_string(s.explicit_settings.backend));
+          },
+          [](TensionSettings& s, const std::string& v) {
+            s.explicit_settings.backend = parse_backend_choice(v);
+          },
+          (std::string("explicit: where the dynamics run: ") + kBackendHelp).c_str())
       .def("validate", &TensionSettings::validate, "Raises plydem.Error naming a bad setting.");
 
   m.def(

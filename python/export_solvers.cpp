@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/model.hpp"
+#include "solvers/device_backend.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "solvers/static_solver.hpp"
 
@@ -226,18 +227,22 @@ void export_explicit_integrator(py::module_& m) {
       m, "ExplicitIntegrator",
       "Damped central differences on a Model (solvers/explicit_integrator.hpp): the same bond "
       "law as the static solve, PFC local damping, prescribed motions of boundary groups.")
-      .def(py::init(
-               [](std::shared_ptr<Model> model, double damping, double safety, double time_step) {
-                 ExplicitSettings settings;
-                 settings.local_damping = damping;
-                 settings.safety_factor = safety;
-                 settings.time_step = time_step;
-                 return std::make_unique<PyIntegrator>(std::move(model), settings);
-               }),
+      .def(py::init([](std::shared_ptr<Model> model, double damping, double safety,
+                       double time_step, const std::string& backend) {
+             ExplicitSettings settings;
+             settings.local_damping = damping;
+             settings.safety_factor = safety;
+             settings.time_step = time_step;
+             settings.backend = parse_backend_choice(backend);
+             return std::make_unique<PyIntegrator>(std::move(model), settings);
+           }),
            py::arg("model"), py::arg("damping") = 0.7, py::arg("safety") = 0.8,
-           py::arg("time_step") = 0.0,
-           "ExplicitIntegrator(model, damping=0.7, safety=0.8, time_step=0): time_step 0 = "
-           "safety times the critical step. Raises plydem.Error for bad settings or model.")
+           py::arg("time_step") = 0.0, py::arg("backend") = "cpu",
+           (std::string("ExplicitIntegrator(model, damping=0.7, safety=0.8, time_step=0, "
+                        "backend='cpu'): time_step 0 = safety times the critical step; backend: "
+                        "where the cycles run, ") +
+            kBackendHelp + ". Raises plydem.Error for bad settings or model.")
+               .c_str())
       .def_property_readonly(
           "time_step", [](const PyIntegrator& x) { return x.integrator.time_step(); }, "[s]")
       .def_property_readonly(

@@ -7,6 +7,7 @@ import json
 import math
 import os
 import pathlib
+import re
 import subprocess
 
 import numpy as np
@@ -253,6 +254,7 @@ def test_docstrings_on_everything():
     assert not missing
 
 
+
 def cli_run(*args):
     return subprocess.run([CLI, *args], capture_output=True, text=True)
 
@@ -273,6 +275,24 @@ def test_linear_solvers_are_the_cli_ones():
         cli = cli_run("tension", "--linear-solver", "nosuch")
         assert cli.returncode != 0 and str(error.value) in cli.stderr
 
+
+def test_backends_are_the_cli_ones():
+    """backend takes and names the values `plydem tension --backend` offers, nothing else."""
+    offered = re.search(r"--backend TEXT:\{([^}]*)\}", cli_run("tension", "--help").stdout)
+    assert offered and offered.group(1).split(",") == ["cpu", "cuda"]
+    model = grip_coupon()
+    for name in offered.group(1).split(","):
+        assert f"'{name}'" in plydem.TensionSettings.backend.__doc__
+        assert f"'{name}'" in plydem.ExplicitIntegrator.__init__.__doc__
+        assert plydem.TensionSettings(backend=name).backend == name
+    assert plydem.TensionSettings().backend == "cpu"
+    assert plydem.ExplicitIntegrator(model, backend="cpu").time_step > 0
+    for name in ("emulation", "gpu"):
+        assert cli_run("tension", "--solver", "explicit", "--backend", name).returncode != 0
+        with pytest.raises(plydem.Error, match=f"unknown backend '{name}': cpu or cuda"):
+            plydem.TensionSettings(backend=name)
+        with pytest.raises(plydem.Error, match=f"unknown backend '{name}': cpu or cuda"):
+            plydem.ExplicitIntegrator(model, backend=name)
 
 def test_interface_mixed_mode_settings_and_bond_fields():
     settings = plydem.StrengthSettings(interface_GIc=300.0, interface_bk_exponent=1.5)
