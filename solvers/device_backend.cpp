@@ -1,6 +1,7 @@
 #include "solvers/device_backend.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cstring>
@@ -26,6 +27,20 @@ ExplicitBackend parse_backend(const std::string& name) {
   if (name == "cuda") return ExplicitBackend::kCuda;
   if (name == "emulation") return ExplicitBackend::kDeviceEmulation;
   throw Error(fmt::format("unknown backend '{}': cpu, cuda or emulation", name));
+}
+
+const std::vector<std::string>& backend_choices() {
+  static const std::vector<std::string> choices{to_string(ExplicitBackend::kCpu),
+                                                to_string(ExplicitBackend::kCuda)};
+  return choices;
+}
+
+ExplicitBackend parse_backend_choice(const std::string& name) {
+  const std::vector<std::string>& choices = backend_choices();
+  if (std::find(choices.begin(), choices.end(), name) == choices.end()) {
+    throw Error(fmt::format("unknown backend '{}': {}", name, fmt::join(choices, " or ")));
+  }
+  return parse_backend(name);
 }
 
 void assign_events(std::vector<SlotEvent>& to, const SlotEvent* from, std::size_t count) {

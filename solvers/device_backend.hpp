@@ -35,6 +35,12 @@ enum class ExplicitBackend {
 const char* to_string(ExplicitBackend backend);
 /// Parses "cpu", "cuda" or "emulation"; throws plydem::Error naming the accepted values.
 ExplicitBackend parse_backend(const std::string& name);
+/// The backends a user chooses from, as the command line's `--backend` and Python's `backend`
+/// offer them: "cpu", "cuda". The emulation is the device's code path for tests and
+/// plydem_kernel_bench, not offered there.
+const std::vector<std::string>& backend_choices();
+/// parse_backend for one of backend_choices(); throws plydem::Error naming them for anything else.
+ExplicitBackend parse_backend_choice(const std::string& name);
 
 /// The host arrays a device backend mirrors, in kernel order (see ParticleStepView).
 struct DeviceArrays {

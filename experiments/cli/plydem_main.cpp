@@ -283,7 +283,7 @@ void add_backend_option(CLI::App& app, std::string& backend, const std::string& 
                  "where explicit dynamics run (" + needs +
                      "): cpu (SIMD kernel, OpenMP threads) or cuda (one CUDA device; a build "
                      "with -DPLYDEM_CUDA=ON)")
-      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->check(CLI::IsMember(plydem::backend_choices()))
       ->capture_default_str();
 }
 

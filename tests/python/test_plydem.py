@@ -7,6 +7,7 @@ import json
 import math
 import os
 import pathlib
+import re
 import subprocess
 
 import numpy as np
@@ -252,6 +253,46 @@ def test_docstrings_on_everything():
                     missing.append(f"{name}.{attr}")
     assert not missing
 
+
+
+def cli_run(*args):
+    return subprocess.run([CLI, *args], capture_output=True, text=True)
+
+
+def test_linear_solvers_are_the_cli_ones():
+    """linear_solver takes what `plydem tension --linear-solver` takes (the same parser) and names it."""
+    help_text = " ".join(cli_run("tension", "--help").stdout.split())
+    for cls in (plydem.TensionSettings, plydem.StrengthSettings):
+        doc = cls.linear_solver.__doc__
+        for name in ("auto", "direct", "cholmod", "petsc"):
+            assert f"{name} (" in help_text and f"'{name}'" in doc, (cls.__name__, name)
+            try:
+                assert cls(linear_solver=name).linear_solver == name
+            except plydem.Error as error:  # a build without PETSc says so, as the CLI does
+                assert name == "petsc" and "built without PETSc" in str(error)
+        with pytest.raises(plydem.Error) as error:
+            cls(linear_solver="nosuch")
+        cli = cli_run("tension", "--linear-solver", "nosuch")
+        assert cli.returncode != 0 and str(error.value) in cli.stderr
+
+
+def test_backends_are_the_cli_ones():
+    """backend takes and names the values `plydem tension --backend` offers, nothing else."""
+    offered = re.search(r"--backend TEXT:\{([^}]*)\}", cli_run("tension", "--help").stdout)
+    assert offered and offered.group(1).split(",") == ["cpu", "cuda"]
+    model = grip_coupon()
+    for name in offered.group(1).split(","):
+        assert f"'{name}'" in plydem.TensionSettings.backend.__doc__
+        assert f"'{name}'" in plydem.ExplicitIntegrator.__init__.__doc__
+        assert plydem.TensionSettings(backend=name).backend == name
+    assert plydem.TensionSettings().backend == "cpu"
+    assert plydem.ExplicitIntegrator(model, backend="cpu").time_step > 0
+    for name in ("emulation", "gpu"):
+        assert cli_run("tension", "--solver", "explicit", "--backend", name).returncode != 0
+        with pytest.raises(plydem.Error, match=f"unknown backend '{name}': cpu or cuda"):
+            plydem.TensionSettings(backend=name)
+        with pytest.raises(plydem.Error, match=f"unknown backend '{name}': cpu or cuda"):
+            plydem.ExplicitIntegrator(model, backend=name)
 
 def test_interface_mixed_mode_settings_and_bond_fields():
     settings = plydem.StrengthSettings(interface_GIc=300.0, interface_bk_exponent=1.5)
