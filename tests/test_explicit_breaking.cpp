@@ -449,7 +449,8 @@ TEST_CASE("the fused kernel breaks the bonds the reference loop breaks, at the s
 }
 
 // A coupon of `length` x `width` at 0.05 mm particles pulled to its first breaks, with one
-// thread, two threads, and two threads in Hilbert order: the same breaks and the same state.
+// thread, two and four threads, and two threads in Hilbert order: the same breaks and the same
+// state.
 void check_thread_and_order_independence(double length, double width) {
   Model m = small_coupon(length, width, 0.05e-3);
   ExplicitSettings settings;
@@ -457,10 +458,14 @@ void check_thread_and_order_independence(double length, double width) {
   const double speed = 0.02;
   const double rate = tensile_stress_per_cycle(m, speed, settings.time_step);
   set_strengths(m, 2500.37 * rate, 4000.37 * rate, 0.3, 1.0);
-  CouponRun one, two, hilbert;
+  CouponRun one, two, four, hilbert;
   {
     Threads threads(1);
     one = run_coupon(m, settings, speed, 6000, 1000);
+  }
+  {
+    Threads threads(4);
+    four = run_coupon(m, settings, speed, 6000, 1000);
   }
   {
     Threads threads(2);
@@ -469,10 +474,12 @@ void check_thread_and_order_independence(double length, double width) {
     hilbert = run_coupon(m, settings, speed, 6000, 1000);
   }
   REQUIRE(one.breaks.size() > 5);
-  CHECK(same_breaks(one.breaks, two.breaks));
-  CHECK(bitwise_equal(one.model.particles, two.model.particles));
-  CHECK(one.energy.boundary_work == two.energy.boundary_work);
-  CHECK(one.energy.released == two.energy.released);
+  for (const CouponRun* other : {&two, &four}) {
+    CHECK(same_breaks(one.breaks, other->breaks));
+    CHECK(bitwise_equal(one.model.particles, other->model.particles));
+    CHECK(one.energy.boundary_work == other->energy.boundary_work);
+    CHECK(one.energy.released == other->energy.released);
+  }
   CHECK(same_breaks(one.breaks, hilbert.breaks));
   CHECK(bitwise_equal(one.model.particles, hilbert.model.particles));
 }
