@@ -155,9 +155,9 @@ ScreenConstants screen_constants(const HalfBondFailure& f, const BondStrength& s
   const double bending = kMomentContribution * 4.0 * f.bending_stiffness / s.radius;
   const double twisting = kMomentContribution * 2.0 * f.twisting_stiffness / s.radius;
   auto square = [](double x) { return x * x; };
-  c.displacement = 2.0 * std::max(square(f.normal_stiffness / tension),
-                                  square((f.shear_stiffness + s.friction * f.normal_stiffness) /
-                                         shear));
+  c.displacement =
+      2.0 * std::max(square(f.normal_stiffness / tension),
+                     square((f.shear_stiffness + s.friction * f.normal_stiffness) / shear));
   c.rotation = 2.0 * std::max(square(bending / tension), square(twisting / shear));
   // The mixed-mode law reaches U = sqrt(x^2 + y^2) >= kappa only where max(x, y) >= kappa /
   // sqrt(2): its screen thresholds are PFC's over sqrt(2) (alpha and beta bound it already).
@@ -167,7 +167,213 @@ ScreenConstants screen_constants(const HalfBondFailure& f, const BondStrength& s
   return c;
 }
 
+// Whether the intact bonds take more distinct strengths than the types keep
+// (StrengthStorage::kAutomatic).
+bool too_many_strengths(const Bonds& bonds) {
+  std::set<std::array<std::int64_t, 8>> distinct;
+  for (int b = 0; b < bonds.size() && static_cast<int>(distinct.size()) <= kMaxTypeStrengths; ++b) {
+    if (bonds.is_broken(b)) continue;
+    distinct.insert({bits_of(bonds.strength_radius(b)), bits_of(bonds.tensile_strength(b)),
+                     bits_of(bonds.cohesion(b)), bits_of(bonds.friction_coefficient(b)),
+                     bits_of(bonds.ductility(b)), bits_of(bonds.mixed_mode_exponent(b)),
+                     bits_of(bonds.fracture_energy_ratio(b)), bits_of(bonds.peak_energy_ratio(b))});
+  }
+  return static_cast<int>(distinct.size()) > kMaxTypeStrengths;
+}
+
+// The index of the lattice direction that `normal` matches within kSameDirection, or -1.
+int find_direction(const std::vector<Eigen::Vector3d>& directions, const Eigen::Vector3d& normal) {
+  for (std::size_t d = 0; d < directions.size(); ++d) {
+    if ((directions[d] - normal).cwiseAbs().maxCoeff() < kSameDirection) return static_cast<int>(d);
+  }
+  return -1;
+}
+
+int find_direction(const std::vector<Eigen::Vector3d>& directions, const double* normal) {
+  return find_direction(directions, Eigen::Vector3d(normal[0], normal[1], normal[2]));
+}
+
+// The intact bonds' directions, both senses, if they are at most kMaxDirections; else none (an
+// irregular packing: normals are then kept exactly).
+std::vector<Eigen::Vector3d> lattice_directions(const Bonds& bonds) {
+  std::vector<Eigen::Vector3d> directions;
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_broken(b)) continue;
+    const Eigen::Vector3d normal = bonds.normal.row(b).matrix().transpose();
+    for (const Eigen::Vector3d& sensed : {normal, Eigen::Vector3d(-normal)}) {
+      if (find_direction(directions, sensed) >= 0) continue;
+      if (static_cast<int>(directions.size()) == kMaxDirections) return {};
+      directions.push_back(sensed);
+    }
+  }
+  return directions;
+}
+
+// The key under which a half-bond type of lattice direction `d` (or -1) is merged with others.
+TypeKey type_key(const HalfBondType& h, int d, const BondStrength& strength, bool breaking,
+                 bool slot_strengths) {
+  TypeKey key{d >= 0 ? d : bits_of(h.normal[0]),
+              d >= 0 ? 0 : bits_of(h.normal[1]),
+              d >= 0 ? 0 : bits_of(h.normal[2]),
+              quantize_relative(h.lever_own),
+              quantize_relative(h.lever_other),
+              quantize_relative(h.shear_stiffness),
+              quantize_relative(h.normal_excess),
+              quantize_relative(h.bending_stiffness),
+              quantize_relative(h.twisting_excess),
+              0,
+              0,
+              0,
+              0,
+              0,
+              0,
+              0,
+              0};
+  if (breaking) {
+    key[9] = bits_of(strength.radius);
+    key[10] = slot_strengths ? 0 : bits_of(strength.tensile);
+    key[11] = slot_strengths ? 0 : bits_of(strength.cohesion);
+    key[12] = bits_of(strength.friction);
+    key[13] = bits_of(strength.ductility);
+    key[14] = bits_of(strength.mixed_mode_exponent);
+    key[15] = bits_of(strength.fracture_energy_ratio);
+    key[16] = bits_of(strength.peak_energy_ratio);
+  }
+  return key;
+}
+
+// The failure data of half-bond type h of a bond of intact stiffness k (none without breaking;
+// the screen's constants only with strengths per type).
+HalfBondFailure failure_data(const HalfBondType& h, const BondStiffness& k,
+                             const BondStrength& strength, bool breaking, bool slot_strengths) {
+  HalfBondFailure f;
+  if (!breaking) return f;
+  f.lever_mean = 0.5 * (h.lever_own + h.lever_other);
+  f.lever_half_difference = 0.5 * (h.lever_other - h.lever_own);
+  f.normal_stiffness = k.normal;
+  f.shear_stiffness = k.shear;
+  f.bending_stiffness = k.bending;
+  f.twisting_stiffness = k.twisting;
+  f.strength = strength;
+  f.shear_stiffness_squared = k.shear * k.shear;
+  f.tension_threshold = f.shear_threshold = std::numeric_limits<double>::infinity();
+  if (breakable_strength(strength)) {
+    const double bending = kMomentContribution * 4.0 * k.bending / strength.radius;
+    f.bending_factor = bending * bending;
+    f.twisting_factor = kMomentContribution * 2.0 * k.twisting / strength.radius;
+    f.shear_friction = (1.0 - kScreenMargin) * strength.friction;
+  }
+  if (!slot_strengths) {
+    const ScreenConstants c = screen_constants(f, strength);
+    f.screen_displacement = c.displacement;
+    f.screen_rotation = c.rotation;
+    f.tension_threshold = c.tension;
+    f.shear_threshold = c.shear;
+  }
+  return f;
+}
+
+// Bond b's stiffnesses; for breaking the intact ones (the arrays hold (1 - damage) times them).
+BondStiffness stiffness_of(const Bonds& bonds, int b, bool breaking) {
+  const double scale = breaking ? 1.0 / (1.0 - bonds.damage(b)) : 1.0;
+  BondStiffness k;
+  k.normal = scale * bonds.normal_stiffness(b);
+  k.shear = scale * bonds.shear_stiffness(b);
+  k.bending = scale * bonds.bending_stiffness(b);
+  k.twisting = scale * bonds.twisting_stiffness(b);
+  return k;
+}
+
+// The type of bond b's first end, of stiffness k, before its normal is snapped to a direction
+// (lever_shear is left for after).
+HalfBondType first_end_type(const Bonds& bonds, int b, const BondStiffness& k) {
+  HalfBondType h;
+  h.shear_stiffness = k.shear;
+  h.normal_excess = k.normal - k.shear;
+  h.bending_stiffness = k.bending;
+  h.twisting_excess = k.twisting - k.bending;
+  for (int c = 0; c < 3; ++c) h.normal[c] = bonds.normal(b, c);
+  h.lever_own = bonds.lever_first(b);
+  h.lever_other = bonds.lever_second(b);
+  return h;
+}
+
+// The same bond seen from its other end.
+HalfBondType mirrored(HalfBondType h) {
+  for (double& x : h.normal) x = -x;
+  std::swap(h.lever_own, h.lever_other);
+  h.lever_shear = h.lever_own * h.shear_stiffness;
+  return h;
+}
+
+HalfBondLanes lanes_of(const HalfBondType& h) {
+  HalfBondLanes v;
+  for (int c = 0; c < 3; ++c) lanes::broadcast(h.normal[c], v.normal[c]);
+  lanes::broadcast(h.lever_own, v.lever_own);
+  lanes::broadcast(h.lever_other, v.lever_other);
+  lanes::broadcast(h.shear_stiffness, v.shear_stiffness);
+  lanes::broadcast(h.lever_shear, v.lever_shear);
+  lanes::broadcast(h.normal_excess, v.normal_excess);
+  lanes::broadcast(h.bending_stiffness, v.bending_stiffness);
+  lanes::broadcast(h.twisting_excess, v.twisting_excess);
+  return v;
+}
+
+HalfBondFailureLanes lanes_of(const HalfBondFailure& f) {
+  HalfBondFailureLanes w;
+  lanes::broadcast(f.lever_mean, w.lever_mean);
+  lanes::broadcast(f.lever_half_difference, w.lever_half_difference);
+  lanes::broadcast(f.normal_stiffness, w.normal_stiffness);
+  lanes::broadcast(f.screen_displacement, w.screen_displacement);
+  lanes::broadcast(f.screen_rotation, w.screen_rotation);
+  lanes::broadcast(f.tension_threshold, w.tension_threshold);
+  lanes::broadcast(f.shear_threshold, w.shear_threshold);
+  lanes::broadcast(f.shear_friction, w.shear_friction);
+  lanes::broadcast(f.bending_factor, w.bending_factor);
+  lanes::broadcast(f.twisting_factor, w.twisting_factor);
+  lanes::broadcast(f.shear_stiffness_squared, w.shear_stiffness_squared);
+  return w;
+}
+
 }  // namespace
+
+// Both ends of every intact bond, grouped by their own kernel particle (CSR): particle k's
+// entries are offset[k] .. offset[k + 1] - 1.
+struct GatherBonds::Ends {
+  std::vector<int> offset;                      // [particle + 1]
+  std::vector<int> fill;                        // [particle] its next entry to fill
+  std::vector<std::int32_t> other, type, bond;  // [entry]; bond: 2 b (first end) or 2 b + 1
+
+  // Counts the ends; throws plydem::Error for a bond that does not join two distinct particles.
+  Ends(const Bonds& bonds, const std::vector<int>& kernel_index) {
+    const int n = static_cast<int>(kernel_index.size());
+    offset.assign(n + 1, 0);
+    for (int b = 0; b < bonds.size(); ++b) {
+      const int i = bonds.first(b), j = bonds.second(b);
+      if (!(i >= 0 && i < n && j >= 0 && j < n && i != j)) {
+        throw Error(
+            fmt::format("bond {} joins particles {} and {}: not two distinct particles of "
+                        "the {} in the model",
+                        b, i, j, n));
+      }
+      if (bonds.is_broken(b)) continue;
+      ++offset[kernel_index[i] + 1];
+      ++offset[kernel_index[j] + 1];
+    }
+    std::partial_sum(offset.begin(), offset.end(), offset.begin());
+    fill.assign(offset.begin(), offset.end() - 1);
+    const std::size_t entries = static_cast<std::size_t>(offset[n]);
+    other.resize(entries);
+    type.resize(entries);
+    bond.resize(entries);
+  }
+
+  void add(int own, int other_end, std::int32_t end_bond, std::int32_t end_type) {
+    other[fill[own]] = other_end;
+    bond[fill[own]] = end_bond;
+    type[fill[own]++] = end_type;
+  }
+};
 
 GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
                          const GatherBreaking& breaking) {
@@ -180,110 +386,35 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
   breaking_ = breaking.enabled;
   softening_ = breaking.enabled && breaking.softening;
 
-  // Both ends of every intact bond, grouped by their own particle (CSR).
-  const int m = bonds.size();
-  std::vector<int> offset(n + 1, 0);
-  for (int b = 0; b < m; ++b) {
-    const int i = bonds.first(b), j = bonds.second(b);
-    if (!(i >= 0 && i < n && j >= 0 && j < n && i != j)) {
-      throw Error(
-          fmt::format("bond {} joins particles {} and {}: not two distinct particles of "
-                      "the {} in the model",
-                      b, i, j, n));
-    }
-    if (bonds.is_broken(b)) continue;
-    ++offset[kernel_index[i] + 1];
-    ++offset[kernel_index[j] + 1];
-  }
-  std::partial_sum(offset.begin(), offset.end(), offset.begin());
-  std::vector<int> fill(offset.begin(), offset.end() - 1);
-  const std::size_t entries_total = static_cast<std::size_t>(offset[n]);
-  std::vector<std::int32_t> entry_other(entries_total);
-  std::vector<std::int32_t> entry_type(entries_total);
-  std::vector<std::int32_t> entry_bond(entries_total);  // 2 b (first end) or 2 b + 1 (second)
-
+  Ends ends(bonds, kernel_index);
   // Strengths per slot when the bonds take too many distinct ones for the types.
   if (breaking_) {
     slot_strengths_ = breaking.storage == StrengthStorage::kSlots;
-    if (breaking.storage == StrengthStorage::kAutomatic) {
-      std::set<std::array<std::int64_t, 8>> distinct;
-      for (int b = 0; b < m && static_cast<int>(distinct.size()) <= kMaxTypeStrengths; ++b) {
-        if (bonds.is_broken(b)) continue;
-        distinct.insert({bits_of(bonds.strength_radius(b)), bits_of(bonds.tensile_strength(b)),
-                         bits_of(bonds.cohesion(b)), bits_of(bonds.friction_coefficient(b)),
-                         bits_of(bonds.ductility(b)), bits_of(bonds.mixed_mode_exponent(b)),
-                         bits_of(bonds.fracture_energy_ratio(b)),
-                         bits_of(bonds.peak_energy_ratio(b))});
-      }
-      slot_strengths_ = static_cast<int>(distinct.size()) > kMaxTypeStrengths;
-    }
+    if (breaking.storage == StrengthStorage::kAutomatic)
+      slot_strengths_ = too_many_strengths(bonds);
   }
+  const std::vector<Eigen::Vector3d> directions = lattice_directions(bonds);
+  std::vector<int> type_direction = assign_types(bonds, kernel_index, directions, ends);
+  lay_out_slots(ends, directions, type_direction);
+  fill_cells(ends, type_direction, bonds.size());
+  share_uniform_types();
+  if (!breaking_) failure_.assign(1, HalfBondFailure{});  // the elastic kernel reads none
+  if (!breaking_) failure_uniform_.assign(1, HalfBondFailureLanes{});
+  fill_slot_state(bonds);
+}
 
-  // The bonds' directions, both senses, if they are few.
-  std::vector<Eigen::Vector3d> directions;
-  auto find_direction = [&](const Eigen::Vector3d& normal) {
-    for (std::size_t d = 0; d < directions.size(); ++d) {
-      if ((directions[d] - normal).cwiseAbs().maxCoeff() < kSameDirection)
-        return static_cast<int>(d);
-    }
-    return -1;
-  };
-  bool few_directions = true;
-  for (int b = 0; b < m && few_directions; ++b) {
-    if (bonds.is_broken(b)) continue;
-    const Eigen::Vector3d normal = bonds.normal.row(b).matrix().transpose();
-    for (const Eigen::Vector3d& sensed : {normal, Eigen::Vector3d(-normal)}) {
-      if (find_direction(sensed) >= 0) continue;
-      if (static_cast<int>(directions.size()) == kMaxDirections) {
-        few_directions = false;
-        break;
-      }
-      directions.push_back(sensed);
-    }
-  }
-  if (!few_directions) directions.clear();
-
-  // Half-bond types, created in mirror pairs: the type of a bond's second end is the exact mirror
-  // image of its first end's (normal negated, levers swapped, the same stiffnesses and strength),
-  // so that both ends compute the same numbers (gather_breaking_block).
+// Half-bond types, created in mirror pairs: the type of a bond's second end is the exact mirror
+// image of its first end's (normal negated, levers swapped, the same stiffnesses and strength),
+// so that both ends compute the same numbers (gather_breaking_block). Returns each type's lattice
+// direction (or -1).
+std::vector<int> GatherBonds::assign_types(const Bonds& bonds, const std::vector<int>& kernel_index,
+                                           const std::vector<Eigen::Vector3d>& directions,
+                                           Ends& ends) {
   types_.assign(1, HalfBondType{});
   failure_.assign(1, HalfBondFailure{});
   std::vector<std::int32_t> mirror(1, 0);
   std::vector<int> type_direction(1, -1);
   std::unordered_map<TypeKey, std::int32_t, KeyHash> type_index;
-  auto direction_of = [&](const double* normal) {
-    return few_directions ? find_direction(Eigen::Vector3d(normal[0], normal[1], normal[2])) : -1;
-  };
-  auto key_of = [&](const HalfBondType& h, int d, const BondStrength& strength) {
-    TypeKey key{d >= 0 ? d : bits_of(h.normal[0]),
-                d >= 0 ? 0 : bits_of(h.normal[1]),
-                d >= 0 ? 0 : bits_of(h.normal[2]),
-                quantize_relative(h.lever_own),
-                quantize_relative(h.lever_other),
-                quantize_relative(h.shear_stiffness),
-                quantize_relative(h.normal_excess),
-                quantize_relative(h.bending_stiffness),
-                quantize_relative(h.twisting_excess),
-                0,
-                0,
-                0,
-                0,
-                0,
-                0,
-                0,
-                0};
-    if (breaking_) {
-      key[9] = bits_of(strength.radius);
-      key[10] = slot_strengths_ ? 0 : bits_of(strength.tensile);
-      key[11] = slot_strengths_ ? 0 : bits_of(strength.cohesion);
-      key[12] = bits_of(strength.friction);
-      key[13] = bits_of(strength.ductility);
-      key[14] = bits_of(strength.mixed_mode_exponent);
-      key[15] = bits_of(strength.fracture_energy_ratio);
-      key[16] = bits_of(strength.peak_energy_ratio);
-    }
-    return key;
-  };
   auto add_type = [&](const HalfBondType& h, int d, const HalfBondFailure& f) {
     types_.push_back(h);
     failure_.push_back(f);
@@ -291,66 +422,20 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
     mirror.push_back(0);
     return static_cast<std::int32_t>(types_.size() - 1);
   };
-  auto failure_data = [&](const HalfBondType& h, const BondStiffness& k,
-                          const BondStrength& strength) {
-    HalfBondFailure f;
-    if (!breaking_) return f;
-    f.lever_mean = 0.5 * (h.lever_own + h.lever_other);
-    f.lever_half_difference = 0.5 * (h.lever_other - h.lever_own);
-    f.normal_stiffness = k.normal;
-    f.shear_stiffness = k.shear;
-    f.bending_stiffness = k.bending;
-    f.twisting_stiffness = k.twisting;
-    f.strength = strength;
-    f.shear_stiffness_squared = k.shear * k.shear;
-    f.tension_threshold = f.shear_threshold = std::numeric_limits<double>::infinity();
-    if (breakable_strength(strength)) {
-      const double bending = kMomentContribution * 4.0 * k.bending / strength.radius;
-      f.bending_factor = bending * bending;
-      f.twisting_factor = kMomentContribution * 2.0 * k.twisting / strength.radius;
-      f.shear_friction = (1.0 - kScreenMargin) * strength.friction;
-    }
-    if (!slot_strengths_) {
-      const ScreenConstants c = screen_constants(f, strength);
-      f.screen_displacement = c.displacement;
-      f.screen_rotation = c.rotation;
-      f.tension_threshold = c.tension;
-      f.shear_threshold = c.shear;
-    }
-    return f;
-  };
-  auto mirrored = [](HalfBondType h) {
-    for (double& x : h.normal) x = -x;
-    std::swap(h.lever_own, h.lever_other);
-    h.lever_shear = h.lever_own * h.shear_stiffness;
-    return h;
-  };
-  for (int b = 0; b < m; ++b) {
+  for (int b = 0; b < bonds.size(); ++b) {
     if (bonds.is_broken(b)) continue;
     const int i = kernel_index[bonds.first(b)], j = kernel_index[bonds.second(b)];
-    // Intact stiffnesses for breaking (the arrays hold (1 - damage) times them).
-    const double scale = breaking_ ? 1.0 / (1.0 - bonds.damage(b)) : 1.0;
-    BondStiffness k;
-    k.normal = scale * bonds.normal_stiffness(b);
-    k.shear = scale * bonds.shear_stiffness(b);
-    k.bending = scale * bonds.bending_stiffness(b);
-    k.twisting = scale * bonds.twisting_stiffness(b);
-    HalfBondType h;
-    h.shear_stiffness = k.shear;
-    h.normal_excess = k.normal - k.shear;
-    h.bending_stiffness = k.bending;
-    h.twisting_excess = k.twisting - k.bending;
-    for (int c = 0; c < 3; ++c) h.normal[c] = bonds.normal(b, c);
-    h.lever_own = bonds.lever_first(b);
-    h.lever_other = bonds.lever_second(b);
-    const int d = direction_of(h.normal);
+    const BondStiffness k = stiffness_of(bonds, b, breaking_);
+    HalfBondType h = first_end_type(bonds, b, k);
+    const int d = find_direction(directions, h.normal);
     if (d >= 0)
       for (int c = 0; c < 3; ++c) h.normal[c] = directions[d](c);
     h.lever_shear = h.lever_own * h.shear_stiffness;
     const HalfBondType h_mirror = mirrored(h);
-    const int d_mirror = direction_of(h_mirror.normal);
+    const int d_mirror = find_direction(directions, h_mirror.normal);
     const BondStrength strength = breaking_ ? bond_strength(bonds, b) : BondStrength{};
-    const TypeKey key = key_of(h, d, strength), key_mirror = key_of(h_mirror, d_mirror, strength);
+    const TypeKey key = type_key(h, d, strength, breaking_, slot_strengths_);
+    const TypeKey key_mirror = type_key(h_mirror, d_mirror, strength, breaking_, slot_strengths_);
     std::int32_t t_first = 0, t_second = 0;
     if (const auto it = type_index.find(key); it != type_index.end()) {
       t_first = it->second;
@@ -359,24 +444,26 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
       t_second = jt->second;
       t_first = mirror[t_second];
     } else {
-      t_first = add_type(h, d, failure_data(h, k, strength));
-      t_second = add_type(h_mirror, d_mirror, failure_data(h_mirror, k, strength));
+      t_first = add_type(h, d, failure_data(h, k, strength, breaking_, slot_strengths_));
+      t_second = add_type(h_mirror, d_mirror,
+                          failure_data(h_mirror, k, strength, breaking_, slot_strengths_));
       mirror[t_first] = t_second;
       mirror[t_second] = t_first;
     }
     type_index.try_emplace(key, t_first);
     type_index.try_emplace(key_mirror, t_second);
-    entry_other[fill[i]] = j;
-    entry_bond[fill[i]] = 2 * b;
-    entry_type[fill[i]++] = t_first;
-    entry_other[fill[j]] = i;
-    entry_bond[fill[j]] = 2 * b + 1;
-    entry_type[fill[j]++] = t_second;
+    ends.add(i, j, 2 * b, t_first);
+    ends.add(j, i, 2 * b + 1, t_second);
   }
+  return type_direction;
+}
 
-  // Lattice slots: one slot per direction, numbered by angle (so that the slot order does not
-  // depend on the bond order), if no particle has two bonds along one direction.
-  lattice_slots_ = few_directions && !directions.empty();
+// Lattice slots: one slot per direction, numbered by angle (so that the slot order does not
+// depend on the bond order), if no particle has two bonds along one direction; `type_direction`
+// becomes each type's slot. Otherwise as many slots as the most bonds of one particle.
+void GatherBonds::lay_out_slots(const Ends& ends, const std::vector<Eigen::Vector3d>& directions,
+                                std::vector<int>& type_direction) {
+  lattice_slots_ = !directions.empty();
   if (lattice_slots_) {
     std::vector<int> by_angle(directions.size());
     std::iota(by_angle.begin(), by_angle.end(), 0);
@@ -389,10 +476,10 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
       slot_of_direction[by_angle[s]] = static_cast<int>(s);
     for (int& d : type_direction) d = d < 0 ? d : slot_of_direction[d];
     width_ = static_cast<int>(directions.size());
-    for (int k = 0; k < n && lattice_slots_; ++k) {
+    for (int k = 0; k < particles_ && lattice_slots_; ++k) {
       unsigned used = 0;
-      for (int e = offset[k]; e < offset[k + 1]; ++e) {
-        const unsigned bit = 1u << type_direction[entry_type[e]];
+      for (int e = ends.offset[k]; e < ends.offset[k + 1]; ++e) {
+        const unsigned bit = 1u << type_direction[ends.type[e]];
         if (used & bit) lattice_slots_ = false;
         used |= bit;
       }
@@ -400,68 +487,53 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
   }
   if (!lattice_slots_) {
     width_ = 0;
-    for (int k = 0; k < n; ++k) width_ = std::max(width_, offset[k + 1] - offset[k]);
+    for (int k = 0; k < particles_; ++k)
+      width_ = std::max(width_, ends.offset[k + 1] - ends.offset[k]);
   }
+}
 
+// The slot table: every end in its slot (a lattice's by direction, else by the other end's
+// index), the empty slots pointing at their own particle.
+void GatherBonds::fill_cells(const Ends& ends, const std::vector<int>& type_slot, int bond_count) {
   const std::size_t cells = static_cast<std::size_t>(width_) * padded_;
   neighbour_.resize(cells);
   type_.assign(cells, 0);
   slot_bond_.assign(cells, -1);
-  bond_cells_.assign(static_cast<std::size_t>(m), {-1, -1});
+  bond_cells_.assign(static_cast<std::size_t>(bond_count), {-1, -1});
   for (int s = 0; s < width_; ++s)
     std::iota(neighbour_.begin() + static_cast<std::ptrdiff_t>(s) * padded_,
               neighbour_.begin() + static_cast<std::ptrdiff_t>(s + 1) * padded_, 0);
   std::vector<int> entries;
-  for (int k = 0; k < n; ++k) {
-    entries.resize(offset[k + 1] - offset[k]);
-    std::iota(entries.begin(), entries.end(), offset[k]);
+  for (int k = 0; k < particles_; ++k) {
+    entries.resize(ends.offset[k + 1] - ends.offset[k]);
+    std::iota(entries.begin(), entries.end(), ends.offset[k]);
     if (!lattice_slots_) {
       std::sort(entries.begin(), entries.end(),
-                [&](int a, int b) { return entry_other[a] < entry_other[b]; });
+                [&](int a, int b) { return ends.other[a] < ends.other[b]; });
     }
     for (std::size_t r = 0; r < entries.size(); ++r) {
       const int e = entries[r];
-      const int slot = lattice_slots_ ? type_direction[entry_type[e]] : static_cast<int>(r);
+      const int slot = lattice_slots_ ? type_slot[ends.type[e]] : static_cast<int>(r);
       const std::size_t cell = static_cast<std::size_t>(slot) * padded_ + k;
-      neighbour_[cell] = entry_other[e];
-      type_[cell] = entry_type[e];
-      slot_bond_[cell] = entry_bond[e];
-      bond_cells_[entry_bond[e] >> 1][entry_bond[e] & 1] = static_cast<std::int64_t>(cell);
+      neighbour_[cell] = ends.other[e];
+      type_[cell] = ends.type[e];
+      slot_bond_[cell] = ends.bond[e];
+      bond_cells_[ends.bond[e] >> 1][ends.bond[e] & 1] = static_cast<std::int64_t>(cell);
     }
   }
+}
 
-  // The types blocks share, repeated across the lanes.
+// The types blocks share, repeated across the lanes, and each block's slots: uniform, mixed or
+// empty, and whether their other ends are consecutive.
+void GatherBonds::share_uniform_types() {
   uniform_.assign(1, HalfBondLanes{});
   failure_uniform_.assign(1, HalfBondFailureLanes{});
   std::vector<std::int32_t> uniform_index(types_.size(), 0);
   auto uniform_of = [&](std::int32_t t) {
     if (uniform_index[t] == 0) {
-      const HalfBondType& h = types_[t];
-      HalfBondLanes v;
-      for (int c = 0; c < 3; ++c) lanes::broadcast(h.normal[c], v.normal[c]);
-      lanes::broadcast(h.lever_own, v.lever_own);
-      lanes::broadcast(h.lever_other, v.lever_other);
-      lanes::broadcast(h.shear_stiffness, v.shear_stiffness);
-      lanes::broadcast(h.lever_shear, v.lever_shear);
-      lanes::broadcast(h.normal_excess, v.normal_excess);
-      lanes::broadcast(h.bending_stiffness, v.bending_stiffness);
-      lanes::broadcast(h.twisting_excess, v.twisting_excess);
       uniform_index[t] = static_cast<std::int32_t>(uniform_.size());
-      uniform_.push_back(v);
-      const HalfBondFailure& f = failure_[t];
-      HalfBondFailureLanes w;
-      lanes::broadcast(f.lever_mean, w.lever_mean);
-      lanes::broadcast(f.lever_half_difference, w.lever_half_difference);
-      lanes::broadcast(f.normal_stiffness, w.normal_stiffness);
-      lanes::broadcast(f.screen_displacement, w.screen_displacement);
-      lanes::broadcast(f.screen_rotation, w.screen_rotation);
-      lanes::broadcast(f.tension_threshold, w.tension_threshold);
-      lanes::broadcast(f.shear_threshold, w.shear_threshold);
-      lanes::broadcast(f.shear_friction, w.shear_friction);
-      lanes::broadcast(f.bending_factor, w.bending_factor);
-      lanes::broadcast(f.twisting_factor, w.twisting_factor);
-      lanes::broadcast(f.shear_stiffness_squared, w.shear_stiffness_squared);
-      failure_uniform_.push_back(w);
+      uniform_.push_back(lanes_of(types_[t]));
+      failure_uniform_.push_back(lanes_of(failure_[t]));
     }
     return uniform_index[t];
   };
@@ -478,10 +550,11 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
       block_run_[cell] = block_run_of(b, s);
     }
   }
-  if (!breaking_) failure_.assign(1, HalfBondFailure{});  // the elastic kernel reads none
-  if (!breaking_) failure_uniform_.assign(1, HalfBondFailureLanes{});
+}
 
-  // Per-slot strengths and softening state, both ends of a bond alike.
+// Per-slot strengths and softening state, both ends of a bond alike.
+void GatherBonds::fill_slot_state(const Bonds& bonds) {
+  const std::size_t cells = static_cast<std::size_t>(width_) * padded_;
   if (slot_strengths_) {
     slot_alpha_ = lanes::Array(cells);
     slot_beta_ = lanes::Array(cells);
@@ -494,7 +567,7 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
     slot_damage_ = lanes::Array(cells);
     slot_kappa_ = lanes::Array(cells);
   }
-  for (int b = 0; b < m && (slot_strengths_ || softening_); ++b) {
+  for (int b = 0; b < bonds.size() && (slot_strengths_ || softening_); ++b) {
     if (bonds.is_broken(b)) continue;
     const BondStrength strength = bond_strength(bonds, b);
     const ScreenConstants screen = screen_constants(failure_[type_[bond_cells_[b][0]]], strength);

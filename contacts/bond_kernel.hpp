@@ -306,6 +306,16 @@ class GatherBonds {
   lanes::Array slot_alpha_, slot_beta_, slot_tension_, slot_shear_;  // [cell], strengths per slot
   std::vector<double> slot_tensile_, slot_cohesion_;                 // [cell], strengths per slot
   lanes::Array slot_damage_, slot_kappa_;                            // [cell], softening
+
+  // The constructor's steps (bond_kernel.cpp).
+  struct Ends;
+  std::vector<int> assign_types(const Bonds& bonds, const std::vector<int>& kernel_index,
+                                const std::vector<Eigen::Vector3d>& directions, Ends& ends);
+  void lay_out_slots(const Ends& ends, const std::vector<Eigen::Vector3d>& directions,
+                     std::vector<int>& type_direction);
+  void fill_cells(const Ends& ends, const std::vector<int>& type_slot, int bond_count);
+  void share_uniform_types();
+  void fill_slot_state(const Bonds& bonds);
 };
 
 /// Displacements and rotations in kernel order: component c of particle k is `displacement[c][k]`.

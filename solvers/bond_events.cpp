@@ -287,13 +287,38 @@ class UnitLoadSolver {
       stale_ = true;
       return;
     }
-    const std::array<int, 12> dofs = bond_dofs(model.bonds, b);
+    ChangeColumns change;
+    if (!change_columns(model, b, removed, change)) return;
+    if (rank_ + change.v.cols() > max_rank_) {
+      stale_ = true;
+      return;
+    }
+    if (!append_columns(change, solve_columns(change))) stale_ = true;
+  }
+
+  // One change's part of V, W and the right-hand side (see the class comment), on its active dofs.
+  struct ChangeColumns {
+    std::array<int, 12> dofs{};   // the bond's dofs (bond_dofs)
+    std::array<int, 12> local{};  // the bond's active dofs, as rows 0..na-1 of its stiffness
+    int na = 0;
+    Eigen::MatrixXd v;      // na x q: the columns of V
+    Eigen::VectorXd w;      // q: the weights W
+    Eigen::VectorXd a, y0;  // q: a and V^T u0
+  };
+
+  // The columns of bond b's change `removed`; false if there are none (the load does not reach
+  // the bond's dofs, or nothing is removed).
+  bool change_columns(const Model& model, int b, const BondParameters& removed,
+                      ChangeColumns& out) const {
+    out.dofs = bond_dofs(model.bonds, b);
+    const std::array<int, 12>& dofs = out.dofs;
+    std::array<int, 12>& local = out.local;
     const Matrix12d k = symmetric_bond_stiffness(removed);
-    std::array<int, 12> local{};  // the bond's active dofs, as rows 0..na-1 of k
     int na = 0;
     for (int r = 0; r < 12; ++r)
       if (active_of_dof_[dofs[r]] >= 0) local[na++] = r;
-    if (na == 0) return;  // the load does not reach this bond's dofs
+    out.na = na;
+    if (na == 0) return false;  // the load does not reach this bond's dofs
 
     // Delta K on the active dofs, its right-hand side part (Delta K)_fp g, and the scaling D.
     Eigen::MatrixXd m(na, na);
@@ -310,35 +335,43 @@ class UnitLoadSolver {
     const Eigen::MatrixXd scaled = d.asDiagonal() * m * d.asDiagonal();
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
     const double largest = eigen.eigenvalues().maxCoeff();
-    if (!(largest > 0)) return;
+    if (!(largest > 0)) return false;
     std::vector<int> kept;
     for (int e = 0; e < na; ++e)
       if (eigen.eigenvalues()(e) > 1e-12 * largest) kept.push_back(e);
     const int q = static_cast<int>(kept.size());
-    if (rank_ + q > max_rank_) {
-      stale_ = true;
-      return;
-    }
-    Eigen::MatrixXd v(na, q), qk(na, q);
-    Eigen::VectorXd w(q);
+    Eigen::MatrixXd qk(na, q);
+    out.w.resize(q);
     for (int e = 0; e < q; ++e) {
       qk.col(e) = eigen.eigenvectors().col(kept[e]);
-      w(e) = eigen.eigenvalues()(kept[e]);
+      out.w(e) = eigen.eigenvalues()(kept[e]);
     }
-    v = d.cwiseInverse().asDiagonal() * qk;
-    const Eigen::VectorXd a = qk.transpose() * d.cwiseProduct(db);
+    out.v = d.cwiseInverse().asDiagonal() * qk;
+    out.a = qk.transpose() * d.cwiseProduct(db);
     Eigen::VectorXd u0_local(na);
     for (int r = 0; r < na; ++r) u0_local(r) = u0_(dofs[local[r]]);
-    const Eigen::VectorXd y0 = v.transpose() * u0_local;
+    out.y0 = out.v.transpose() * u0_local;
+    return true;
+  }
 
-    // Z = K0^-1 V, on the active dofs.
+  // Z = K0^-1 V for one change's columns, on the active dofs.
+  Eigen::MatrixXd solve_columns(const ChangeColumns& change) const {
+    const Eigen::Index q = change.v.cols();
     Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(free_count_, q);
-    for (int r = 0; r < na; ++r) rhs.row(free_of_dof_[dofs[local[r]]]) = v.row(r);
+    for (int r = 0; r < change.na; ++r)
+      rhs.row(free_of_dof_[change.dofs[change.local[r]]]) = change.v.row(r);
     system_->solve_free_in_place(rhs);
     Eigen::MatrixXd z(active_dofs_.size(), q);
     for (std::size_t k2 = 0; k2 < active_dofs_.size(); ++k2)
       z.row(k2) = rhs.row(free_of_active_[k2]);
+    return z;
+  }
 
+  // Appends one change's columns (Z = K0^-1 V) to Z, G, a, V^T u0 and the Cholesky factor of C;
+  // false, leaving them as they were, where the factor would be inaccurate.
+  bool append_columns(const ChangeColumns& change, const Eigen::MatrixXd& z) {
+    const int q = static_cast<int>(change.v.cols());
+    const Eigen::MatrixXd& v = change.v;
     // G's new columns: V_s^T Z over every earlier change s, and this change's own block.
     const int r0 = rank_;
     Eigen::MatrixXd g_cross(r0, q);
@@ -350,10 +383,10 @@ class UnitLoadSolver {
     Term term;
     term.column = r0;
     term.v = v;
-    term.rows.resize(na);
-    Eigen::MatrixXd z_own(na, q);
-    for (int r = 0; r < na; ++r) {
-      term.rows[r] = active_of_dof_[dofs[local[r]]];
+    term.rows.resize(change.na);
+    Eigen::MatrixXd z_own(change.na, q);
+    for (int r = 0; r < change.na; ++r) {
+      term.rows[r] = active_of_dof_[change.dofs[change.local[r]]];
       z_own.row(r) = z.row(term.rows[r]);
     }
     Eigen::MatrixXd g_own = v.transpose() * z_own;
@@ -363,7 +396,7 @@ class UnitLoadSolver {
     Eigen::MatrixXd x = -g_cross;
     if (r0 > 0) l_.topLeftCorner(r0, r0).triangularView<Eigen::Lower>().solveInPlace(x);
     Eigen::MatrixXd c22 = -g_own;
-    c22.diagonal() += w.cwiseInverse();
+    c22.diagonal() += change.w.cwiseInverse();
     const Eigen::MatrixXd schur = c22 - x.transpose() * x;
     const Eigen::LLT<Eigen::MatrixXd> llt(schur);
     // C <= W^-1, and a pivot far below its column's W^-1 is lost to cancellation: the current
@@ -371,11 +404,9 @@ class UnitLoadSolver {
     // inaccurate there. Factor the current stiffness instead.
     const Eigen::MatrixXd l22 = llt.matrixL();
     bool accurate = llt.info() == Eigen::Success;
-    for (int e = 0; accurate && e < q; ++e) accurate = l22(e, e) * l22(e, e) * w(e) > kPivotFloor;
-    if (!accurate) {
-      stale_ = true;
-      return;
-    }
+    for (int e = 0; accurate && e < q; ++e)
+      accurate = l22(e, e) * l22(e, e) * change.w(e) > kPivotFloor;
+    if (!accurate) return false;
 
     reserve(r0 + q);
     z_.middleCols(r0, q) = z;
@@ -385,10 +416,11 @@ class UnitLoadSolver {
     l_.block(r0, 0, q, r0) = x.transpose();
     l_.block(0, r0, r0, q).setZero();
     l_.block(r0, r0, q, q) = l22;
-    a_.segment(r0, q) = a;
-    y0_.segment(r0, q) = y0;
+    a_.segment(r0, q) = change.a;
+    y0_.segment(r0, q) = change.y0;
     terms_.push_back(std::move(term));
     rank_ = r0 + q;
+    return true;
   }
 
   struct Term {
@@ -648,104 +680,133 @@ bool fix_loose_pieces(const Model& model, const Eigen::VectorXd& u, int& cluster
   return changed;
 }
 
-}  // namespace
+// The event sequence of run_events (bond_events.hpp): the equilibrium at unit load, its critical
+// state, the bond that fails there, and the stop rules; the unit-load solver keeps the factor up
+// to date with the bonds' changes.
+class EventLoop {
+ public:
+  EventLoop(Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
+            const EventSettings& settings, Clock::time_point start)
+      : model_(model),
+        reaction_dofs_(reaction_dofs),
+        settings_(settings),
+        start_(start),
+        solver_(settings, unit) {
+    std::vector<int> label;
+    clusters_ = intact_clusters(model, label);
+    const Bonds& bonds = model.bonds;
+    for (int b = 0; b < bonds.size(); ++b) broken_ += bonds.is_broken(b) ? 1 : 0;
+  }
 
-EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
-                        const EventSettings& settings, const EventsState* resume) {
-  const auto start = Clock::now();
-  settings.validate();
-  check_inputs(model, unit, reaction_dofs);
-  Bonds& bonds = model.bonds;
-  const double r = settings.tooth_stiffness_ratio;
-
-  EventsResult result;
-  UnitLoadSolver solver(settings, unit);
-  std::vector<int> label;
-  int clusters = intact_clusters(model, label);
-  int broken = 0;
-  for (int b = 0; b < bonds.size(); ++b) broken += bonds.is_broken(b) ? 1 : 0;
-
-  Eigen::VectorXd u, critical_u;
-  UnitState state;
-  DofArray critical_force;
-  double critical_lambda = 1, first_energy = -1, previous_energy = 0, peak_reaction = 0;
-  std::string pending_stop;
-  double last_progress = 0;
-  long events = 0;
-  if (resume) {
-    const EventsState& r = *resume;
-    const int n = model.particles.size();
+  // Continues the run that saved `r` (EventSettings::on_checkpoint).
+  void resume(const EventsState& r) {
+    const int n = model_.particles.size();
     require(
         r.critical_u.size() == kDofsPerParticle * n && r.critical_force.rows() == n &&
             r.constraints.fixed.rows() == n && r.constraints.value.rows() == n &&
             (r.stale || (r.factored_from.fixed.rows() == n && r.factored_from.value.rows() == n)),
         fmt::format("events: the state to resume is for another model ({} particles here)", n));
-    result.path = r.result.path;
-    result.breaks = r.result.breaks;
-    result.peak = r.result.peak;
-    result.solves = r.result.solves;
-    result.dissipated_energy = r.result.dissipated_energy;
-    clusters = r.clusters;
-    broken = r.broken;
-    critical_u = r.critical_u;
-    critical_force = r.critical_force;
-    critical_lambda = r.critical_lambda;
-    first_energy = r.first_energy;
-    previous_energy = r.previous_energy;
-    peak_reaction = r.peak_reaction;
-    pending_stop = r.pending_stop;
-    events = r.events;
-    solver.restore(model, r);
+    result_.path = r.result.path;
+    result_.breaks = r.result.breaks;
+    result_.peak = r.result.peak;
+    result_.solves = r.result.solves;
+    result_.dissipated_energy = r.result.dissipated_energy;
+    clusters_ = r.clusters;
+    broken_ = r.broken;
+    critical_u_ = r.critical_u;
+    critical_force_ = r.critical_force;
+    critical_lambda_ = r.critical_lambda;
+    first_energy_ = r.first_energy;
+    previous_energy_ = r.previous_energy;
+    peak_reaction_ = r.peak_reaction;
+    pending_stop_ = r.pending_stop;
+    events_ = r.events;
+    solver_.restore(model_, r);
   }
 
-  while (true) {
-    if (events == 0) {
-      solver.solve(model, u);  // errors here are the caller's: bad constraints
-    } else {
-      try {
-        solver.solve(model, u);
-      } catch (const Error& e) {  // a factorization after breaks found a mechanism
-        result.stop = "failed";
-        result.message = e.what();
+  EventsResult run() {
+    while (true) {
+      if (!solve()) break;
+      ++result_.solves;
+      evaluate(model_, u_, reaction_dofs_, settings_, state_);
+      if (events_ > 0)
+        result_.dissipated_energy +=
+            critical_lambda_ * critical_lambda_ * (previous_energy_ - state_.energy);
+      if (!pending_stop_.empty()) {
+        result_.stop = pending_stop_;
         break;
       }
+      if (first_energy_ < 0) first_energy_ = state_.energy;
+      if (events_ > 0 && state_.energy <= kCollapsedEnergy * first_energy_) {
+        result_.stop = "failed";
+        break;
+      }
+      const int b = critical_bond(state_);
+      if (b < 0) {
+        result_.stop = "no bond loaded";
+        break;
+      }
+      // The bond fails at the critical state: a tooth of stiffness, or all of it.
+      const bool breaks = !softening(state_.ductility[b]) || last_tooth(model_.bonds, b, settings_);
+      const EventPoint point = critical_state(b, breaks);
+      fail(b, breaks, point);
+      after_event(point);
     }
-    ++result.solves;
-    evaluate(model, u, reaction_dofs, settings, state);
-    if (events > 0)
-      result.dissipated_energy +=
-          critical_lambda * critical_lambda * (previous_energy - state.energy);
-    if (!pending_stop.empty()) {
-      result.stop = pending_stop;
-      break;
-    }
-    if (first_energy < 0) first_energy = state.energy;
-    if (events > 0 && state.energy <= kCollapsedEnergy * first_energy) {
-      result.stop = "failed";
-      break;
-    }
-    const int b = critical_bond(state);
-    if (b < 0) {
-      result.stop = "no bond loaded";
-      break;
-    }
+    finish();
+    return result_;
+  }
 
-    // The critical state.
-    ++events;
-    const double lambda = state.factor[b];
-    const BondState mode = state.mode[b];
+ private:
+  // The unit-load solution into u_; false (the run stopped) if a factorization after breaks
+  // found a mechanism.
+  bool solve() {
+    if (events_ == 0) {
+      solver_.solve(model_, u_);  // errors here are the caller's: bad constraints
+      return true;
+    }
+    try {
+      solver_.solve(model_, u_);
+    } catch (const Error& e) {  // a factorization after breaks found a mechanism
+      result_.stop = "failed";
+      result_.message = e.what();
+      return false;
+    }
+    return true;
+  }
+
+  // The critical state at which bond b fails: logged in the path (and the peak), and shown to
+  // EventSettings::on_event.
+  EventPoint critical_state(int b, bool breaks) {
+    ++events_;
+    const double lambda = state_.factor[b];
     EventPoint point;
-    point.event = events;
+    point.event = events_;
     point.load_factor = lambda;
-    point.reaction = lambda * state.reaction;
+    point.reaction = lambda * state_.reaction;
     point.bond = b;
-    point.strain_energy = lambda * lambda * state.energy;
-    critical_u = u;
-    critical_force = state.force;
-    critical_lambda = lambda;
-    previous_energy = state.energy;
+    point.strain_energy = lambda * lambda * state_.energy;
+    critical_u_ = u_;
+    critical_force_ = state_.force;
+    critical_lambda_ = lambda;
+    previous_energy_ = state_.energy;
+    point.broken = broken_ + (breaks ? 1 : 0);
+    result_.path.push_back(point);
+    const int index = static_cast<int>(result_.path.size()) - 1;
+    if (result_.peak < 0 || std::abs(point.reaction) > peak_reaction_) {
+      result_.peak = index;
+      peak_reaction_ = std::abs(point.reaction);
+    }
+    if (settings_.on_event) {
+      write_state(model_.particles, lambda, u_, state_.force);
+      settings_.on_event(model_, point);
+    }
+    return point;
+  }
 
-    // The bond fails: a tooth of stiffness, or all of it.
+  // Bond b breaks (all its stiffness) or loses a tooth, and the solver hears of the change.
+  void fail(int b, bool breaks, const EventPoint& point) {
+    Bonds& bonds = model_.bonds;
+    const double r = settings_.tooth_stiffness_ratio;
     const BondParameters before = bond_parameters(bonds, b);
     EventChange change;
     change.bond = b;
@@ -758,44 +819,14 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
       v[5] = bonds.state(b);
     };
     fields(change.before);
-    const bool breaks = !softening(state.ductility[b]) || last_tooth(bonds, b, settings);
     const double keep = breaks ? 0.0 : r;
     BondParameters removed = before;
     removed.normal_stiffness *= 1 - keep;
     removed.shear_stiffness *= 1 - keep;
     removed.bending_stiffness *= 1 - keep;
     removed.twisting_stiffness *= 1 - keep;
-    point.broken = broken + (breaks ? 1 : 0);
-    result.path.push_back(point);
-    const int index = static_cast<int>(result.path.size()) - 1;
-    if (result.peak < 0 || std::abs(point.reaction) > peak_reaction) {
-      result.peak = index;
-      peak_reaction = std::abs(point.reaction);
-    }
-    if (settings.on_event) {
-      write_state(model.particles, lambda, u, state.force);
-      settings.on_event(model, point);
-    }
-
     if (breaks) {
-      bonds.normal_stiffness(b) = 0;
-      bonds.shear_stiffness(b) = 0;
-      bonds.bending_stiffness(b) = 0;
-      bonds.twisting_stiffness(b) = 0;
-      bonds.damage(b) = 1;
-      bonds.state(b) = static_cast<int>(mode);
-      ++broken;
-      BondBreak record;
-      record.bond = b;
-      record.mode = mode;
-      record.at = static_cast<double>(events);
-      record.load = lambda;
-      const int i = bonds.first(b);
-      record.position = model.particles.reference_position.row(i).transpose().matrix() +
-                        bonds.lever_first(b) * bonds.normal.row(b).transpose().matrix();
-      result.breaks.push_back(record);
-      DofConstraints constraints = solver.constraints();
-      if (fix_loose_pieces(model, u, clusters, constraints)) solver.set_constraints(constraints);
+      break_bond(b, point);
     } else {
       bonds.normal_stiffness(b) *= r;
       bonds.shear_stiffness(b) *= r;
@@ -808,51 +839,117 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
     change.removed[1] = removed.shear_stiffness;
     change.removed[2] = removed.bending_stiffness;
     change.removed[3] = removed.twisting_stiffness;
-    solver.change(model, b, removed, change);
-
-    const double elapsed = seconds_since(start);
-    if (settings.on_progress && elapsed - last_progress >= settings.progress_seconds) {
-      last_progress = elapsed;
-      settings.on_progress({events, broken, lambda, peak_reaction, elapsed});
-    }
-    if (index > result.peak && std::abs(point.reaction) < settings.stop_fraction * peak_reaction)
-      pending_stop = "failed";
-    else if (events >= settings.max_events)
-      pending_stop = "event limit";
-    if (pending_stop.empty() && settings.stop_after)
-      pending_stop = settings.stop_after(model, point);
-    if (settings.checkpoint_every > 0 && settings.on_checkpoint &&
-        events % settings.checkpoint_every == 0) {
-      EventsState s;
-      s.events = events;
-      s.broken = broken;
-      s.clusters = clusters;
-      s.critical_u = critical_u;
-      s.critical_force = critical_force;
-      s.critical_lambda = critical_lambda;
-      s.first_energy = first_energy;
-      s.previous_energy = previous_energy;
-      s.peak_reaction = peak_reaction;
-      s.pending_stop = pending_stop;
-      s.result.path = result.path;
-      s.result.breaks = result.breaks;
-      s.result.peak = result.peak;
-      s.result.solves = result.solves;
-      s.result.dissipated_energy = result.dissipated_energy;
-      solver.save(s);
-      settings.on_checkpoint(model, s);
-    }
+    solver_.change(model_, b, removed, change);
   }
 
-  if (events > 0)
-    write_state(model.particles, critical_lambda, critical_u, critical_force);
-  else
-    write_state(model.particles, 1.0, u, state.force);
-  result.factorizations = solver.factorizations();
-  result.wall_seconds = seconds_since(start);
-  if (settings.on_progress)
-    settings.on_progress({events, broken, critical_lambda, peak_reaction, result.wall_seconds});
-  return result;
+  // Bond b breaks: no stiffness left, logged at its contact point, and the pieces that came loose
+  // are fixed.
+  void break_bond(int b, const EventPoint& point) {
+    Bonds& bonds = model_.bonds;
+    const BondState mode = state_.mode[b];
+    bonds.normal_stiffness(b) = 0;
+    bonds.shear_stiffness(b) = 0;
+    bonds.bending_stiffness(b) = 0;
+    bonds.twisting_stiffness(b) = 0;
+    bonds.damage(b) = 1;
+    bonds.state(b) = static_cast<int>(mode);
+    ++broken_;
+    BondBreak record;
+    record.bond = b;
+    record.mode = mode;
+    record.at = static_cast<double>(point.event);
+    record.load = point.load_factor;
+    const int i = bonds.first(b);
+    record.position = model_.particles.reference_position.row(i).transpose().matrix() +
+                      bonds.lever_first(b) * bonds.normal.row(b).transpose().matrix();
+    result_.breaks.push_back(record);
+    DofConstraints constraints = solver_.constraints();
+    if (fix_loose_pieces(model_, u_, clusters_, constraints)) solver_.set_constraints(constraints);
+  }
+
+  // Progress, the stop rules that end the run at its next solve, and the checkpoint.
+  void after_event(const EventPoint& point) {
+    const double elapsed = seconds_since(start_);
+    if (settings_.on_progress && elapsed - last_progress_ >= settings_.progress_seconds) {
+      last_progress_ = elapsed;
+      settings_.on_progress({events_, broken_, point.load_factor, peak_reaction_, elapsed});
+    }
+    const int index = static_cast<int>(result_.path.size()) - 1;
+    if (index > result_.peak && std::abs(point.reaction) < settings_.stop_fraction * peak_reaction_)
+      pending_stop_ = "failed";
+    else if (events_ >= settings_.max_events)
+      pending_stop_ = "event limit";
+    if (pending_stop_.empty() && settings_.stop_after)
+      pending_stop_ = settings_.stop_after(model_, point);
+    if (settings_.checkpoint_every > 0 && settings_.on_checkpoint &&
+        events_ % settings_.checkpoint_every == 0)
+      settings_.on_checkpoint(model_, checkpoint());
+  }
+
+  EventsState checkpoint() const {
+    EventsState s;
+    s.events = events_;
+    s.broken = broken_;
+    s.clusters = clusters_;
+    s.critical_u = critical_u_;
+    s.critical_force = critical_force_;
+    s.critical_lambda = critical_lambda_;
+    s.first_energy = first_energy_;
+    s.previous_energy = previous_energy_;
+    s.peak_reaction = peak_reaction_;
+    s.pending_stop = pending_stop_;
+    s.result.path = result_.path;
+    s.result.breaks = result_.breaks;
+    s.result.peak = result_.peak;
+    s.result.solves = result_.solves;
+    s.result.dissipated_energy = result_.dissipated_energy;
+    solver_.save(s);
+    return s;
+  }
+
+  // Leaves the model at the last critical state (at the unit-load solution if no bond was
+  // loaded).
+  void finish() {
+    if (events_ > 0)
+      write_state(model_.particles, critical_lambda_, critical_u_, critical_force_);
+    else
+      write_state(model_.particles, 1.0, u_, state_.force);
+    result_.factorizations = solver_.factorizations();
+    result_.wall_seconds = seconds_since(start_);
+    if (settings_.on_progress)
+      settings_.on_progress(
+          {events_, broken_, critical_lambda_, peak_reaction_, result_.wall_seconds});
+  }
+
+  Model& model_;
+  const DofFlags& reaction_dofs_;
+  const EventSettings& settings_;
+  Clock::time_point start_;
+  UnitLoadSolver solver_;
+  EventsResult result_;
+  int clusters_ = 0;
+  int broken_ = 0;
+  long events_ = 0;
+  Eigen::VectorXd u_;  // the unit-load solution
+  UnitState state_;    // and what it gives
+  // The last critical state.
+  Eigen::VectorXd critical_u_;
+  DofArray critical_force_;
+  double critical_lambda_ = 1, first_energy_ = -1, previous_energy_ = 0, peak_reaction_ = 0;
+  std::string pending_stop_;  // ends the run at the next solve
+  double last_progress_ = 0;
+};
+
+}  // namespace
+
+EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
+                        const EventSettings& settings, const EventsState* resume) {
+  const auto start = Clock::now();
+  settings.validate();
+  check_inputs(model, unit, reaction_dofs);
+  EventLoop loop(model, unit, reaction_dofs, settings, start);
+  if (resume) loop.resume(*resume);
+  return loop.run();
 }
 
 namespace {

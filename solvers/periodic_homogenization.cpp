@@ -117,9 +117,12 @@ void PeriodicModel::check_consistency() const {
   }
 }
 
-PeriodicModel periodic_supercell(const UnitCell& cell, const std::vector<FamilyStiffness>& families,
-                                 const std::array<int, 3>& repeats,
-                                 const std::array<bool, 3>& periodic, double density) {
+namespace {
+
+// The number of particles of the supercell; throws plydem::Error for bad inputs.
+long supercell_size(const UnitCell& cell, const std::vector<FamilyStiffness>& families,
+                    const std::array<int, 3>& repeats, const std::array<bool, 3>& periodic,
+                    double density) {
   const int basis = static_cast<int>(cell.basis.size());
   require(basis > 0 && static_cast<int>(cell.radius.size()) == basis,
           "periodic supercell: the unit cell's basis and radius lists must be non-empty and of "
@@ -142,25 +145,22 @@ PeriodicModel periodic_supercell(const UnitCell& cell, const std::vector<FamilyS
     count *= repeats[d];
   }
   require(count < 100'000'000, fmt::format("periodic supercell: {} particles is too many", count));
+  return count;
+}
 
-  PeriodicModel out;
-  out.periodic = periodic;
-  out.lattice_vectors = cell.lattice_vectors;
-  for (int d = 0; d < 3; ++d) out.lattice_vectors.col(d) *= repeats[d];
-  out.volume = cell.volume * repeats[0] * repeats[1] * repeats[2];
-  Model& model = out.model;
-  const Eigen::Vector3d a1 = out.lattice_vectors.col(0), a2 = out.lattice_vectors.col(1);
-  const double area = a1.cross(a2).norm();
-  model.thickness = area > 0 ? out.volume / area : 0;
-  model.description = fmt::format("periodic supercell of {} x {} x {} unit cells, {} particles",
-                                  repeats[0], repeats[1], repeats[2], count);
-
-  // Particle of basis site p in cell (c0, c1, c2).
-  auto index = [&](const Eigen::Vector3i& c, int p) {
+// The particle of basis site p in cell (c0, c1, c2) of the supercell.
+struct SupercellIndex {
+  std::array<int, 3> repeats;
+  int basis;
+  int operator()(const Eigen::Vector3i& c, int p) const {
     return ((c(2) * repeats[1] + c(1)) * repeats[0] + c(0)) * basis + p;
-  };
-  Particles& particles = model.particles;
-  particles.resize(static_cast<int>(count));
+  }
+};
+
+void place_particles(const UnitCell& cell, const std::array<int, 3>& repeats, double density,
+                     Particles& particles) {
+  const int basis = static_cast<int>(cell.basis.size());
+  const SupercellIndex index{repeats, basis};
   const double volume = cell.volume / basis;
   for (int c2 = 0; c2 < repeats[2]; ++c2)
     for (int c1 = 0; c1 < repeats[1]; ++c1)
@@ -176,11 +176,17 @@ PeriodicModel periodic_supercell(const UnitCell& cell, const std::vector<FamilyS
           particles.mass(i) = density * volume;
           particles.moment_of_inertia(i) = 0.4 * density * volume * r * r;  // solid sphere
         }
+}
 
+// Every unit-cell bond in every cell, wrapped into the supercell (out.model.bonds and
+// out.bond_image sized already).
+void bond_supercell(const UnitCell& cell, const std::vector<FamilyStiffness>& families,
+                    const std::array<int, 3>& repeats, const std::array<bool, 3>& periodic,
+                    PeriodicModel& out) {
+  const int basis = static_cast<int>(cell.basis.size());
+  const SupercellIndex index{repeats, basis};
   const int cell_bonds = static_cast<int>(cell.bonds.size());
-  Bonds& bonds = model.bonds;
-  bonds.resize(static_cast<int>(count / basis) * cell_bonds);
-  out.bond_image.setZero(bonds.size(), 3);
+  Bonds& bonds = out.model.bonds;
   const Eigen::Array3i size(repeats[0], repeats[1], repeats[2]);
   int b = 0;
   for (int c2 = 0; c2 < repeats[2]; ++c2)
@@ -227,41 +233,66 @@ PeriodicModel periodic_supercell(const UnitCell& cell, const std::vector<FamilyS
           bonds.lever_first(b) = cell.radius[bond.first] + 0.5 * gap;
           bonds.lever_second(b) = cell.radius[bond.second] + 0.5 * gap;
         }
-  // A Model holds one bond per pair of particles; with too few repeats a bond would join a
-  // particle to its own image or a pair twice.
-  {
-    std::vector<std::vector<int>> partners(count);
-    for (int k = 0; k < bonds.size(); ++k) {
-      const int i = std::min(bonds.first(k), bonds.second(k));
-      const int j = std::max(bonds.first(k), bonds.second(k));
-      const bool repeated =
-          i == j || std::find(partners[i].begin(), partners[i].end(), j) != partners[i].end();
-      if (repeated)
-        throw Error(fmt::format(
-            "periodic supercell: with {} x {} x {} repeats, unit-cell bond {} joins particle {} "
-            "to {} where another bond already does (or to its own image); use more repeats "
-            "along the periodic directions",
-            repeats[0], repeats[1], repeats[2], k % cell_bonds, bonds.first(k), bonds.second(k)));
-      partners[i].push_back(j);
-    }
+}
+
+// A Model holds one bond per pair of particles; with too few repeats a bond would join a
+// particle to its own image or a pair twice.
+void check_one_bond_per_pair(const Bonds& bonds, long count, const std::array<int, 3>& repeats,
+                             int cell_bonds) {
+  std::vector<std::vector<int>> partners(count);
+  for (int k = 0; k < bonds.size(); ++k) {
+    const int i = std::min(bonds.first(k), bonds.second(k));
+    const int j = std::max(bonds.first(k), bonds.second(k));
+    const bool repeated =
+        i == j || std::find(partners[i].begin(), partners[i].end(), j) != partners[i].end();
+    if (repeated)
+      throw Error(fmt::format(
+          "periodic supercell: with {} x {} x {} repeats, unit-cell bond {} joins particle {} "
+          "to {} where another bond already does (or to its own image); use more repeats "
+          "along the periodic directions",
+          repeats[0], repeats[1], repeats[2], k % cell_bonds, bonds.first(k), bonds.second(k)));
+    partners[i].push_back(j);
   }
+}
+
+}  // namespace
+
+PeriodicModel periodic_supercell(const UnitCell& cell, const std::vector<FamilyStiffness>& families,
+                                 const std::array<int, 3>& repeats,
+                                 const std::array<bool, 3>& periodic, double density) {
+  const long count = supercell_size(cell, families, repeats, periodic, density);
+  const int basis = static_cast<int>(cell.basis.size());
+  PeriodicModel out;
+  out.periodic = periodic;
+  out.lattice_vectors = cell.lattice_vectors;
+  for (int d = 0; d < 3; ++d) out.lattice_vectors.col(d) *= repeats[d];
+  out.volume = cell.volume * repeats[0] * repeats[1] * repeats[2];
+  Model& model = out.model;
+  const Eigen::Vector3d a1 = out.lattice_vectors.col(0), a2 = out.lattice_vectors.col(1);
+  const double area = a1.cross(a2).norm();
+  model.thickness = area > 0 ? out.volume / area : 0;
+  model.description = fmt::format("periodic supercell of {} x {} x {} unit cells, {} particles",
+                                  repeats[0], repeats[1], repeats[2], count);
+  model.particles.resize(static_cast<int>(count));
+  place_particles(cell, repeats, density, model.particles);
+  const int cell_bonds = static_cast<int>(cell.bonds.size());
+  model.bonds.resize(static_cast<int>(count / basis) * cell_bonds);
+  out.bond_image.setZero(model.bonds.size(), 3);
+  bond_supercell(cell, families, repeats, periodic, out);
+  check_one_bond_per_pair(model.bonds, count, repeats, cell_bonds);
   out.check_consistency();
   return out;
 }
 
-PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
-                                           const StaticSettings& settings,
-                                           Eigen::MatrixXd* fluctuations) {
-  const auto start = Clock::now();
-  validate(settings);
-  periodic.check_consistency();
-  const Model& model = periodic.model;
+namespace {
+
+// The stiffness each dof's bonds could give it (particle order): translations sum k_n + k_s,
+// rotations also the translational springs through their lever arms. Throws plydem::Error for a
+// particle without any.
+Eigen::VectorXd reference_stiffness(const Model& model) {
   const Particles& p = model.particles;
   const Bonds& bonds = model.bonds;
   const int n = p.size(), m = bonds.size();
-
-  // The stiffness each dof's bonds could give it: translations sum k_n + k_s, rotations also the
-  // translational springs through their lever arms.
   Eigen::VectorXd reference = Eigen::VectorXd::Zero(6 * n);  // particle order
   for (int b = 0; b < m; ++b) {
     const double k = bonds.normal_stiffness(b) + bonds.shear_stiffness(b);
@@ -279,23 +310,26 @@ PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
           "periodic homogenization: {} has no bonds (or only bonds without stiffness): it floats "
           "freely in the period; remove it or bond it",
           where(p, i)));
+  return reference;
+}
 
-  PeriodicHomogenization result;
-  result.particles = n;
-  result.bonds = m;
-  const bool direct =
-      settings.method == StaticMethod::kDirect ||
-      (settings.method == StaticMethod::kAuto && 6 * n - 3 <= settings.direct_max_dofs);
-  const EliminationOrder order =
-      direct ? EliminationOrder::minimum_degree(model) : EliminationOrder::identity(n);
-  const BlockStiffness k = block_stiffness(model, order);
-
-  // The macro strain E moves the image of `second` by E (x_second + L image) and `first` by
-  // E x_first; the bond law sees only the difference E * branch (it is invariant under a common
-  // translation), so the unit strain s loads the bond like a displacement E_s * branch of its
-  // second particle: H_wE gets K(:, u_second) E_s branch, H_EE gets its energy.
-  Eigen::MatrixXd coupling = Eigen::MatrixXd::Zero(6 * n, 6);  // H_wE, rank order
+// What the unit macro strains load: H_wE (6 columns, dofs in rank order) and H_EE.
+struct StrainLoad {
+  Eigen::MatrixXd coupling;
   Matrix6d h_ee = Matrix6d::Zero();
+};
+
+// The macro strain E moves the image of `second` by E (x_second + L image) and `first` by
+// E x_first; the bond law sees only the difference E * branch (it is invariant under a common
+// translation), so the unit strain s loads the bond like a displacement E_s * branch of its
+// second particle: H_wE gets K(:, u_second) E_s branch, H_EE gets its energy.
+StrainLoad strain_load(const PeriodicModel& periodic, const EliminationOrder& order) {
+  const Bonds& bonds = periodic.model.bonds;
+  const int n = periodic.model.particles.size(), m = bonds.size();
+  StrainLoad out;
+  Eigen::MatrixXd& coupling = out.coupling;
+  Matrix6d& h_ee = out.h_ee;
+  coupling = Eigen::MatrixXd::Zero(6 * n, 6);  // H_wE, rank order
   for (int b = 0; b < m; ++b) {
     const Matrix12d full = parallel_bond_stiffness(bond_parameters(bonds, b));
     const Matrix12d sym = 0.5 * (full + full.transpose());
@@ -308,77 +342,136 @@ PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
     h_ee.noalias() += strain_motion.transpose() * load.middleRows<3>(6);
   }
   h_ee = 0.5 * (h_ee + h_ee.transpose()).eval();
-  result.affine = h_ee / periodic.volume;
+  return out;
+}
 
-  // Internal dofs in rank order: all but the translations of particle 0 (the fluctuation's rigid
-  // translations) and the dofs without stiffness of their own.
-  std::vector<int> free_index(6 * n, -1), free_dof;
-  Eigen::VectorXd weight(6 * n);  // reference^-1/2, rank order, for the residual test
-  int unrestrained = 0;
+// The internal dofs in rank order: all but the translations of particle 0 (the fluctuation's
+// rigid translations) and the dofs without stiffness of their own.
+struct InternalDofs {
+  std::vector<int> free_index;  // [rank-ordered dof] its index among the free ones, or -1
+  std::vector<int> free_dof;    // [free index] the rank-ordered dof
+  Eigen::VectorXd weight;       // reference^-1/2, rank order, for the residual test
+  int unrestrained = 0;         // dofs without stiffness of their own
+};
+
+InternalDofs internal_dofs(const EliminationOrder& order, const BlockStiffness& k,
+                           const Eigen::VectorXd& reference) {
+  const int n = static_cast<int>(order.order.size());
+  InternalDofs out;
+  out.free_index.assign(6 * n, -1);
+  out.weight.resize(6 * n);
   for (int r = 0; r < n; ++r) {
     const int i = order.order[r];
     for (int c = 0; c < 6; ++c) {
       const int d = 6 * r + c;
-      weight(d) = 1 / std::sqrt(reference(6 * i + c));
+      out.weight(d) = 1 / std::sqrt(reference(6 * i + c));
       if (i == 0 && c < 3) continue;
       if (!(k.diagonal(r, c) > kUnrestrained * reference(6 * i + c))) {
-        ++unrestrained;
+        ++out.unrestrained;
         continue;
       }
-      free_index[d] = static_cast<int>(free_dof.size());
-      free_dof.push_back(d);
+      out.free_index[d] = static_cast<int>(out.free_dof.size());
+      out.free_dof.push_back(d);
     }
   }
-  const int nf = static_cast<int>(free_dof.size());
-  result.internal_dofs = nf;
-  Eigen::VectorXd scale(nf);
-  for (int f = 0; f < nf; ++f)
-    scale(f) = 1 / std::sqrt(k.diagonal(free_dof[f] / 6, free_dof[f] % 6));
-  const SparseMatrix a = compress_lower(k, free_index, nf, scale);
-  Eigen::MatrixXd rhs(nf, 6);
-  for (int f = 0; f < nf; ++f) rhs.row(f) = -scale(f) * coupling.row(free_dof[f]);
+  return out;
+}
 
+// The scaled fluctuations y = A^-1 rhs, by the method the settings choose.
+struct ScaledSolution {
   Eigen::MatrixXd y;
   int zero_pivots = 0;
+  std::string method;
+};
+
+ScaledSolution solve_scaled(const SparseMatrix& a, const Eigen::MatrixXd& rhs, bool direct,
+                            const StaticSettings& settings) {
+  const int nf = static_cast<int>(a.cols());
+  ScaledSolution out;
   if (nf == 0) {
-    y.setZero(0, 6);
-    result.method = "none (no internal dofs)";
+    out.y.setZero(0, 6);
+    out.method = "none (no internal dofs)";
   } else if (direct) {
-    result.method = "supernodal Cholesky (AMD on particles)";
+    out.method = "supernodal Cholesky (AMD on particles)";
     SupernodalCholesky cholesky;
     cholesky.analyze(a);
     cholesky.factorize(a, settings.pivot_tolerance * std::max(nf, 1000));
-    zero_pivots = static_cast<int>(cholesky.zero_pivots().size());
-    y = rhs;
-    cholesky.solve_in_place(y);
+    out.zero_pivots = static_cast<int>(cholesky.zero_pivots().size());
+    out.y = rhs;
+    cholesky.solve_in_place(out.y);
   } else if (settings.preconditioner == StaticPreconditioner::kIncompleteCholesky) {
-    result.method = "ConjugateGradient + IncompleteCholesky";
-    y = solve_cg<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(
+    out.method = "ConjugateGradient + IncompleteCholesky";
+    out.y = solve_cg<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(
         a, rhs, settings);
   } else {
-    result.method = "ConjugateGradient + Jacobi";
-    y = solve_cg<Eigen::DiagonalPreconditioner<double>>(a, rhs, settings);
+    out.method = "ConjugateGradient + Jacobi";
+    out.y = solve_cg<Eigen::DiagonalPreconditioner<double>>(a, rhs, settings);
   }
-  result.zero_modes = unrestrained + zero_pivots;
-  require(y.allFinite(),
-          "periodic homogenization: the fluctuations are not finite (the stiffness is "
-          "numerically singular)");
-  Eigen::MatrixXd fluctuation = Eigen::MatrixXd::Zero(6 * n, 6);
-  for (int f = 0; f < nf; ++f) fluctuation.row(free_dof[f]) = scale(f) * y.row(f);
+  return out;
+}
 
-  // Every dof left out (the fixed translations, dofs without stiffness, zero pivots) must be in
-  // equilibrium too: a zero-energy mode that the strain loads would show here as a force.
-  const Eigen::MatrixXd residual = weight.asDiagonal() * (k.multiply(fluctuation) + coupling);
-  const double load = (weight.asDiagonal() * coupling).norm();
+// Every dof left out (the fixed translations, dofs without stiffness, zero pivots) must be in
+// equilibrium too: a zero-energy mode that the strain loads would show here as a force.
+void check_equilibrium(const BlockStiffness& k, const Eigen::MatrixXd& fluctuation,
+                       const StrainLoad& strain, const InternalDofs& dofs, int zero_pivots) {
+  const Eigen::MatrixXd residual =
+      dofs.weight.asDiagonal() * (k.multiply(fluctuation) + strain.coupling);
+  const double load = (dofs.weight.asDiagonal() * strain.coupling).norm();
   if (!(residual.norm() <= 1e-6 * load || load == 0)) {
     throw Error(fmt::format(
         "periodic homogenization: the bonds do not restrain some internal dofs that the macro "
         "strain loads (a mechanism: {} dofs without stiffness and {} zero pivots among {} "
         "internal dofs; unbalanced force {:.3g} of the load): stiffen the bonds or check the "
         "packing (or StaticSettings::pivot_tolerance is too large)",
-        unrestrained, zero_pivots, nf, residual.norm() / load));
+        dofs.unrestrained, zero_pivots, dofs.free_dof.size(), residual.norm() / load));
   }
-  const Matrix6d condensed = h_ee + coupling.transpose() * fluctuation;
+}
+
+}  // namespace
+
+PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
+                                           const StaticSettings& settings,
+                                           Eigen::MatrixXd* fluctuations) {
+  const auto start = Clock::now();
+  validate(settings);
+  periodic.check_consistency();
+  const Model& model = periodic.model;
+  const int n = model.particles.size();
+  const Eigen::VectorXd reference = reference_stiffness(model);
+
+  PeriodicHomogenization result;
+  result.particles = n;
+  result.bonds = model.bonds.size();
+  const bool direct =
+      settings.method == StaticMethod::kDirect ||
+      (settings.method == StaticMethod::kAuto && 6 * n - 3 <= settings.direct_max_dofs);
+  const EliminationOrder order =
+      direct ? EliminationOrder::minimum_degree(model) : EliminationOrder::identity(n);
+  const BlockStiffness k = block_stiffness(model, order);
+  const StrainLoad strain = strain_load(periodic, order);
+  result.affine = strain.h_ee / periodic.volume;
+
+  // H_ww y = -H_wE on the internal dofs, Jacobi-scaled.
+  const InternalDofs dofs = internal_dofs(order, k, reference);
+  const int nf = static_cast<int>(dofs.free_dof.size());
+  result.internal_dofs = nf;
+  Eigen::VectorXd scale(nf);
+  for (int f = 0; f < nf; ++f)
+    scale(f) = 1 / std::sqrt(k.diagonal(dofs.free_dof[f] / 6, dofs.free_dof[f] % 6));
+  const SparseMatrix a = compress_lower(k, dofs.free_index, nf, scale);
+  Eigen::MatrixXd rhs(nf, 6);
+  for (int f = 0; f < nf; ++f) rhs.row(f) = -scale(f) * strain.coupling.row(dofs.free_dof[f]);
+  const ScaledSolution solution = solve_scaled(a, rhs, direct, settings);
+  result.method = solution.method;
+  result.zero_modes = dofs.unrestrained + solution.zero_pivots;
+  require(solution.y.allFinite(),
+          "periodic homogenization: the fluctuations are not finite (the stiffness is "
+          "numerically singular)");
+  Eigen::MatrixXd fluctuation = Eigen::MatrixXd::Zero(6 * n, 6);
+  for (int f = 0; f < nf; ++f) fluctuation.row(dofs.free_dof[f]) = scale(f) * solution.y.row(f);
+  check_equilibrium(k, fluctuation, strain, dofs, solution.zero_pivots);
+
+  const Matrix6d condensed = strain.h_ee + strain.coupling.transpose() * fluctuation;
   if (fluctuations) {
     fluctuations->resize(6 * n, 6);
     for (int r = 0; r < n; ++r) {

@@ -3,40 +3,57 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <utility>
+#include <vector>
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
 
 namespace plydem {
 
-// The symbolic analysis follows Davis, "Direct Methods for Sparse Linear Systems" (SIAM 2006):
-// elimination tree (Liu's algorithm, sec. 4.1), column counts by traversing row subtrees (as
-// Eigen's SimplicialCholesky does, sec. 4.2), postorder (sec. 4.3), and the multifrontal method
-// with fundamental supernodes (sec. 9.1, 9.2).
-void SupernodalCholesky::analyze(const SparseMatrix& a) {
-  require(a.rows() == a.cols() && a.isCompressed(),
-          "sparse Cholesky: the matrix must be square and compressed");
+namespace {
+
+// The strictly lower entries of A by row: column[begin[i] .. begin[i + 1]) lists the columns
+// j < i with A(i, j) stored.
+struct RowPattern {
+  std::vector<int> begin, column;
+};
+
+RowPattern strictly_lower_rows(const Eigen::SparseMatrix<double>& a) {
   const int n = static_cast<int>(a.cols());
   const int* outer = a.outerIndexPtr();
   const int* inner = a.innerIndexPtr();
-
-  // The strictly lower entries by row: row_column[row_begin[i] .. row_begin[i + 1]) lists the
-  // columns j < i with A(i, j) stored.
-  std::vector<int> row_begin(n + 1, 0);
+  RowPattern rows;
+  std::vector<int>& row_begin = rows.begin;
+  row_begin.assign(n + 1, 0);
   for (int j = 0; j < n; ++j)
     for (int p = outer[j]; p < outer[j + 1]; ++p)
       if (inner[p] > j) ++row_begin[inner[p] + 1];
   for (int i = 0; i < n; ++i) row_begin[i + 1] += row_begin[i];
-  std::vector<int> row_column(row_begin[n]);
-  {
-    std::vector<int> cursor(row_begin.begin(), row_begin.end() - 1);
-    for (int j = 0; j < n; ++j)
-      for (int p = outer[j]; p < outer[j + 1]; ++p)
-        if (inner[p] > j) row_column[cursor[inner[p]]++] = j;
-  }
+  rows.column.resize(row_begin[n]);
+  std::vector<int> cursor(row_begin.begin(), row_begin.end() - 1);
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p)
+      if (inner[p] > j) rows.column[cursor[inner[p]]++] = j;
+  return rows;
+}
 
-  // Elimination tree, and the number of entries below the diagonal in each column of L.
-  std::vector<int> parent(n, -1), ancestor(n, -1), count(n, 0), tag(n);
+// The elimination tree (parent, -1 at a root) and the number of entries below the diagonal in
+// each column of L.
+struct EliminationTree {
+  std::vector<int> parent, count;
+};
+
+EliminationTree elimination_tree(const RowPattern& rows) {
+  const int n = static_cast<int>(rows.begin.size()) - 1;
+  const std::vector<int>& row_begin = rows.begin;
+  const std::vector<int>& row_column = rows.column;
+  EliminationTree tree;
+  std::vector<int>& parent = tree.parent;
+  std::vector<int>& count = tree.count;
+  parent.assign(n, -1);
+  count.assign(n, 0);
+  std::vector<int> ancestor(n, -1), tag(n);
   for (int k = 0; k < n; ++k) {
     for (int p = row_begin[k]; p < row_begin[k + 1]; ++p) {
       for (int i = row_column[p]; i != -1 && i < k;) {
@@ -55,9 +72,17 @@ void SupernodalCholesky::analyze(const SparseMatrix& a) {
         tag[i] = k;
       }
   }
+  return tree;
+}
 
-  // Postorder. A child whose column continues its parent's supernode (same pattern below) is
-  // visited last, so that it ends up right before its parent.
+// A postorder of the tree: postorder[old] = new column, original[new] = old. A child whose column
+// continues its parent's supernode (same pattern below) is visited last, so that it ends up right
+// before its parent.
+void postorder_tree(const EliminationTree& tree, std::vector<int>& postorder,
+                    std::vector<int>& original) {
+  const std::vector<int>& parent = tree.parent;
+  const std::vector<int>& count = tree.count;
+  const int n = static_cast<int>(parent.size());
   std::vector<int> child_begin(n + 1, 0);
   for (int j = 0; j < n; ++j)
     if (parent[j] >= 0) ++child_begin[parent[j] + 1];
@@ -74,44 +99,66 @@ void SupernodalCholesky::analyze(const SparseMatrix& a) {
     const auto chain = std::find_if(first, last, [&](int c) { return count[c] == count[j] + 1; });
     if (chain != last) std::rotate(chain, chain + 1, last);
   }
-  postorder_.assign(n, -1);
-  original_.assign(n, -1);
-  {
-    int label = 0;
-    std::vector<int> stack, next_child(child_begin.begin(), child_begin.end() - 1);
-    for (int root = 0; root < n; ++root) {
-      if (parent[root] != -1) continue;
-      stack.push_back(root);
-      while (!stack.empty()) {
-        const int j = stack.back();
-        if (next_child[j] < child_begin[j + 1]) {
-          stack.push_back(children[next_child[j]++]);
-        } else {
-          stack.pop_back();
-          original_[label] = j;
-          postorder_[j] = label++;
-        }
+  postorder.assign(n, -1);
+  original.assign(n, -1);
+  int label = 0;
+  std::vector<int> stack, next_child(child_begin.begin(), child_begin.end() - 1);
+  for (int root = 0; root < n; ++root) {
+    if (parent[root] != -1) continue;
+    stack.push_back(root);
+    while (!stack.empty()) {
+      const int j = stack.back();
+      if (next_child[j] < child_begin[j + 1]) {
+        stack.push_back(children[next_child[j]++]);
+      } else {
+        stack.pop_back();
+        original[label] = j;
+        postorder[j] = label++;
       }
     }
   }
+}
 
-  // Fundamental supernodes in the new numbering: column j - 1 joins column j when j is its parent
-  // and its pattern below the diagonal is j's pattern plus j.
-  std::vector<int> new_parent(n), new_count(n);
+// The tree in the new numbering.
+EliminationTree renumbered(const EliminationTree& tree, const std::vector<int>& postorder) {
+  const int n = static_cast<int>(postorder.size());
+  EliminationTree out;
+  out.parent.resize(n);
+  out.count.resize(n);
   for (int j = 0; j < n; ++j) {
-    new_parent[postorder_[j]] = parent[j] < 0 ? -1 : postorder_[parent[j]];
-    new_count[postorder_[j]] = count[j];
+    out.parent[postorder[j]] = tree.parent[j] < 0 ? -1 : postorder[tree.parent[j]];
+    out.count[postorder[j]] = tree.count[j];
   }
+  return out;
+}
+
+// Fundamental supernodes of the (postordered) tree, by first column, n appended: column j - 1
+// joins column j when j is its parent and its pattern below the diagonal is j's pattern plus j.
+std::vector<int> fundamental_supernodes(const EliminationTree& tree) {
+  const std::vector<int>& new_parent = tree.parent;
+  const std::vector<int>& new_count = tree.count;
+  const int n = static_cast<int>(new_parent.size());
   std::vector<int> fundamental;
   for (int j = 0; j < n; ++j)
     if (j == 0 || !(new_parent[j - 1] == j && new_count[j - 1] == new_count[j] + 1))
       fundamental.push_back(j);
   fundamental.push_back(n);
+  return fundamental;
+}
 
-  // Relaxed amalgamation: a supernode merges into its parent when it ends right where the parent
-  // begins and the explicit zeros this adds to the dense panels stay few (CHOLMOD's default rule:
-  // always up to 4 columns, up to 16 with 80 % zeros, up to 48 with 10 %, any size with 5 %).
-  // Small supernodes waste the dense kernels: a particle's dofs alone make 3-column supernodes.
+// The supernodes after amalgamation: first columns (n appended) and each one's panel rows.
+struct Supernodes {
+  std::vector<int> first_column, rows;
+};
+
+// Relaxed amalgamation: a supernode merges into its parent when it ends right where the parent
+// begins and the explicit zeros this adds to the dense panels stay few (CHOLMOD's default rule:
+// always up to 4 columns, up to 16 with 80 % zeros, up to 48 with 10 %, any size with 5 %).
+// Small supernodes waste the dense kernels: a particle's dofs alone make 3-column supernodes.
+Supernodes amalgamate(const EliminationTree& tree, const std::vector<int>& fundamental) {
+  const std::vector<int>& new_parent = tree.parent;
+  const std::vector<int>& new_count = tree.count;
+  const int n = static_cast<int>(new_parent.size());
   std::vector<int> column_owner(n);
   const int fundamental_count = static_cast<int>(fundamental.size()) - 1;
   for (int s = 0; s < fundamental_count; ++s)
@@ -148,20 +195,48 @@ void SupernodalCholesky::analyze(const SparseMatrix& a) {
       child.merged_into = p;
     }
   }
-  first_column_.clear();
-  std::vector<int> expected_rows;
+  Supernodes out;
   for (int s = 0; s < fundamental_count; ++s)
     if (group[s].merged_into < 0) {
-      first_column_.push_back(group[s].first);
-      expected_rows.push_back(group[s].rows);
+      out.first_column.push_back(group[s].first);
+      out.rows.push_back(group[s].rows);
     }
-  const int supernodes = static_cast<int>(first_column_.size());
-  first_column_.push_back(n);
+  out.first_column.push_back(n);
+  return out;
+}
+
+}  // namespace
+
+// The symbolic analysis follows Davis, "Direct Methods for Sparse Linear Systems" (SIAM 2006):
+// elimination tree (Liu's algorithm, sec. 4.1), column counts by traversing row subtrees (as
+// Eigen's SimplicialCholesky does, sec. 4.2), postorder (sec. 4.3), and the multifrontal method
+// with fundamental supernodes (sec. 9.1, 9.2).
+void SupernodalCholesky::analyze(const SparseMatrix& a) {
+  require(a.rows() == a.cols() && a.isCompressed(),
+          "sparse Cholesky: the matrix must be square and compressed");
+  const EliminationTree tree = elimination_tree(strictly_lower_rows(a));
+  postorder_tree(tree, postorder_, original_);
+  // Supernodes in the new numbering.
+  const EliminationTree new_tree = renumbered(tree, postorder_);
+  Supernodes supernodes = amalgamate(new_tree, fundamental_supernodes(new_tree));
+  first_column_ = std::move(supernodes.first_column);
+  find_children(new_tree.parent);
+  find_row_patterns(a, supernodes.rows);
+  size_workspace(supernodes.rows);
+  panel_.reset();
+  pivot_.clear();
+  zero_pivots_.clear();
+  is_zero_pivot_.clear();
+}
+
+// Supernode children (in increasing order: every child before its parent), from the parents of
+// the columns in the new numbering.
+void SupernodalCholesky::find_children(const std::vector<int>& new_parent) {
+  const int n = static_cast<int>(new_parent.size());
+  const int supernodes = supernode_count();
   std::vector<int> supernode_of(n);
   for (int s = 0; s < supernodes; ++s)
     for (int j = first_column_[s]; j < first_column_[s + 1]; ++j) supernode_of[j] = s;
-
-  // Supernode children (in increasing order: every child before its parent).
   child_start_.assign(supernodes + 1, 0);
   std::vector<int> super_parent(supernodes, -1);
   for (int s = 0; s < supernodes; ++s) {
@@ -173,13 +248,19 @@ void SupernodalCholesky::analyze(const SparseMatrix& a) {
   }
   for (int s = 0; s < supernodes; ++s) child_start_[s + 1] += child_start_[s];
   child_.assign(child_start_[supernodes], 0);
-  {
-    std::vector<int> cursor(child_start_.begin(), child_start_.end() - 1);
-    for (int s = 0; s < supernodes; ++s)
-      if (super_parent[s] >= 0) child_[cursor[super_parent[s]]++] = s;
-  }
+  std::vector<int> cursor(child_start_.begin(), child_start_.end() - 1);
+  for (int s = 0; s < supernodes; ++s)
+    if (super_parent[s] >= 0) child_[cursor[super_parent[s]]++] = s;
+}
 
-  // Row patterns: a supernode's own columns, then the rows below from A and from its children.
+// Row patterns: a supernode's own columns, then the rows below from A and from its children;
+// `expected_rows` (from the column counts) checks them.
+void SupernodalCholesky::find_row_patterns(const SparseMatrix& a,
+                                           const std::vector<int>& expected_rows) {
+  const int n = static_cast<int>(a.cols());
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  const int supernodes = supernode_count();
   std::size_t total = 0;
   for (int s = 0; s < supernodes; ++s) total += static_cast<std::size_t>(expected_rows[s]);
   rows_.clear();
@@ -217,31 +298,28 @@ void SupernodalCholesky::analyze(const SparseMatrix& a) {
     row_start_.push_back(static_cast<int>(rows_.size()));
     panel_start_.push_back(panel_start_.back() + static_cast<Eigen::Index>(m) * (e - f));
   }
-  // Workspace of the factorization: the largest update matrix, and the most that the stack of
-  // pending updates holds at once (children wait until their parent is assembled).
+}
+
+// Workspace of the factorization: the largest update matrix, and the most that the stack of
+// pending updates holds at once (children wait until their parent is assembled).
+void SupernodalCholesky::size_workspace(const std::vector<int>& expected_rows) {
   largest_update_ = 1;
   stack_size_ = 1;
-  {
-    std::size_t depth = 0;
-    std::vector<std::size_t> pending;
-    for (int s = 0; s < supernodes; ++s) {
-      const int children = child_start_[s + 1] - child_start_[s];
-      for (int c = 0; c < children; ++c) {
-        depth -= pending.back();
-        pending.pop_back();
-      }
-      const std::size_t mu = static_cast<std::size_t>(expected_rows[s]) -
-                             static_cast<std::size_t>(first_column_[s + 1] - first_column_[s]);
-      pending.push_back(mu * mu);
-      depth += mu * mu;
-      largest_update_ = std::max(largest_update_, mu * mu);
-      stack_size_ = std::max(stack_size_, depth);
+  std::size_t depth = 0;
+  std::vector<std::size_t> pending;
+  for (int s = 0; s < supernode_count(); ++s) {
+    const int children = child_start_[s + 1] - child_start_[s];
+    for (int c = 0; c < children; ++c) {
+      depth -= pending.back();
+      pending.pop_back();
     }
+    const std::size_t mu = static_cast<std::size_t>(expected_rows[s]) -
+                           static_cast<std::size_t>(first_column_[s + 1] - first_column_[s]);
+    pending.push_back(mu * mu);
+    depth += mu * mu;
+    largest_update_ = std::max(largest_update_, mu * mu);
+    stack_size_ = std::max(stack_size_, depth);
   }
-  panel_.reset();
-  pivot_.clear();
-  zero_pivots_.clear();
-  is_zero_pivot_.clear();
 }
 
 namespace {

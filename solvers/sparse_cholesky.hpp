@@ -68,6 +68,11 @@ class SupernodalCholesky {
   std::vector<double> pivot_;  // in the new numbering
   std::vector<int> zero_pivots_;
   std::vector<char> is_zero_pivot_;  // in the new numbering
+
+  // Steps of analyze() (sparse_cholesky.cpp).
+  void find_children(const std::vector<int>& new_parent);
+  void find_row_patterns(const SparseMatrix& lower, const std::vector<int>& expected_rows);
+  void size_workspace(const std::vector<int>& expected_rows);
 };
 
 }  // namespace plydem
