@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <numeric>
 #include <random>
 #include <tuple>
 
+#include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
 
 namespace plydem {
@@ -288,13 +288,9 @@ PackingBonds bonds_within_brute_force(const RandomPacking& packing, double conta
 
 int keep_largest_cluster(RandomPacking& packing, PackingBonds& bonds) {
   const int n = static_cast<int>(packing.position.rows());
-  std::vector<int> parent(n);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (const auto& [i, j] : bonds.pairs) parent[root(i)] = root(j);
+  DisjointSets sets(n);
+  auto root = [&](int i) { return sets.find(i); };
+  for (const auto& [i, j] : bonds.pairs) sets.join(i, j);
   std::vector<int> size(n, 0);
   for (int i = 0; i < n; ++i) ++size[root(i)];
   const int largest = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());

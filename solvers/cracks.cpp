@@ -8,26 +8,13 @@
 #include <limits>
 #include <map>
 #include <numbers>
-#include <numeric>
 #include <optional>
 
 #include "contacts/cell_list.hpp"
+#include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
 
 namespace plydem {
-
-namespace {
-
-// Union-find with path halving.
-int find_root(std::vector<int>& parent, int i) {
-  while (parent[i] != i) {
-    parent[i] = parent[parent[i]];
-    i = parent[i];
-  }
-  return i;
-}
-
-}  // namespace
 
 std::string Crack::mode() const {
   if (shear == 0) return "tension";
@@ -57,19 +44,17 @@ std::vector<Crack> find_cracks(const Model& model, const std::vector<BondBreak>&
     group[k] = {interface, interface ? bonds.family(b) : p.ply(bonds.first(b))};
     position.row(k) = breaks[k].position.transpose().array();
   }
-  std::vector<int> parent(n);
-  std::iota(parent.begin(), parent.end(), 0);
+  DisjointSets sets(n);
   const Eigen::ArrayXd half = Eigen::ArrayXd::Constant(n, 0.5 * link_distance);
   for (const auto& [i, j] : find_contact_pairs(position, half, 1.0)) {
     if (group[i] != group[j]) continue;
-    const int ri = find_root(parent, i), rj = find_root(parent, j);
-    if (ri != rj) parent[std::max(ri, rj)] = std::min(ri, rj);
+    sets.join(i, j);
   }
   // Members of each crack, in order of their first break (the breaks are in solver order).
   std::map<int, std::vector<int>> members;
   std::vector<int> order;
   for (int k = 0; k < n; ++k) {
-    const int root = find_root(parent, k);
+    const int root = sets.find(k);
     if (members[root].empty()) order.push_back(root);
     members[root].push_back(k);
   }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "contacts/bond_kernel.hpp"
+#include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #include "solvers/stiffness_assembly.hpp"
@@ -112,29 +113,13 @@ void check_input(const Model& model, const DofConstraints& constraints) {
   }
 }
 
-// Particles joined into sets (union-find with path halving); a set's root is its lowest index.
-struct ParticleSets {
-  explicit ParticleSets(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int root(int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  // Joins the sets of i and j; false where they were one already.
-  bool join(int i, int j) {
-    const int a = root(i), b = root(j);
-    if (a == b) return false;
-    parent[std::max(a, b)] = std::min(a, b);
-    return true;
-  }
-  std::vector<int> parent;
-};
-
 // Clusters of bond-connected particles (union-find); each has its own six rigid-body modes.
 std::vector<std::vector<int>> bonded_clusters(const Model& model) {
   const int n = model.particles.size();
-  ParticleSets sets(n);
-  for (int k = 0; k < model.bonds.size(); ++k) sets.join(model.bonds.first(k), model.bonds.second(k));
-  auto root = [&](int i) { return sets.root(i); };
+  DisjointSets sets(n);
+  for (int k = 0; k < model.bonds.size(); ++k)
+    sets.join(model.bonds.first(k), model.bonds.second(k));
+  auto root = [&](int i) { return sets.find(i); };
   std::vector<int> index(n, -1);
   std::vector<std::vector<int>> clusters;
   for (int i = 0; i < n; ++i) {
@@ -337,8 +322,8 @@ bool free_motions_are_rigid(const Model& model) {
   const Bonds& b = model.bonds;
   const auto& x = model.particles.reference_position;
   const int n = model.particles.size();
-  ParticleSets bodies(n);
-  auto root = [&](int i) { return bodies.root(i); };
+  DisjointSets bodies(n);
+  auto root = [&](int i) { return bodies.find(i); };
   auto join = [&](int i, int j) { return bodies.join(i, j); };
   std::vector<int> point_bonds;
   std::vector<Eigen::Vector3d> contact;
@@ -661,8 +646,8 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
     // Where the unknowns sit, for PETSc's rigid-body near-null space.
     // The rigidity test only where PETSc may solve (it spares PETSc's mechanism probe).
-    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position,
-                            petsc_may_solve && free_motions_are_rigid(model)});
+    m.cholesky->set_layout(
+        {m.free_dofs, m.s, p.reference_position, petsc_may_solve && free_motions_are_rigid(model)});
     m.cholesky->factor(m.a, threshold);
     ++m.factorizations;
     if (!m.cholesky->zero_pivots().empty())

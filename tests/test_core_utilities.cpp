@@ -1,0 +1,25 @@
+// The small shared pieces of core/ that several layers use: disjoint sets.
+#include <doctest/doctest.h>
+
+#include <utility>
+#include <vector>
+
+#include "core/disjoint_sets.hpp"
+
+using namespace plydem;
+
+TEST_CASE("disjoint sets: a set's representative is its lowest index, whatever the join order") {
+  DisjointSets forward(6), backward(6);
+  const std::vector<std::pair<int, int>> joins = {{5, 3}, {3, 1}, {4, 2}, {2, 0}};
+  for (const auto& [a, b] : joins) CHECK(forward.join(a, b));
+  for (auto it = joins.rbegin(); it != joins.rend(); ++it)
+    CHECK(backward.join(it->second, it->first));
+  for (int i = 0; i < 6; ++i) {
+    const int lowest = i % 2 == 0 ? 0 : 1;
+    CHECK(forward.find(i) == lowest);
+    CHECK(backward.find(i) == lowest);
+  }
+  CHECK_FALSE(forward.join(5, 1));  // one set already
+  CHECK(forward.join(5, 4));
+  for (int i = 0; i < 6; ++i) CHECK(forward.find(i) == 0);
+}
