@@ -1,10 +1,13 @@
-// The small shared pieces of core/ that several layers use: disjoint sets.
+// The small shared pieces of core/ that several layers use: disjoint sets, the TOML reader.
 #include <doctest/doctest.h>
+#include <fmt/format.h>
 
 #include <utility>
 #include <vector>
 
 #include "core/disjoint_sets.hpp"
+#include "core/error.hpp"
+#include "core/toml_reader.hpp"
 
 using namespace plydem;
 
@@ -22,4 +25,16 @@ TEST_CASE("disjoint sets: a set's representative is its lowest index, whatever t
   CHECK_FALSE(forward.join(5, 1));  // one set already
   CHECK(forward.join(5, 4));
   for (int i = 0; i < 6; ++i) CHECK(forward.find(i) == 0);
+}
+
+TEST_CASE("toml reader: a syntax error becomes plydem::Error in the caller's words") {
+  const auto words = [](const TomlSyntaxError& e) {
+    return fmt::format("x.toml:{}:{}: {}", e.line, e.column, e.description);
+  };
+  const toml::table table = parse_toml("a = 1\nb = 2.5\nc = 'text'\n", "x.toml", words);
+  CHECK(toml_number(*table.get("a")) == 1.0);
+  CHECK(toml_number(*table.get("b")) == 2.5);
+  CHECK_FALSE(toml_number(*table.get("c")).has_value());
+  CHECK_THROWS_WITH_AS(parse_toml("a = 1\nb = = 2\n", "x.toml", words),
+                       doctest::Contains("x.toml:2:"), Error);
 }

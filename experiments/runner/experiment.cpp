@@ -7,16 +7,8 @@
 #include <fstream>
 #include <sstream>
 
-// See core/material.cpp: link against Debian's compiled toml++ rather than re-instantiating it.
-#ifndef TOML_HEADER_ONLY
-#define TOML_HEADER_ONLY 0
-#ifndef TOML_SHARED_LIB
-#define TOML_SHARED_LIB 1
-#endif
-#endif
-#include <toml++/toml.h>
-
 #include "core/error.hpp"
+#include "core/toml_reader.hpp"
 
 namespace plydem {
 
@@ -52,12 +44,6 @@ Error wrong_type(const std::string& origin, const std::string& key, const toml::
       fmt::format("{}: key '{}' must be {}, got {}", origin, key, expected, type_name(node)));
 }
 
-std::optional<double> as_number(const toml::node& node) {
-  if (const auto* v = node.as_floating_point()) return v->get();
-  if (const auto* v = node.as_integer()) return static_cast<double>(v->get());
-  return std::nullopt;
-}
-
 void collect_keys(const toml::table& table, const std::string& prefix,
                   std::vector<std::string>& keys) {
   for (const auto& [key, node] : table) {
@@ -86,12 +72,9 @@ ExperimentConfig ExperimentConfig::load(const std::filesystem::path& path) {
 ExperimentConfig ExperimentConfig::parse(const std::string& text, const std::string& origin) {
   auto data = std::make_shared<Data>();
   data->origin = origin;
-  try {
-    data->table = toml::parse(text, origin);
-  } catch (const toml::parse_error& e) {
-    throw Error(fmt::format("{}:{}:{}: malformed TOML: {}", origin, e.source().begin.line,
-                            e.source().begin.column, e.description()));
-  }
+  data->table = parse_toml(text, origin, [&origin](const TomlSyntaxError& e) {
+    return fmt::format("{}:{}:{}: malformed TOML: {}", origin, e.line, e.column, e.description);
+  });
   ExperimentConfig config;
   config.data_ = std::move(data);
   config.path_ = origin;
@@ -132,7 +115,7 @@ std::string ExperimentConfig::string(const std::string& key, const std::string& 
 double ExperimentConfig::number(const std::string& key, double fallback) const {
   const toml::node_view<const toml::node> node = data_->table.at_path(key);
   if (!node) return fallback;
-  const std::optional<double> value = as_number(*node.node());
+  const std::optional<double> value = toml_number(*node.node());
   if (!value) throw wrong_type(data_->origin, key, *node.node(), "a number");
   if (!std::isfinite(*value)) {
     throw Error(fmt::format("{}: key '{}' must be finite, got {}", data_->origin, key, *value));
@@ -182,7 +165,7 @@ std::vector<double> ExperimentConfig::numbers(const std::string& key,
   if (!array) throw wrong_type(data_->origin, key, *node.node(), "an array of numbers");
   std::vector<double> out;
   for (const toml::node& element : *array) {
-    const std::optional<double> v = as_number(element);
+    const std::optional<double> v = toml_number(element);
     if (!v || !std::isfinite(*v)) {
       throw wrong_type(data_->origin, key, element, "an array of finite numbers; an element");
     }
