@@ -194,42 +194,10 @@ void ExperimentConfig::require_known_keys(const std::vector<std::string>& known)
   }
 }
 
-void ExperimentRegistry::add(const std::string& kind, const std::string& description,
-                             ExperimentFactory factory) {
-  require(!kind.empty(), "an experiment kind needs a name");
-  if (entries_.count(kind)) {
-    throw Error(fmt::format("experiment kind '{}' is already registered", kind));
-  }
-  entries_.emplace(kind, Entry{description, std::move(factory)});
-}
-
-bool ExperimentRegistry::contains(const std::string& kind) const {
-  return entries_.count(kind) > 0;
-}
-
-std::unique_ptr<Experiment> ExperimentRegistry::create(const std::string& kind) const {
-  const auto it = entries_.find(kind);
-  if (it == entries_.end()) {
-    std::string names;
-    for (const auto& [name, entry] : entries_) {
-      names += fmt::format("{}{}", names.empty() ? "" : ", ", name);
-    }
-    throw Error(fmt::format("unknown experiment kind '{}' (registered: {})", kind, names));
-  }
-  return it->second.factory();
-}
-
-std::vector<std::string> ExperimentRegistry::kinds() const {
-  std::vector<std::string> out;
-  for (const auto& [name, entry] : entries_) out.push_back(name);
-  return out;
-}
-
-std::string ExperimentRegistry::description(const std::string& kind) const {
-  const auto it = entries_.find(kind);
-  require(it != entries_.end(), fmt::format("unknown experiment kind '{}'", kind));
-  return it->second.description;
-}
+ExperimentRegistry::ExperimentRegistry()
+    : FactoryRegistry<Experiment>({"experiment kind", "an experiment kind needs a name",
+                                   "experiment kind '{}' is already registered",
+                                   "unknown experiment kind '{}' (registered: {})"}) {}
 
 ExperimentRegistry& default_experiment_registry() {
   static ExperimentRegistry registry = [] {

@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include "core/registry.hpp"
+
 namespace plydem {
 
 /// A parsed experiment config (TOML). Keys may be dotted to reach into tables ("fem.element").
@@ -103,25 +105,15 @@ class Experiment {
                                const ExperimentContext& context) const = 0;
 };
 
-using ExperimentFactory = std::function<std::unique_ptr<Experiment>()>;
+using ExperimentFactory = FactoryRegistry<Experiment>::Factory;
 
-/// Experiment kinds by name, as strategies/registry.hpp does for strategies.
-class ExperimentRegistry {
+/// Experiment kinds by name (core/registry.hpp, as strategies/registry.hpp for strategies):
+/// add() throws plydem::Error if the kind is empty or taken, create() lists the registered kinds
+/// if `kind` is unknown.
+class ExperimentRegistry : public FactoryRegistry<Experiment> {
  public:
-  /// Throws plydem::Error if the kind is empty or taken.
-  void add(const std::string& kind, const std::string& description, ExperimentFactory factory);
-  bool contains(const std::string& kind) const;
-  /// Throws plydem::Error listing the registered kinds if `kind` is unknown.
-  std::unique_ptr<Experiment> create(const std::string& kind) const;
-  std::vector<std::string> kinds() const;
-  std::string description(const std::string& kind) const;
-
- private:
-  struct Entry {
-    std::string description;
-    ExperimentFactory factory;
-  };
-  std::map<std::string, Entry> entries_;
+  ExperimentRegistry();
+  std::vector<std::string> kinds() const { return names(); }
 };
 
 /// The process-wide experiment registry, filled with the built-in kinds on first use.
