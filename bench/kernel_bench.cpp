@@ -23,7 +23,6 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <fstream>
@@ -35,6 +34,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "core/stopwatch.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
@@ -42,7 +42,6 @@
 namespace {
 
 using namespace plydem;
-using Clock = std::chrono::steady_clock;
 
 // A square Hex2D layer of about `particles` particles (the edges lose a few).
 Model square_layer(long particles) {
@@ -87,10 +86,6 @@ void pull_with_grips(Model& model, ExplicitIntegrator& integrator, long cycles) 
     m.fix_angular_velocity = {true, true, false};
   }
   integrator.set_prescribed_motions({motion[0], motion[1]});
-}
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
 // CPU time of the whole process, all threads [s]: with the wall time it shows whether the run had
@@ -251,10 +246,10 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   pull_with_grips(model, integrator, 200'000);
   integrator.advance(1);  // first touch of the kernel's arrays, not timed
   const double cpu = process_cpu_seconds();
-  const auto start = Clock::now();
+  const Stopwatch clock;
   nlohmann::json timers;
   const CycleReport report = timed_cycles(integrator, api, steps, steps, &timers);
-  const double seconds = seconds_since(start);
+  const double seconds = clock.seconds();
   require(std::isfinite(report.strain_energy), "the benchmark run diverged");
   nlohmann::json r = row("plydem", n, bonds, threads, steps, seconds, process_cpu_seconds() - cpu,
                          static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(n));
@@ -278,10 +273,10 @@ int run_coupon(long cycles, int threads, const std::string& order, const std::st
   ExplicitIntegrator integrator(model, settings);
   pull_with_grips(model, integrator, cycles);
   const double cpu = process_cpu_seconds();
-  const auto start = Clock::now();
+  const Stopwatch clock;
   nlohmann::json timers;
   const CycleReport report = timed_cycles(integrator, api, cycles, report_every, &timers);
-  const double seconds = seconds_since(start);
+  const double seconds = clock.seconds();
   require(std::isfinite(report.strain_energy) && report.strain_energy > 0,
           "the coupon run did not load the coupon");
   nlohmann::json r = row(

@@ -36,7 +36,6 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <fstream>
@@ -46,14 +45,13 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "core/stopwatch.hpp"
 #include "solvers/linear_solver.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 constexpr double kDiameter = 0.05e-3;
 constexpr double kPaperLength = 10e-3;
@@ -180,13 +178,13 @@ int main(int argc, char** argv) {
     mallopt(M_MMAP_THRESHOLD, 32 << 20);
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
 
-    auto start = Clock::now();
+    plydem::Stopwatch clock;
     const std::unique_ptr<plydem::Strategy> hex2d = plydem::default_registry().create("hex2d");
     const plydem::Model built =
         layup.empty()
             ? hex2d->build(spec).model
             : plydem::build_laminate(*hex2d, {spec, plydem::parse_layup(layup), {}}).model;
-    const double build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    const double build_seconds = clock.seconds();
     const plydem::DofConstraints constraints = tension_constraints(built, spec.particle_diameter);
     plydem::StaticSettings settings;
     settings.pin_rigid_modes = true;
@@ -201,9 +199,9 @@ int main(int argc, char** argv) {
       plydem::Model model = built;
       const long faults = minor_page_faults();
       const double cpu = cpu_seconds();
-      start = Clock::now();
+      clock.restart();
       plydem::StaticResult solved = plydem::solve_static(model, constraints, settings);
-      const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+      const double wall = clock.seconds();
       const double used = cpu_seconds() - cpu;
       if (k == 0) {
         r = std::move(solved);

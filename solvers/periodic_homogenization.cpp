@@ -4,7 +4,6 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <vector>
@@ -12,13 +11,13 @@
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
 #include "core/parallel_bond.hpp"
+#include "core/stopwatch.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #include "solvers/stiffness_assembly.hpp"
 
 namespace plydem {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
 std::string where(const Particles& p, int i) {
@@ -252,7 +251,7 @@ PeriodicModel periodic_supercell(const UnitCell& cell, const std::vector<FamilyS
 PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
                                            const StaticSettings& settings,
                                            Eigen::MatrixXd* fluctuations) {
-  const auto start = Clock::now();
+  const Stopwatch clock;
   validate(settings);
   periodic.check_consistency();
   const Model& model = periodic.model;
@@ -386,7 +385,7 @@ PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
     }
   }
   result.relaxed = 0.5 * (condensed + condensed.transpose()) / periodic.volume;
-  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.seconds = clock.seconds();
   return result;
 }
 

@@ -4,7 +4,6 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -15,6 +14,7 @@
 #include "contacts/bond_kernel.hpp"
 #include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #include "solvers/stiffness_assembly.hpp"
 
@@ -22,12 +22,6 @@ namespace plydem {
 namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 Eigen::Vector3d reference_of(const Particles& p, int i) {
   return {p.reference_position(i, 0), p.reference_position(i, 1), p.reference_position(i, 2)};
 }
@@ -554,7 +548,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   validate(settings);
   Impl& m = *impl_;
   m.settings = settings;
-  auto start = Clock::now();
+  Stopwatch phase;
   check_input(model, given);
   m.constraints = given;
   m.given_fixed = given.fixed;
@@ -567,7 +561,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
         m.pinned.push_back(pin);
       }
   }
-  m.setup.checks = seconds_since(start);
+  m.setup.checks = phase.seconds();
 
   const Particles& p = model.particles;
   const int n = m.n = p.size();
@@ -593,15 +587,15 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   // The hand-written direct solver (and kAuto, which starts with its analysis) factorizes in a
   // fill-reducing order of the particles (counted with the factorization); CHOLMOD orders the
   // dofs itself and CG needs none.
-  start = Clock::now();
+  phase.restart();
   // PETSc numbers the particles itself (slices along the model's longest extent, one per rank).
   m.order =
       m.direct && nf > 0 && kind != LinearSolverKind::kCholmod && kind != LinearSolverKind::kPetsc
           ? EliminationOrder::minimum_degree(model)
           : EliminationOrder::identity(n);
-  const double ordering_seconds = seconds_since(start);
+  const double ordering_seconds = phase.seconds();
 
-  start = Clock::now();
+  phase.restart();
   // Dofs in rank order (dof 6 * rank + component): index among the free dofs, or -1 if
   // prescribed; free_dofs[f] is the model's dof (6 * particle + component) of free index f.
   m.free_index.assign(dofs, -1);
@@ -632,9 +626,9 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   }
   // The lower triangle only: all that the factorizations, IC and CG read, at half the memory.
   m.a = compress_lower(m.k, m.free_index, nf, m.s);
-  m.setup.assembly = seconds_since(start);
+  m.setup.assembly = phase.seconds();
 
-  start = Clock::now();
+  phase.restart();
   if (nf == 0) {
     m.method_name = "none (every dof prescribed)";
   } else if (m.direct) {
@@ -654,15 +648,15 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
       refuse_zero_pivots(p, m.free_dofs, m.cholesky->pivots(), m.cholesky->zero_pivots(),
                          threshold);
     m.method_name = m.cholesky->name();
-    m.setup.factorization = ordering_seconds + seconds_since(start);
+    m.setup.factorization = ordering_seconds + phase.seconds();
   } else if (settings.preconditioner == StaticPreconditioner::kIncompleteCholesky) {
     m.method_name = "ConjugateGradient + IncompleteCholesky";
     m.cg_ic = m.make_cg<IncompleteCholeskyCg>();
-    m.setup.factorization = seconds_since(start);
+    m.setup.factorization = phase.seconds();
   } else {
     m.method_name = "ConjugateGradient + Jacobi";
     m.cg_jacobi = m.make_cg<JacobiCg>();
-    m.setup.factorization = seconds_since(start);
+    m.setup.factorization = phase.seconds();
   }
 }
 
@@ -729,7 +723,7 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
 
   // The prescribed values (pins at zero), in rank order, and the right-hand side -K_fp u_p from
   // the blocks (the prescribed values, free dofs at zero).
-  auto start = Clock::now();
+  Stopwatch phase;
   const int nf = m.nf;
   auto value_of = [&](int i, int c) { return m.given_fixed(i, c) ? values(i, c) : 0.0; };
   Eigen::VectorXd u_ranked = Eigen::VectorXd::Zero(m.dofs);
@@ -744,9 +738,9 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
     for (int d = 0; d < m.dofs; ++d)
       if (m.free_index[d] >= 0) b(m.free_index[d]) = -m.s(m.free_index[d]) * k_u(d);
   }
-  result.seconds.assembly += seconds_since(start);
+  result.seconds.assembly += phase.seconds();
 
-  start = Clock::now();
+  phase.restart();
   Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);
   if (nf > 0 && m.direct) {
     y = b;
@@ -764,7 +758,7 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
     else
       m.run_cg(*m.cg_jacobi, b, y, result);
   }
-  result.seconds.solve = seconds_since(start);
+  result.seconds.solve = phase.seconds();
   require(y.allFinite(),
           "static solve: the solution is not finite (the stiffness matrix is numerically "
           "singular)");

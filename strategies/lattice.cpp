@@ -6,7 +6,6 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -18,6 +17,7 @@
 #include "core/error.hpp"
 #include "core/parallel_bond.hpp"
 #include "core/progress.hpp"
+#include "core/stopwatch.hpp"
 #include "strategies/calibration.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/specimen.hpp"
@@ -25,12 +25,7 @@
 namespace plydem {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 constexpr double kDegree = std::numbers::pi / 180.0;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // Voigt index pairs (11, 22, 33, 23, 13, 12).
 constexpr int kVoigt[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
@@ -707,7 +702,7 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
                                                       double thickness, double diameter,
                                                       const Eigen::Vector2d* sample_size,
                                                       const OrientationModuli* start_law) const {
-  const auto start = Clock::now();
+  const Stopwatch clock;
   validate(material);
   require(std::isfinite(ply_angle), "ply angle is not finite");
   require(std::isfinite(thickness) && thickness > 0,
@@ -868,7 +863,7 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
       fmt::join(Eigen::Map<const Eigen::Vector3d>(m.shear.data()) * 1e-9, " "), m.coupling * 1e-9,
       m.coupling_oblique * 1e-9, out.sample_box(0) * 1e3, out.sample_box(1) * 1e3,
       out.sample_box(2) * 1e3, out.sample_particles, out.sample_bonds, out.sample_coordination);
-  out.seconds = seconds_since(start);
+  out.seconds = clock.seconds();
   return out;
 }
 

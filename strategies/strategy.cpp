@@ -4,12 +4,12 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <numbers>
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 
 namespace plydem {
 
@@ -33,10 +33,6 @@ namespace {
 
 std::atomic<long> calibration_count{0};
 std::atomic<long> build_count{0};
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 }  // namespace
 
@@ -66,17 +62,17 @@ std::string Strategy::calibration_key(const CouponSpec& coupon) const {
 }
 
 Specimen Strategy::build(const CouponSpec& coupon) const {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   coupon.validate();
   Calibration calibration = calibrate_coupon(coupon);
   count_build_work(1, 0);
   Specimen specimen = build(coupon, calibration);
-  specimen.build_seconds = seconds_since(start);
+  specimen.build_seconds = clock.seconds();
   return specimen;
 }
 
 Specimen Strategy::build(const CouponSpec& coupon, const Calibration& calibration) const {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   coupon.validate();
   if (calibration.target.norm() > 0) {
     const Eigen::Matrix3d target =
@@ -90,7 +86,7 @@ Specimen Strategy::build(const CouponSpec& coupon, const Calibration& calibratio
   specimen.model = assemble(coupon, calibration);
   specimen.ply_calibrations.push_back(calibration);
   count_build_work(0, 1);
-  specimen.build_seconds = seconds_since(start);
+  specimen.build_seconds = clock.seconds();
   return specimen;
 }
 

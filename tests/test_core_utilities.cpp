@@ -1,5 +1,5 @@
 // The small shared pieces of core/ that several layers use: disjoint sets, the TOML reader, the
-// registry of factories by name.
+// registry of factories by name, the stopwatch.
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
@@ -11,6 +11,7 @@
 #include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
 #include "core/registry.hpp"
+#include "core/stopwatch.hpp"
 #include "core/toml_reader.hpp"
 
 using namespace plydem;
@@ -77,4 +78,15 @@ TEST_CASE("registry: names in order, a new instance per create, errors in the re
                        "a widget needs a name", Error);
   CHECK_THROWS_WITH_AS(registry.add("empty", "", nullptr), "widget 'empty' has no factory", Error);
   CHECK(registry.names().size() == 2);  // the refused ones were not added
+}
+
+TEST_CASE("stopwatch: seconds since the start; a lap starts again") {
+  Stopwatch clock;
+  const double first = clock.seconds();
+  CHECK(first >= 0);
+  CHECK(clock.seconds() >= first);  // steady: never backwards
+  const double lap = clock.lap();
+  CHECK(lap >= first);
+  clock.restart();
+  CHECK(clock.seconds() >= 0);
 }
