@@ -35,6 +35,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
@@ -93,7 +94,7 @@ void pull_with_grips(Model& model, ExplicitIntegrator& integrator, long cycles) 
 double process_cpu_seconds() {
   timespec t{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  return static_cast<double>(t.tv_sec) + kSecondsPerNanosecond * static_cast<double>(t.tv_nsec);
 }
 
 // `cycles` cycles with a check every `check_every`, through run() or (api "advance") through
@@ -132,7 +133,7 @@ nlohmann::json row(const std::string& engine, long particles, long bonds, int th
   r["steps"] = steps;
   r["seconds"] = seconds;
   r["cpu_seconds"] = cpu_seconds;
-  r["ns_per_step"] = 1e9 * seconds / static_cast<double>(steps);
+  r["ns_per_step"] = kNanosecondsPerSecond * seconds / static_cast<double>(steps);
   r["particle_steps_per_s"] = static_cast<double>(particles) * static_cast<double>(steps) / seconds;
   r["bond_steps_per_s"] = static_cast<double>(bonds) * static_cast<double>(steps) / seconds;
   r["bytes_per_particle"] = bytes_per_particle;

@@ -46,6 +46,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "solvers/linear_solver.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
@@ -61,7 +62,8 @@ constexpr double kNominalStrain = 1e-3;
 double cpu_seconds() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  return static_cast<double>(t.tv_sec) +
+         plydem::kSecondsPerNanosecond * static_cast<double>(t.tv_nsec);
 }
 
 long minor_page_faults() {
@@ -151,9 +153,9 @@ int main(int argc, char** argv) {
     plydem::CouponSpec spec;
     spec.material = plydem::load_material("eglass-my750");
     spec.ply_angle = 0;
-    spec.particle_diameter = diameter_mm > 0 ? diameter_mm * 1e-3 : kDiameter;
-    spec.length = sized ? length_mm * 1e-3 : kPaperLength;
-    spec.width = sized ? width_mm * 1e-3 : kPaperWidth;
+    spec.particle_diameter = diameter_mm > 0 ? diameter_mm * plydem::kMetresPerMm : kDiameter;
+    spec.length = sized ? length_mm * plydem::kMetresPerMm : kPaperLength;
+    spec.width = sized ? width_mm * plydem::kMetresPerMm : kPaperWidth;
     if (particles > 0) {
       // Sites of the hexagonal layer (at 0 deg, first site at (R, R)) with centres at least one
       // radius inside an L x W rectangle: rows sqrt(3)/2 d apart, every other row shifted by d/2.
@@ -219,7 +221,7 @@ int main(int argc, char** argv) {
     if (!plydem::is_root()) return 0;  // under mpiexec, rank 0 reports (its own time and memory)
     if (json) {
       nlohmann::json j;
-      j["coupon_mm"] = {spec.length * 1e3, spec.width * 1e3};
+      j["coupon_mm"] = {spec.length * plydem::kMmPerMetre, spec.width * plydem::kMmPerMetre};
       j["particles"] = built.particles.size();
       j["bonds"] = built.bonds.size();
       j["free_dofs"] = r.free_dofs;
@@ -258,18 +260,19 @@ int main(int argc, char** argv) {
       std::cout << fmt::format(
           "| {:.3g} x {:.3g} | {} | {} | {} | {} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | "
           "{:.4f} | {} | {} | {:.0f} |\n",
-          spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(),
-          r.free_dofs, method_cell, t.checks, t.assembly, t.factorization, t.solve, first_wall,
-          first_cpu, first_faults, best, rss);
+          spec.length * plydem::kMmPerMetre, spec.width * plydem::kMmPerMetre,
+          built.particles.size(), built.bonds.size(), r.free_dofs, method_cell, t.checks,
+          t.assembly, t.factorization, t.solve, first_wall, first_cpu, first_faults, best, rss);
     } else {
       std::cout << fmt::format(
           "{:.3g} x {:.3g} mm: {} particles, {} bonds, {} free dofs, {} ({} iterations), "
           "residual {:.2g}; build {:.3f} s\n  first solve: checks {:.4f} s, assembly {:.4f} s, "
           "factorization {:.4f} s, solve {:.4f} s; call {:.4f} s wall, {:.4f} s CPU, {} page "
           "faults\n",
-          spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(),
-          r.free_dofs, r.method_name, r.iterations, r.relative_residual, build_seconds, t.checks,
-          t.assembly, t.factorization, t.solve, first_wall, first_cpu, first_faults);
+          spec.length * plydem::kMmPerMetre, spec.width * plydem::kMmPerMetre,
+          built.particles.size(), built.bonds.size(), r.free_dofs, r.method_name, r.iterations,
+          r.relative_residual, build_seconds, t.checks, t.assembly, t.factorization, t.solve,
+          first_wall, first_cpu, first_faults);
       if (repeat > 1)
         std::cout << fmt::format("  best of {} more solves: {:.4f} s wall, {:.4f} s CPU\n",
                                  repeat - 1, best_wall, best_cpu);

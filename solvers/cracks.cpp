@@ -13,6 +13,7 @@
 #include "contacts/cell_list.hpp"
 #include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
+#include "core/units.hpp"
 
 namespace plydem {
 
@@ -184,10 +185,10 @@ std::string cracks_csv(const std::vector<Crack>& cracks) {
       "first_load\n";
   for (const Crack& c : cracks) {
     out += fmt::format("{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.4g},{},{},{},{},{:g},{:.10g}\n",
-                       c.id, c.interface ? "interface" : "ply", c.ply, c.centroid.x() * 1e3,
-                       c.centroid.y() * 1e3, c.centroid.z() * 1e3, c.length * 1e3,
-                       c.angle * 180.0 / std::numbers::pi, c.bonds, c.tension, c.shear, c.mode(),
-                       c.first_at, c.first_load);
+                       c.id, c.interface ? "interface" : "ply", c.ply, c.centroid.x() * kMmPerMetre,
+                       c.centroid.y() * kMmPerMetre, c.centroid.z() * kMmPerMetre,
+                       c.length * kMmPerMetre, c.angle * 180.0 / std::numbers::pi, c.bonds,
+                       c.tension, c.shear, c.mode(), c.first_at, c.first_load);
   }
   return out;
 }
@@ -207,7 +208,7 @@ std::vector<BondBreak> cut_transverse_crack(Model& model, double x, int first_pl
     require(std::abs(p.reference_position(i, 0) - x) > 1e-9 * p.radius(i),
             fmt::format("a crack cut at x = {} mm runs through the centre of particle {}: put "
                         "the plane between particles",
-                        x * 1e3, i));
+                        x * kMmPerMetre, i));
   }
   std::vector<BondBreak> breaks;
   for (int b = 0; b < bonds.size(); ++b) {
@@ -226,7 +227,7 @@ std::vector<BondBreak> cut_transverse_crack(Model& model, double x, int first_pl
   }
   require(!breaks.empty(),
           fmt::format("a crack cut at x = {} mm through plies {} .. {} crosses no intact bond",
-                      x * 1e3, first_ply, last_ply));
+                      x * kMmPerMetre, first_ply, last_ply));
   return breaks;
 }
 

@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/parallel_bond.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #include "solvers/stiffness_assembly.hpp"
 
@@ -21,9 +22,9 @@ namespace {
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
 std::string where(const Particles& p, int i) {
-  return fmt::format("particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i,
-                     1e3 * p.reference_position(i, 0), 1e3 * p.reference_position(i, 1),
-                     1e3 * p.reference_position(i, 2));
+  return fmt::format(
+      "particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i, kMmPerMetre * p.reference_position(i, 0),
+      kMmPerMetre * p.reference_position(i, 1), kMmPerMetre * p.reference_position(i, 2));
 }
 
 // A dof whose own stiffness is below this fraction of the stiffness its bonds could give it has

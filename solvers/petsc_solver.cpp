@@ -37,6 +37,7 @@
 #include "core/error.hpp"
 #include "core/machine_memory.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "solvers/sparse_cholesky.hpp"
 
 namespace plydem {
@@ -186,7 +187,7 @@ class PetscSolver final : public LinearSolver {
             "{:.3g} of its size): the free dofs form a mechanism. Naming its dofs needs a direct "
             "factor of {:.1f} GB in this order, more than the {:.1f} GB available ({}); run "
             "--linear-solver cholmod or direct, which order the dofs to fill in less",
-            probe_error_, bytes / 1e9, memory.available / 1e9, memory.source));
+            probe_error_, bytes / kBytesPerGB, memory.available / kBytesPerGB, memory.source));
       }
       fallback_->factorize(lower, pivot_tolerance);
     }

@@ -15,6 +15,7 @@
 #include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #include "solvers/stiffness_assembly.hpp"
 
@@ -27,7 +28,7 @@ Eigen::Vector3d reference_of(const Particles& p, int i) {
 }
 
 std::string where(const Particles& p, int i) {
-  const Eigen::Vector3d x = 1e3 * reference_of(p, i);
+  const Eigen::Vector3d x = kMmPerMetre * reference_of(p, i);
   return fmt::format("particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i, x.x(), x.y(), x.z());
 }
 

@@ -18,6 +18,7 @@
 #include "core/parallel_bond.hpp"
 #include "core/progress.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "strategies/calibration.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/specimen.hpp"
@@ -859,10 +860,11 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
                                "Gauss-Newton steps",
                                out.iterations)
                  : std::string("lattice-paper: eq. (15) moduli, negative ones set to zero"),
-      fmt::join(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(m.normal.data()) * 1e-9, " "),
-      fmt::join(Eigen::Map<const Eigen::Vector3d>(m.shear.data()) * 1e-9, " "), m.coupling * 1e-9,
-      m.coupling_oblique * 1e-9, out.sample_box(0) * 1e3, out.sample_box(1) * 1e3,
-      out.sample_box(2) * 1e3, out.sample_particles, out.sample_bonds, out.sample_coordination);
+      fmt::join(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(m.normal.data()) * kGPaPerPa, " "),
+      fmt::join(Eigen::Map<const Eigen::Vector3d>(m.shear.data()) * kGPaPerPa, " "),
+      m.coupling * kGPaPerPa, m.coupling_oblique * kGPaPerPa, out.sample_box(0) * kMmPerMetre,
+      out.sample_box(1) * kMmPerMetre, out.sample_box(2) * kMmPerMetre, out.sample_particles,
+      out.sample_bonds, out.sample_coordination);
   out.seconds = clock.seconds();
   return out;
 }
@@ -885,10 +887,10 @@ void LatticeStrategy::check_reached(const LatticeCalibration& cal, const Materia
     const double error = (c.reached - c.target) / std::abs(c.target);
     if (std::abs(error) > max_error_) {
       const bool modulus = c.name[0] != 'n';
-      missed += fmt::format("{}{} = {:.4g}{} where the target is {:.4g}{} ({:+.2f}%)",
-                            missed.empty() ? "" : "; ", c.name, c.reached * (modulus ? 1e-9 : 1),
-                            modulus ? " GPa" : "", c.target * (modulus ? 1e-9 : 1),
-                            modulus ? " GPa" : "", 100 * error);
+      missed += fmt::format(
+          "{}{} = {:.4g}{} where the target is {:.4g}{} ({:+.2f}%)", missed.empty() ? "" : "; ",
+          c.name, c.reached * (modulus ? kGPaPerPa : 1), modulus ? " GPa" : "",
+          c.target * (modulus ? kGPaPerPa : 1), modulus ? " GPa" : "", 100 * error);
     }
   }
   if (!missed.empty()) {

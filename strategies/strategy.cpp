@@ -10,6 +10,7 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 
 namespace plydem {
 
@@ -20,13 +21,14 @@ void CouponSpec::validate() const {
                                                   {"particle diameter", particle_diameter}};
   for (const auto& [name, value] : sizes) {
     require(std::isfinite(value), fmt::format("coupon {} is not a finite number", name));
-    require(value > 0, fmt::format("coupon {} must be positive, got {} mm", name, value * 1e3));
+    require(value > 0,
+            fmt::format("coupon {} must be positive, got {} mm", name, value * kMmPerMetre));
   }
   require(std::isfinite(ply_angle), "ply angle is not a finite number");
   require(length >= 4 * particle_diameter && width >= particle_diameter,
           fmt::format("a {} mm x {} mm coupon is too small for particles of diameter {} mm "
                       "(need length >= 4 and width >= 1 diameter)",
-                      length * 1e3, width * 1e3, particle_diameter * 1e3));
+                      length * kMmPerMetre, width * kMmPerMetre, particle_diameter * kMmPerMetre));
 }
 
 namespace {
