@@ -25,6 +25,7 @@
 #include <string>
 
 #include "core/material.hpp"
+#include "core/units.hpp"
 #include "solvers/bond_events.hpp"
 #include "strategies/registry.hpp"
 
@@ -41,7 +42,8 @@ struct Run {
 double cpu_seconds() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  return static_cast<double>(t.tv_sec) +
+         plydem::kSecondsPerNanosecond * static_cast<double>(t.tv_nsec);
 }
 
 Run run(const plydem::Model& built, const plydem::DofConstraints& unit,

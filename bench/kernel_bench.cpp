@@ -23,7 +23,6 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <fstream>
@@ -35,6 +34,8 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "experiments/protocols/tension_test.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
@@ -42,7 +43,6 @@
 namespace {
 
 using namespace plydem;
-using Clock = std::chrono::steady_clock;
 
 // A square Hex2D layer of about `particles` particles (the edges lose a few).
 Model square_layer(long particles) {
@@ -89,16 +89,12 @@ void pull_with_grips(Model& model, ExplicitIntegrator& integrator, long cycles) 
   integrator.set_prescribed_motions({motion[0], motion[1]});
 }
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 // CPU time of the whole process, all threads [s]: with the wall time it shows whether the run had
 // its cores to itself.
 double process_cpu_seconds() {
   timespec t{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  return static_cast<double>(t.tv_sec) + kSecondsPerNanosecond * static_cast<double>(t.tv_nsec);
 }
 
 // `cycles` cycles with a check every `check_every`, through run() or (api "advance") through
@@ -137,7 +133,7 @@ nlohmann::json row(const std::string& engine, long particles, long bonds, int th
   r["steps"] = steps;
   r["seconds"] = seconds;
   r["cpu_seconds"] = cpu_seconds;
-  r["ns_per_step"] = 1e9 * seconds / static_cast<double>(steps);
+  r["ns_per_step"] = kNanosecondsPerSecond * seconds / static_cast<double>(steps);
   r["particle_steps_per_s"] = static_cast<double>(particles) * static_cast<double>(steps) / seconds;
   r["bond_steps_per_s"] = static_cast<double>(bonds) * static_cast<double>(steps) / seconds;
   r["bytes_per_particle"] = bytes_per_particle;
@@ -251,10 +247,10 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   pull_with_grips(model, integrator, 200'000);
   integrator.advance(1);  // first touch of the kernel's arrays, not timed
   const double cpu = process_cpu_seconds();
-  const auto start = Clock::now();
+  const Stopwatch clock;
   nlohmann::json timers;
   const CycleReport report = timed_cycles(integrator, api, steps, steps, &timers);
-  const double seconds = seconds_since(start);
+  const double seconds = clock.seconds();
   require(std::isfinite(report.strain_energy), "the benchmark run diverged");
   nlohmann::json r = row("plydem", n, bonds, threads, steps, seconds, process_cpu_seconds() - cpu,
                          static_cast<double>(integrator.kernel_bytes()) / static_cast<double>(n));
@@ -278,10 +274,10 @@ int run_coupon(long cycles, int threads, const std::string& order, const std::st
   ExplicitIntegrator integrator(model, settings);
   pull_with_grips(model, integrator, cycles);
   const double cpu = process_cpu_seconds();
-  const auto start = Clock::now();
+  const Stopwatch clock;
   nlohmann::json timers;
   const CycleReport report = timed_cycles(integrator, api, cycles, report_every, &timers);
-  const double seconds = seconds_since(start);
+  const double seconds = clock.seconds();
   require(std::isfinite(report.strain_energy) && report.strain_energy > 0,
           "the coupon run did not load the coupon");
   nlohmann::json r = row(

@@ -36,7 +36,6 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <fstream>
@@ -46,14 +45,14 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "solvers/linear_solver.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 constexpr double kDiameter = 0.05e-3;
 constexpr double kPaperLength = 10e-3;
@@ -63,7 +62,8 @@ constexpr double kNominalStrain = 1e-3;
 double cpu_seconds() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  return static_cast<double>(t.tv_sec) +
+         plydem::kSecondsPerNanosecond * static_cast<double>(t.tv_nsec);
 }
 
 long minor_page_faults() {
@@ -155,9 +155,9 @@ plydem::CouponSpec coupon_of(const BenchOptions& o) {
   plydem::CouponSpec spec;
   spec.material = plydem::load_material("eglass-my750");
   spec.ply_angle = 0;
-  spec.particle_diameter = o.diameter_mm > 0 ? o.diameter_mm * 1e-3 : kDiameter;
-  spec.length = sized ? o.length_mm * 1e-3 : kPaperLength;
-  spec.width = sized ? o.width_mm * 1e-3 : kPaperWidth;
+  spec.particle_diameter = o.diameter_mm > 0 ? o.diameter_mm * plydem::kMetresPerMm : kDiameter;
+  spec.length = sized ? o.length_mm * plydem::kMetresPerMm : kPaperLength;
+  spec.width = sized ? o.width_mm * plydem::kMetresPerMm : kPaperWidth;
   if (o.particles > 0) {
     // Sites of the hexagonal layer (at 0 deg, first site at (R, R)) with centres at least one
     // radius inside an L x W rectangle: rows sqrt(3)/2 d apart, every other row shifted by d/2.
@@ -202,9 +202,9 @@ void time_solves(const plydem::Model& built, const plydem::CouponSpec& spec, con
     plydem::Model model = built;
     const long faults = minor_page_faults();
     const double cpu = cpu_seconds();
-    const auto start = Clock::now();
+    const plydem::Stopwatch clock;
     plydem::StaticResult solved = plydem::solve_static(model, constraints, settings);
-    const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+    const double wall = clock.seconds();
     const double used = cpu_seconds() - cpu;
     if (k == 0) {
       m.result = std::move(solved);
@@ -224,7 +224,7 @@ void print_json(const plydem::CouponSpec& spec, const plydem::Model& built, int 
   const plydem::StaticResult& r = m.result;
   const plydem::StaticTimings& t = r.seconds;
   nlohmann::json j;
-  j["coupon_mm"] = {spec.length * 1e3, spec.width * 1e3};
+  j["coupon_mm"] = {spec.length * plydem::kMmPerMetre, spec.width * plydem::kMmPerMetre};
   j["particles"] = built.particles.size();
   j["bonds"] = built.bonds.size();
   j["free_dofs"] = r.free_dofs;
@@ -267,9 +267,9 @@ void print_markdown_row(const plydem::CouponSpec& spec, const plydem::Model& bui
   std::cout << fmt::format(
       "| {:.3g} x {:.3g} | {} | {} | {} | {} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | "
       "{:.4f} | {} | {} | {:.0f} |\n",
-      spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(), r.free_dofs,
-      method_cell, t.checks, t.assembly, t.factorization, t.solve, m.first_wall, m.first_cpu,
-      m.first_faults, best, m.rss);
+      spec.length * plydem::kMmPerMetre, spec.width * plydem::kMmPerMetre, built.particles.size(),
+      built.bonds.size(), r.free_dofs, method_cell, t.checks, t.assembly, t.factorization, t.solve,
+      m.first_wall, m.first_cpu, m.first_faults, best, m.rss);
 }
 
 void print_text(const plydem::CouponSpec& spec, const plydem::Model& built, int repeat,
@@ -281,9 +281,10 @@ void print_text(const plydem::CouponSpec& spec, const plydem::Model& built, int 
       "residual {:.2g}; build {:.3f} s\n  first solve: checks {:.4f} s, assembly {:.4f} s, "
       "factorization {:.4f} s, solve {:.4f} s; call {:.4f} s wall, {:.4f} s CPU, {} page "
       "faults\n",
-      spec.length * 1e3, spec.width * 1e3, built.particles.size(), built.bonds.size(), r.free_dofs,
-      r.method_name, r.iterations, r.relative_residual, m.build_seconds, t.checks, t.assembly,
-      t.factorization, t.solve, m.first_wall, m.first_cpu, m.first_faults);
+      spec.length * plydem::kMmPerMetre, spec.width * plydem::kMmPerMetre, built.particles.size(),
+      built.bonds.size(), r.free_dofs, r.method_name, r.iterations, r.relative_residual,
+      m.build_seconds, t.checks, t.assembly, t.factorization, t.solve, m.first_wall, m.first_cpu,
+      m.first_faults);
   if (repeat > 1)
     std::cout << fmt::format("  best of {} more solves: {:.4f} s wall, {:.4f} s CPU\n", repeat - 1,
                              m.best_wall, m.best_cpu);
@@ -311,13 +312,13 @@ int main(int argc, char** argv) {
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
 
     Measurement m;
-    const auto start = Clock::now();
+    const plydem::Stopwatch clock;
     const std::unique_ptr<plydem::Strategy> hex2d = plydem::default_registry().create("hex2d");
     const plydem::Model built =
         o.layup.empty()
             ? hex2d->build(spec).model
             : plydem::build_laminate(*hex2d, {spec, plydem::parse_layup(o.layup), {}}).model;
-    m.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    m.build_seconds = clock.seconds();
     time_solves(built, spec, o, m);
 
     if (!plydem::is_root()) return 0;  // under mpiexec, rank 0 reports (its own time and memory)

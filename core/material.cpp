@@ -10,21 +10,9 @@
 #include <string_view>
 #include <vector>
 
-// Debian's libtomlplusplus-dev ships a compiled shared library, but its headers default to
-// header-only mode (TOML_HEADER_ONLY=1) unless the build passes the flags from tomlplusplus.pc or
-// the tomlplusplus::tomlplusplus CMake target (-DTOML_HEADER_ONLY=0 -DTOML_SHARED_LIB=1). Default
-// to the compiled library so that a plain `-ltomlplusplus` link works and the parser is not
-// re-instantiated in this translation unit; a build that sets the flags itself wins.
-#ifndef TOML_HEADER_ONLY
-#define TOML_HEADER_ONLY 0
-#ifndef TOML_SHARED_LIB
-#define TOML_SHARED_LIB 1
-#endif
-#endif
-#include <toml++/toml.h>
-
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
+#include "core/toml_reader.hpp"
 
 namespace plydem {
 namespace {
@@ -165,8 +153,7 @@ std::optional<double> read_number(const toml::table& table, std::string_view key
     require(!required, "material file " + in_quotes(file) + ": missing key " + in_quotes(key));
     return std::nullopt;
   }
-  if (const auto* value = node->as_floating_point()) return value->get();
-  if (const auto* value = node->as_integer()) return static_cast<double>(value->get());
+  if (const std::optional<double> value = toml_number(*node)) return value;
   std::ostringstream type;
   type << node->type();
   throw Error("material file " + in_quotes(file) + ": key " + in_quotes(key) +
@@ -175,15 +162,13 @@ std::optional<double> read_number(const toml::table& table, std::string_view key
 
 // `text` is the file's content when given, else the file is read.
 Material parse_material_file(const std::string& file, const std::string* text = nullptr) {
-  toml::table table;
-  try {
-    table = text ? toml::parse(*text, std::string_view(file)) : toml::parse_file(file);
-  } catch (const toml::parse_error& e) {
-    const auto& where = e.source().begin;
-    throw Error("material file " + in_quotes(file) + ": TOML syntax error at line " +
-                std::to_string(where.line) + ", column " + std::to_string(where.column) + ": " +
-                std::string(e.description()));
-  }
+  const auto syntax_error = [&file](const TomlSyntaxError& e) {
+    return "material file " + in_quotes(file) + ": TOML syntax error at line " +
+           std::to_string(e.line) + ", column " + std::to_string(e.column) + ": " +
+           std::string(e.description);
+  };
+  const toml::table table =
+      text ? parse_toml(*text, file, syntax_error) : parse_toml_file(file, syntax_error);
 
   // Unknown keys are errors, not warnings: a typo such as "nu21" for "nu12" would otherwise leave
   // the intended constant missing or, worse, silently use a different one.

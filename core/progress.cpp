@@ -31,20 +31,17 @@ ProgressMeter::ProgressMeter(std::string what, double total, std::string unit)
     : what_(std::move(what)),
       unit_(std::move(unit)),
       total_(total),
-      interval_(progress_interval()),
-      start_(Clock::now()),
-      last_(start_) {}
+      interval_(progress_interval()) {}
 
 void ProgressMeter::update(double done) {
   update(done, std::string());
 }
 
 void ProgressMeter::update(double done, const std::string& detail) {
-  const Clock::time_point now = Clock::now();
-  if (std::chrono::duration<double>(now - last_).count() < interval_) return;
+  if (since_report_.seconds() < interval_) return;
   if (!spdlog::default_logger_raw()->should_log(spdlog::level::info)) return;
-  const double elapsed = std::chrono::duration<double>(now - start_).count();
-  last_ = now;
+  const double elapsed = since_start_.seconds();
+  since_report_.restart();
   reported_ = true;
   const std::string tail = detail.empty() ? std::string() : ", " + detail;
   if (total_ > 0) {

@@ -9,8 +9,9 @@
 ///   ProgressMeter meter("building the coupon: lattice rows", rows, "rows");
 ///   for (long i = 0; i < rows; ++i) { ...; meter.update(i + 1); }
 
-#include <chrono>
 #include <string>
+
+#include "core/stopwatch.hpp"
 
 namespace plydem {
 
@@ -32,11 +33,10 @@ class ProgressMeter {
   bool reported() const { return reported_; }
 
  private:
-  using Clock = std::chrono::steady_clock;
   std::string what_, unit_;
   double total_ = 0;
   double interval_ = 2;
-  Clock::time_point start_, last_;
+  Stopwatch since_start_, since_report_;
   bool reported_ = false;
 };
 

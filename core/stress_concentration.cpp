@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 
 namespace plydem {
 
@@ -29,7 +30,7 @@ double heywood_finite_width_factor(double diameter, double width) {
   require(std::isfinite(diameter) && std::isfinite(width) && diameter >= 0 && diameter < width,
           fmt::format("the finite-width factor needs a hole narrower than its strip (0 <= D < W), "
                       "got D = {} mm, W = {} mm",
-                      diameter * 1e3, width * 1e3));
+                      diameter * kMmPerMetre, width * kMmPerMetre));
   const double r = 1.0 - diameter / width;
   return (2.0 + r * r * r) / (3.0 * r);
 }

@@ -5,11 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <numeric>
 #include <random>
 #include <tuple>
 
+#include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
+#include "core/units.hpp"
 
 namespace plydem {
 namespace {
@@ -107,7 +108,7 @@ void check_contact_radius(const RandomPacking& packing, double contact_radius) {
     require(!packing.periodic[a] || packing.box(a) >= 3 * cutoff,
             fmt::format("random packing: the periodic edge along {} ({:.4g} mm) must be at least "
                         "3 bond cutoffs ({:.4g} mm) long",
-                        kAxis[a], packing.box(a) * 1e3, 3 * cutoff * 1e3));
+                        kAxis[a], packing.box(a) * kMmPerMetre, 3 * cutoff * kMmPerMetre));
   }
 }
 
@@ -161,7 +162,7 @@ void RandomPackingSpec::validate() const {
     require(!periodic[a] || box(a) >= 3 * diameter,
             fmt::format("random packing: the periodic edge along {} ({:.4g} mm) must be at least "
                         "3 diameters ({:.4g} mm)",
-                        kAxis[a], box(a) * 1e3, 3 * diameter * 1e3));
+                        kAxis[a], box(a) * kMmPerMetre, 3 * diameter * kMmPerMetre));
   }
   require(std::isfinite(packing_fraction) && packing_fraction > 0 &&
               packing_fraction <= kMaxPackingFraction,
@@ -175,7 +176,8 @@ void RandomPackingSpec::validate() const {
   require(count() >= 2,
           fmt::format("random packing: a {:.4g} x {:.4g} x {:.4g} mm box at packing fraction {} "
                       "holds fewer than two spheres of diameter {:.4g} mm",
-                      box(0) * 1e3, box(1) * 1e3, box(2) * 1e3, packing_fraction, diameter * 1e3));
+                      box(0) * kMmPerMetre, box(1) * kMmPerMetre, box(2) * kMmPerMetre,
+                      packing_fraction, diameter * kMmPerMetre));
 }
 
 RandomPacking random_sequential_addition(const RandomPackingSpec& spec) {
@@ -288,13 +290,9 @@ PackingBonds bonds_within_brute_force(const RandomPacking& packing, double conta
 
 int keep_largest_cluster(RandomPacking& packing, PackingBonds& bonds) {
   const int n = static_cast<int>(packing.position.rows());
-  std::vector<int> parent(n);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (const auto& [i, j] : bonds.pairs) parent[root(i)] = root(j);
+  DisjointSets sets(n);
+  auto root = [&](int i) { return sets.find(i); };
+  for (const auto& [i, j] : bonds.pairs) sets.join(i, j);
   std::vector<int> size(n, 0);
   for (int i = 0; i < n; ++i) ++size[root(i)];
   const int largest = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());

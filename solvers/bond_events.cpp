@@ -10,11 +10,11 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <numeric>
 #include <utility>
 #include <vector>
 
 #include "contacts/bond_kernel.hpp"
+#include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
 
 namespace plydem {
@@ -73,26 +73,12 @@ Matrix12d symmetric_bond_stiffness(const BondParameters& params) {
   return 0.5 * (k + k.transpose());  // as the assembly does (solvers/stiffness_assembly.hpp)
 }
 
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
-
 // Clusters of particles joined by intact bonds: a label per particle (0 .. count - 1).
 int intact_clusters(const Model& model, std::vector<int>& label) {
   const int n = model.particles.size();
-  UnionFind sets(n);
+  DisjointSets sets(n);
   for (int b = 0; b < model.bonds.size(); ++b)
-    if (!model.bonds.is_broken(b)) sets.unite(model.bonds.first(b), model.bonds.second(b));
+    if (!model.bonds.is_broken(b)) sets.join(model.bonds.first(b), model.bonds.second(b));
   label.assign(n, -1);
   int count = 0;
   for (int i = 0; i < n; ++i) {
@@ -478,7 +464,7 @@ class UnitLoadSolver {
   void find_active_dofs(const Model& model) {
     const int dofs = kDofsPerParticle * model.particles.size();
     const int source = dofs;
-    UnionFind sets(dofs + 1);
+    DisjointSets sets(dofs + 1);
     auto prescribed = [&](int dof) {
       return constraints_.fixed(dof / kDofsPerParticle, dof % kDofsPerParticle);
     };
@@ -494,9 +480,9 @@ class UnitLoadSolver {
         for (int c = 0; c < 12; ++c) {
           if (k(r, c) == 0) continue;
           if (!prescribed(bd[c]))
-            sets.unite(bd[r], bd[c]);
+            sets.join(bd[r], bd[c]);
           else if (value(bd[c]) != 0)
-            sets.unite(bd[r], source);
+            sets.join(bd[r], source);
         }
       }
     }

@@ -8,26 +8,14 @@
 #include <limits>
 #include <map>
 #include <numbers>
-#include <numeric>
 #include <optional>
 
 #include "contacts/cell_list.hpp"
+#include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
+#include "core/units.hpp"
 
 namespace plydem {
-
-namespace {
-
-// Union-find with path halving.
-int find_root(std::vector<int>& parent, int i) {
-  while (parent[i] != i) {
-    parent[i] = parent[parent[i]];
-    i = parent[i];
-  }
-  return i;
-}
-
-}  // namespace
 
 std::string Crack::mode() const {
   if (shear == 0) return "tension";
@@ -57,19 +45,17 @@ std::vector<Crack> find_cracks(const Model& model, const std::vector<BondBreak>&
     group[k] = {interface, interface ? bonds.family(b) : p.ply(bonds.first(b))};
     position.row(k) = breaks[k].position.transpose().array();
   }
-  std::vector<int> parent(n);
-  std::iota(parent.begin(), parent.end(), 0);
+  DisjointSets sets(n);
   const Eigen::ArrayXd half = Eigen::ArrayXd::Constant(n, 0.5 * link_distance);
   for (const auto& [i, j] : find_contact_pairs(position, half, 1.0)) {
     if (group[i] != group[j]) continue;
-    const int ri = find_root(parent, i), rj = find_root(parent, j);
-    if (ri != rj) parent[std::max(ri, rj)] = std::min(ri, rj);
+    sets.join(i, j);
   }
   // Members of each crack, in order of their first break (the breaks are in solver order).
   std::map<int, std::vector<int>> members;
   std::vector<int> order;
   for (int k = 0; k < n; ++k) {
-    const int root = find_root(parent, k);
+    const int root = sets.find(k);
     if (members[root].empty()) order.push_back(root);
     members[root].push_back(k);
   }
@@ -199,10 +185,10 @@ std::string cracks_csv(const std::vector<Crack>& cracks) {
       "first_load\n";
   for (const Crack& c : cracks) {
     out += fmt::format("{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.4g},{},{},{},{},{:g},{:.10g}\n",
-                       c.id, c.interface ? "interface" : "ply", c.ply, c.centroid.x() * 1e3,
-                       c.centroid.y() * 1e3, c.centroid.z() * 1e3, c.length * 1e3,
-                       c.angle * 180.0 / std::numbers::pi, c.bonds, c.tension, c.shear, c.mode(),
-                       c.first_at, c.first_load);
+                       c.id, c.interface ? "interface" : "ply", c.ply, c.centroid.x() * kMmPerMetre,
+                       c.centroid.y() * kMmPerMetre, c.centroid.z() * kMmPerMetre,
+                       c.length * kMmPerMetre, c.angle * 180.0 / std::numbers::pi, c.bonds,
+                       c.tension, c.shear, c.mode(), c.first_at, c.first_load);
   }
   return out;
 }
@@ -222,7 +208,7 @@ std::vector<BondBreak> cut_transverse_crack(Model& model, double x, int first_pl
     require(std::abs(p.reference_position(i, 0) - x) > 1e-9 * p.radius(i),
             fmt::format("a crack cut at x = {} mm runs through the centre of particle {}: put "
                         "the plane between particles",
-                        x * 1e3, i));
+                        x * kMmPerMetre, i));
   }
   std::vector<BondBreak> breaks;
   for (int b = 0; b < bonds.size(); ++b) {
@@ -241,7 +227,7 @@ std::vector<BondBreak> cut_transverse_crack(Model& model, double x, int first_pl
   }
   require(!breaks.empty(),
           fmt::format("a crack cut at x = {} mm through plies {} .. {} crosses no intact bond",
-                      x * 1e3, first_ply, last_ply));
+                      x * kMmPerMetre, first_ply, last_ply));
   return breaks;
 }
 

@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/machine_memory.hpp"
+#include "core/units.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #ifdef PLYDEM_HAVE_PETSC
 #include "solvers/petsc_solver.hpp"
@@ -297,7 +298,8 @@ class AutoSolver final : public LinearSolver {
       direct_.reset();
       cholmod_ = make_linear_solver(LinearSolverKind::kPetsc);
       reason_ =
-          !fits ? fmt::format("chosen by auto: a direct factor would need {:.2f} GB", bytes / 1e9)
+          !fits ? fmt::format("chosen by auto: a direct factor would need {:.2f} GB",
+                              bytes / kBytesPerGB)
           : mpi_size() > 1
               ? "chosen by auto: distributed over the MPI ranks"
               : fmt::format("chosen by auto: a direct factor would fill {:.0f} entries per unknown",
@@ -307,8 +309,8 @@ class AutoSolver final : public LinearSolver {
           "static solve: the direct factor of these {:.0f} unknowns needs about {:.2f} GB "
           "(symbolic analysis: {:.3g} entries, {:.0f} per unknown, with its workspace), more "
           "than the {:.2f} GB available ({}); {}",
-          unknowns, bytes / 1e9, static_cast<double>(direct_->factor_entries()), fill,
-          memory.available / 1e9, memory.source,
+          unknowns, bytes / kBytesPerGB, static_cast<double>(direct_->factor_entries()), fill,
+          memory.available / kBytesPerGB, memory.source,
           use_ == LinearSolverUse::kManySolves
               ? "this solver updates a direct factor, so it cannot switch to an iterative one: "
                 "make the model smaller or the particles larger"

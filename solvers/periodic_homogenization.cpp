@@ -4,7 +4,6 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <vector>
@@ -12,19 +11,20 @@
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
 #include "core/parallel_bond.hpp"
+#include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #include "solvers/stiffness_assembly.hpp"
 
 namespace plydem {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
 std::string where(const Particles& p, int i) {
-  return fmt::format("particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i,
-                     1e3 * p.reference_position(i, 0), 1e3 * p.reference_position(i, 1),
-                     1e3 * p.reference_position(i, 2));
+  return fmt::format(
+      "particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i, kMmPerMetre * p.reference_position(i, 0),
+      kMmPerMetre * p.reference_position(i, 1), kMmPerMetre * p.reference_position(i, 2));
 }
 
 // A dof whose own stiffness is below this fraction of the stiffness its bonds could give it has
@@ -432,7 +432,7 @@ void check_equilibrium(const BlockStiffness& k, const Eigen::MatrixXd& fluctuati
 PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
                                            const StaticSettings& settings,
                                            Eigen::MatrixXd* fluctuations) {
-  const auto start = Clock::now();
+  const Stopwatch clock;
   validate(settings);
   periodic.check_consistency();
   const Model& model = periodic.model;
@@ -479,7 +479,7 @@ PeriodicHomogenization homogenize_periodic(const PeriodicModel& periodic,
     }
   }
   result.relaxed = 0.5 * (condensed + condensed.transpose()) / periodic.volume;
-  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.seconds = clock.seconds();
   return result;
 }
 

@@ -28,7 +28,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -37,6 +36,8 @@
 
 #include "core/error.hpp"
 #include "core/machine_memory.hpp"
+#include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "solvers/sparse_cholesky.hpp"
 
 namespace plydem {
@@ -103,8 +104,7 @@ double probe_value(std::uint64_t row) {
 // The progress of one KSPSolve: residuals fall about geometrically, so the time left is the
 // decades still to go at the rate of those done.
 struct SolveProgress {
-  using Clock = std::chrono::steady_clock;
-  Clock::time_point start = Clock::now(), last_report = start;
+  Stopwatch since_start, since_report;
   double first_residual = 0;
   double target = 1e-12;  // relative
   const char* what = "solve";
@@ -116,10 +116,9 @@ PetscErrorCode report_progress(KSP /*ksp*/, PetscInt iteration, PetscReal residu
     p.first_residual = residual;
     return 0;
   }
-  const auto now = SolveProgress::Clock::now();
-  const double elapsed = std::chrono::duration<double>(now - p.start).count();
-  if (std::chrono::duration<double>(now - p.last_report).count() < kProgressSeconds) return 0;
-  p.last_report = now;
+  if (p.since_report.seconds() < kProgressSeconds) return 0;
+  const double elapsed = p.since_start.seconds();
+  p.since_report.restart();
   if (!is_root() || !(p.first_residual > 0)) return 0;
   const double relative = residual / p.first_residual;
   const double done = -std::log10(std::max(relative, 1e-300));
@@ -165,10 +164,9 @@ class PetscSolver final : public LinearSolver {
     default_option("-mg_levels_pc_type", "jacobi");
     check(KSPSetFromOptions(ksp_), "options (KSPSetFromOptions)");
     check(KSPMonitorSet(ksp_, report_progress, &progress_, nullptr), "KSPMonitorSet");
-    const auto setup_start = SolveProgress::Clock::now();
+    const Stopwatch setup_clock;
     check(KSPSetUp(ksp_), "setup of the preconditioner (KSPSetUp)");
-    const double setup_seconds =
-        std::chrono::duration<double>(SolveProgress::Clock::now() - setup_start).count();
+    const double setup_seconds = setup_clock.seconds();
     if (setup_seconds > kProgressSeconds && is_root())
       spdlog::info("static solve: PETSc's AMG hierarchy for {} unknowns set up in {:.1f} s", n_,
                    setup_seconds);
@@ -189,7 +187,7 @@ class PetscSolver final : public LinearSolver {
             "{:.3g} of its size): the free dofs form a mechanism. Naming its dofs needs a direct "
             "factor of {:.1f} GB in this order, more than the {:.1f} GB available ({}); run "
             "--linear-solver cholmod or direct, which order the dofs to fill in less",
-            probe_error_, bytes / 1e9, memory.available / 1e9, memory.source));
+            probe_error_, bytes / kBytesPerGB, memory.available / kBytesPerGB, memory.source));
       }
       fallback_->factorize(lower, pivot_tolerance);
     }

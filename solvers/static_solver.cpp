@@ -4,7 +4,6 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -13,7 +12,10 @@
 #include <vector>
 
 #include "contacts/bond_kernel.hpp"
+#include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "solvers/sparse_cholesky.hpp"
 #include "solvers/stiffness_assembly.hpp"
 
@@ -21,18 +23,12 @@ namespace plydem {
 namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 Eigen::Vector3d reference_of(const Particles& p, int i) {
   return {p.reference_position(i, 0), p.reference_position(i, 1), p.reference_position(i, 2)};
 }
 
 std::string where(const Particles& p, int i) {
-  const Eigen::Vector3d x = 1e3 * reference_of(p, i);
+  const Eigen::Vector3d x = kMmPerMetre * reference_of(p, i);
   return fmt::format("particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i, x.x(), x.y(), x.z());
 }
 
@@ -112,29 +108,13 @@ void check_input(const Model& model, const DofConstraints& constraints) {
   }
 }
 
-// Particles joined into sets (union-find with path halving); a set's root is its lowest index.
-struct ParticleSets {
-  explicit ParticleSets(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int root(int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  // Joins the sets of i and j; false where they were one already.
-  bool join(int i, int j) {
-    const int a = root(i), b = root(j);
-    if (a == b) return false;
-    parent[std::max(a, b)] = std::min(a, b);
-    return true;
-  }
-  std::vector<int> parent;
-};
-
 // Clusters of bond-connected particles (union-find); each has its own six rigid-body modes.
 std::vector<std::vector<int>> bonded_clusters(const Model& model) {
   const int n = model.particles.size();
-  ParticleSets sets(n);
-  for (int k = 0; k < model.bonds.size(); ++k) sets.join(model.bonds.first(k), model.bonds.second(k));
-  auto root = [&](int i) { return sets.root(i); };
+  DisjointSets sets(n);
+  for (int k = 0; k < model.bonds.size(); ++k)
+    sets.join(model.bonds.first(k), model.bonds.second(k));
+  auto root = [&](int i) { return sets.find(i); };
   std::vector<int> index(n, -1);
   std::vector<std::vector<int>> clusters;
   for (int i = 0; i < n; ++i) {
@@ -337,8 +317,8 @@ bool free_motions_are_rigid(const Model& model) {
   const Bonds& b = model.bonds;
   const auto& x = model.particles.reference_position;
   const int n = model.particles.size();
-  ParticleSets bodies(n);
-  auto root = [&](int i) { return bodies.root(i); };
+  DisjointSets bodies(n);
+  auto root = [&](int i) { return bodies.find(i); };
   auto join = [&](int i, int j) { return bodies.join(i, j); };
   std::vector<int> point_bonds;
   std::vector<Eigen::Vector3d> contact;
@@ -569,7 +549,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   validate(settings);
   Impl& m = *impl_;
   m.settings = settings;
-  auto start = Clock::now();
+  Stopwatch phase;
   check_input(model, given);
   m.constraints = given;
   m.given_fixed = given.fixed;
@@ -582,7 +562,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
         m.pinned.push_back(pin);
       }
   }
-  m.setup.checks = seconds_since(start);
+  m.setup.checks = phase.seconds();
 
   const Particles& p = model.particles;
   const int n = m.n = p.size();
@@ -608,15 +588,15 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   // The hand-written direct solver (and kAuto, which starts with its analysis) factorizes in a
   // fill-reducing order of the particles (counted with the factorization); CHOLMOD orders the
   // dofs itself and CG needs none.
-  start = Clock::now();
+  phase.restart();
   // PETSc numbers the particles itself (slices along the model's longest extent, one per rank).
   m.order =
       m.direct && nf > 0 && kind != LinearSolverKind::kCholmod && kind != LinearSolverKind::kPetsc
           ? EliminationOrder::minimum_degree(model)
           : EliminationOrder::identity(n);
-  const double ordering_seconds = seconds_since(start);
+  const double ordering_seconds = phase.seconds();
 
-  start = Clock::now();
+  phase.restart();
   // Dofs in rank order (dof 6 * rank + component): index among the free dofs, or -1 if
   // prescribed; free_dofs[f] is the model's dof (6 * particle + component) of free index f.
   m.free_index.assign(dofs, -1);
@@ -647,9 +627,9 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   }
   // The lower triangle only: all that the factorizations, IC and CG read, at half the memory.
   m.a = compress_lower(m.k, m.free_index, nf, m.s);
-  m.setup.assembly = seconds_since(start);
+  m.setup.assembly = phase.seconds();
 
-  start = Clock::now();
+  phase.restart();
   if (nf == 0) {
     m.method_name = "none (every dof prescribed)";
   } else if (m.direct) {
@@ -661,23 +641,23 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
     // Where the unknowns sit, for PETSc's rigid-body near-null space.
     // The rigidity test only where PETSc may solve (it spares PETSc's mechanism probe).
-    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position,
-                            petsc_may_solve && free_motions_are_rigid(model)});
+    m.cholesky->set_layout(
+        {m.free_dofs, m.s, p.reference_position, petsc_may_solve && free_motions_are_rigid(model)});
     m.cholesky->factor(m.a, threshold);
     ++m.factorizations;
     if (!m.cholesky->zero_pivots().empty())
       refuse_zero_pivots(p, m.free_dofs, m.cholesky->pivots(), m.cholesky->zero_pivots(),
                          threshold);
     m.method_name = m.cholesky->name();
-    m.setup.factorization = ordering_seconds + seconds_since(start);
+    m.setup.factorization = ordering_seconds + phase.seconds();
   } else if (settings.preconditioner == StaticPreconditioner::kIncompleteCholesky) {
     m.method_name = "ConjugateGradient + IncompleteCholesky";
     m.cg_ic = m.make_cg<IncompleteCholeskyCg>();
-    m.setup.factorization = seconds_since(start);
+    m.setup.factorization = phase.seconds();
   } else {
     m.method_name = "ConjugateGradient + Jacobi";
     m.cg_jacobi = m.make_cg<JacobiCg>();
-    m.setup.factorization = seconds_since(start);
+    m.setup.factorization = phase.seconds();
   }
 }
 
@@ -744,7 +724,7 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
 
   // The prescribed values (pins at zero), in rank order, and the right-hand side -K_fp u_p from
   // the blocks (the prescribed values, free dofs at zero).
-  auto start = Clock::now();
+  Stopwatch phase;
   const int nf = m.nf;
   auto value_of = [&](int i, int c) { return m.given_fixed(i, c) ? values(i, c) : 0.0; };
   Eigen::VectorXd u_ranked = Eigen::VectorXd::Zero(m.dofs);
@@ -759,9 +739,9 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
     for (int d = 0; d < m.dofs; ++d)
       if (m.free_index[d] >= 0) b(m.free_index[d]) = -m.s(m.free_index[d]) * k_u(d);
   }
-  result.seconds.assembly += seconds_since(start);
+  result.seconds.assembly += phase.seconds();
 
-  start = Clock::now();
+  phase.restart();
   Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);
   if (nf > 0 && m.direct) {
     y = b;
@@ -779,7 +759,7 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
     else
       m.run_cg(*m.cg_jacobi, b, y, result);
   }
-  result.seconds.solve = seconds_since(start);
+  result.seconds.solve = phase.seconds();
   require(y.allFinite(),
           "static solve: the solution is not finite (the stiffness matrix is numerically "
           "singular)");

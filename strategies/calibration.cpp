@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "strategies/registry.hpp"
 
 namespace plydem {
@@ -215,10 +216,10 @@ std::string Unreachable::message() const {
     const std::string error =
         std::abs(t) > 1e-9 * target.norm()
             ? fmt::format("{:+.2f}%", 100 * (r - t) / std::abs(t))
-            : fmt::format("target 0, off by {:.2g} GPa", std::abs(r - t) * 1e-9);
-    entries += fmt::format("{}{} {:.4g} ({})", e ? ", " : "", kEntryNames[e], r * 1e-9 + 0.0,
+            : fmt::format("target 0, off by {:.2g} GPa", std::abs(r - t) * kGPaPerPa);
+    entries += fmt::format("{}{} {:.4g} ({})", e ? ", " : "", kEntryNames[e], r * kGPaPerPa + 0.0,
                            std::abs(t) > 1e-9 * target.norm()
-                               ? fmt::format("target {:.4g}, {}", t * 1e-9, error)
+                               ? fmt::format("target {:.4g}, {}", t * kGPaPerPa, error)
                                : error);
   }
   std::string strategies;
@@ -265,15 +266,16 @@ std::string describe_unreachable(const Eigen::Matrix3d& reached, const Eigen::Ma
       worst = e;
     }
     // + 0.0 turns -0 into 0 for printing.
-    entries +=
-        fmt::format("{}{} {:.4g} ({:.4g})", e ? ", " : "", names[e],
-                    reached(rows[e], cols[e]) * 1e-9 + 0.0, target(rows[e], cols[e]) * 1e-9 + 0.0);
+    entries += fmt::format("{}{} {:.4g} ({:.4g})", e ? ", " : "", names[e],
+                           reached(rows[e], cols[e]) * kGPaPerPa + 0.0,
+                           target(rows[e], cols[e]) * kGPaPerPa + 0.0);
   }
   return fmt::format(
       "{} cannot be reached: the nearest stiffness with non-negative springs has {} = {:.4g} GPa "
       "where the target is {:.4g} GPa (relative error {:.3g}); nearest (target) in GPa: {}",
-      names[worst], names[worst], reached(rows[worst], cols[worst]) * 1e-9,
-      target(rows[worst], cols[worst]) * 1e-9, (reached - target).norm() / target.norm(), entries);
+      names[worst], names[worst], reached(rows[worst], cols[worst]) * kGPaPerPa,
+      target(rows[worst], cols[worst]) * kGPaPerPa, (reached - target).norm() / target.norm(),
+      entries);
 }
 
 }  // namespace plydem

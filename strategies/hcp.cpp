@@ -8,6 +8,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "packings/hcp_lamina.hpp"
 #include "strategies/calibration.hpp"
 #include "strategies/registry.hpp"
@@ -78,7 +79,7 @@ Eigen::VectorXd affine_fit(const UnitCell& cell, const Eigen::Matrix3d& target,
 }
 
 std::string gpa(double pascal) {
-  return fmt::format("{:.4g}", pascal * 1e-9);
+  return fmt::format("{:.4g}", pascal * kGPaPerPa);
 }
 
 void validate_ply(double ply_angle, double thickness) {

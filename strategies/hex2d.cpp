@@ -9,6 +9,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "packings/hexagonal_layer.hpp"
 #include "strategies/boundary_cells.hpp"
 #include "strategies/calibration.hpp"
@@ -70,8 +71,8 @@ HexagonalRelaxedSprings hexagonal_springs_relaxed(const Eigen::Matrix3d& c, doub
 }
 
 std::string hexagonal_relaxed_limits(const Eigen::Matrix3d& c) {
-  const double c11 = c(0, 0) * 1e-9, c22 = c(1, 1) * 1e-9, c12 = c(0, 1) * 1e-9,
-               c66 = c(2, 2) * 1e-9;
+  const double c11 = c(0, 0) * kGPaPerPa, c22 = c(1, 1) * kGPaPerPa, c12 = c(0, 1) * kGPaPerPa,
+               c66 = c(2, 2) * kGPaPerPa;
   std::string violated;
   auto check = [&](bool holds, const std::string& condition) {
     if (!holds) violated += fmt::format("{}{}", violated.empty() ? "" : "; ", condition);

@@ -3,12 +3,12 @@
 #include <fmt/format.h>
 
 #include <cctype>
-#include <chrono>
 #include <cmath>
 #include <numbers>
 
 #include "contacts/cell_list.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 
 namespace plydem {
 
@@ -121,7 +121,7 @@ Specimen build_laminate(const Strategy& strategy, const LaminateSpec& spec) {
 }
 
 Specimen build_laminate(SpecimenBuilder& builder, const LaminateSpec& spec) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   require(!spec.ply_angles.empty(), "a laminate needs at least one ply");
   spec.coupon.validate();
   spec.interface.validate();
@@ -235,8 +235,7 @@ Specimen build_laminate(SpecimenBuilder& builder, const LaminateSpec& spec) {
       set_ply_transverse_shear(specimen, k, spec.coupon.material, spec.ply_angles[k], t,
                                builder.strategy().description());
   model.check_consistency();
-  specimen.build_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  specimen.build_seconds = clock.seconds();
   return specimen;
 }
 

@@ -6,7 +6,6 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -18,6 +17,8 @@
 #include "core/error.hpp"
 #include "core/parallel_bond.hpp"
 #include "core/progress.hpp"
+#include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "strategies/calibration.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/specimen.hpp"
@@ -25,12 +26,7 @@
 namespace plydem {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 constexpr double kDegree = std::numbers::pi / 180.0;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // Voigt index pairs (11, 22, 33, 23, 13, 12).
 constexpr int kVoigt[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
@@ -856,10 +852,11 @@ std::string calibration_method(const LatticeCalibration& out, bool corrected) {
                               "Gauss-Newton steps",
                               out.iterations)
                 : std::string("lattice-paper: eq. (15) moduli, negative ones set to zero"),
-      fmt::join(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(m.normal.data()) * 1e-9, " "),
-      fmt::join(Eigen::Map<const Eigen::Vector3d>(m.shear.data()) * 1e-9, " "), m.coupling * 1e-9,
-      m.coupling_oblique * 1e-9, out.sample_box(0) * 1e3, out.sample_box(1) * 1e3,
-      out.sample_box(2) * 1e3, out.sample_particles, out.sample_bonds, out.sample_coordination);
+      fmt::join(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(m.normal.data()) * kGPaPerPa, " "),
+      fmt::join(Eigen::Map<const Eigen::Vector3d>(m.shear.data()) * kGPaPerPa, " "),
+      m.coupling * kGPaPerPa, m.coupling_oblique * kGPaPerPa, out.sample_box(0) * kMmPerMetre,
+      out.sample_box(1) * kMmPerMetre, out.sample_box(2) * kMmPerMetre, out.sample_particles,
+      out.sample_bonds, out.sample_coordination);
 }
 
 }  // namespace
@@ -868,7 +865,7 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
                                                       double thickness, double diameter,
                                                       const Eigen::Vector2d* sample_size,
                                                       const OrientationModuli* start_law) const {
-  const auto start = Clock::now();
+  const Stopwatch clock;
   validate(material);
   require(std::isfinite(ply_angle), "ply angle is not finite");
   require(std::isfinite(thickness) && thickness > 0,
@@ -925,7 +922,7 @@ LatticeCalibration LatticeStrategy::calibrate_lattice(const Material& material, 
   cal.affine = in_plane_block(affine_layer(model, sample.volume));
   cal.families = orientation_families(model.bonds, g, ply_angle);
   cal.method = calibration_method(out, corrected_);
-  out.seconds = seconds_since(start);
+  out.seconds = clock.seconds();
   return out;
 }
 
@@ -947,10 +944,10 @@ void LatticeStrategy::check_reached(const LatticeCalibration& cal, const Materia
     const double error = (c.reached - c.target) / std::abs(c.target);
     if (std::abs(error) > max_error_) {
       const bool modulus = c.name[0] != 'n';
-      missed += fmt::format("{}{} = {:.4g}{} where the target is {:.4g}{} ({:+.2f}%)",
-                            missed.empty() ? "" : "; ", c.name, c.reached * (modulus ? 1e-9 : 1),
-                            modulus ? " GPa" : "", c.target * (modulus ? 1e-9 : 1),
-                            modulus ? " GPa" : "", 100 * error);
+      missed += fmt::format(
+          "{}{} = {:.4g}{} where the target is {:.4g}{} ({:+.2f}%)", missed.empty() ? "" : "; ",
+          c.name, c.reached * (modulus ? kGPaPerPa : 1), modulus ? " GPa" : "",
+          c.target * (modulus ? kGPaPerPa : 1), modulus ? " GPa" : "", 100 * error);
     }
   }
   if (!missed.empty()) {

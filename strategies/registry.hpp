@@ -7,34 +7,21 @@
 ///   plydem::Registry& registry = plydem::default_registry();
 ///   registry.add("my-packing", "my own packing", [] { return std::make_unique<MyStrategy>(); });
 
-#include <functional>
-#include <map>
-#include <memory>
 #include <string>
 #include <vector>
 
+#include "core/registry.hpp"
 #include "strategies/strategy.hpp"
 
 namespace plydem {
 
-using StrategyFactory = std::function<std::unique_ptr<Strategy>()>;
+using StrategyFactory = FactoryRegistry<Strategy>::Factory;
 
-class Registry {
+/// Strategies by name (core/registry.hpp): add() throws plydem::Error if the name is empty or
+/// taken, create() lists the registered names if `name` is unknown.
+class Registry : public FactoryRegistry<Strategy> {
  public:
-  /// Adds a strategy; throws plydem::Error if the name is empty or taken.
-  void add(const std::string& name, const std::string& description, StrategyFactory factory);
-  bool contains(const std::string& name) const;
-  /// A new instance; throws plydem::Error listing the registered names if `name` is unknown.
-  std::unique_ptr<Strategy> create(const std::string& name) const;
-  std::vector<std::string> names() const;
-  std::string description(const std::string& name) const;
-
- private:
-  struct Entry {
-    std::string description;
-    StrategyFactory factory;
-  };
-  std::map<std::string, Entry> entries_;
+  Registry();
 };
 
 /// The names of the strategies in `registry` (but `except`) whose calibrate(), with their default

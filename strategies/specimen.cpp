@@ -2,10 +2,9 @@
 
 #include <fmt/format.h>
 
-#include <chrono>
-
 #include "core/error.hpp"
 #include "core/progress.hpp"
+#include "core/stopwatch.hpp"
 
 namespace plydem {
 
@@ -77,12 +76,11 @@ const Calibration& SpecimenBuilder::calibration(const CouponSpec& coupon) {
 }
 
 Specimen SpecimenBuilder::build(const CouponSpec& coupon) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   const Calibration& cal = calibration(coupon);
   Specimen specimen = strategy_.build(coupon, cal);
   ++statistics_.builds;
-  specimen.build_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  specimen.build_seconds = clock.seconds();
   return specimen;
 }
 

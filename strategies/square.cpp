@@ -11,6 +11,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "packings/square_layer.hpp"
 #include "strategies/boundary_cells.hpp"
 #include "strategies/calibration.hpp"
@@ -62,7 +63,7 @@ std::string negative_springs(const std::array<FamilyStiffness, 4>& k) {
 
 // The conditions of square_springs_non_negative that `c` (lattice frame) violates, in words.
 std::string violated_conditions(const Eigen::Matrix3d& c) {
-  const double gpa = 1e-9;
+  const double gpa = kGPaPerPa;
   const double c11 = c(0, 0), c22 = c(1, 1), c12 = c(0, 1), c66 = c(2, 2);
   const double c16 = std::abs(0.5 * (c(0, 2) + c(1, 2)));
   struct Condition {
@@ -184,7 +185,7 @@ std::array<FamilyStiffness, 4> square_springs_eq33(const Eigen::Matrix3d& c, dou
     throw Error(fmt::format(
         "a square lattice has C16 = C26 in its own frame, but the stiffness has C16 = {:.6g} and "
         "C26 = {:.6g} GPa there",
-        c16 * 1e-9, c26 * 1e-9));
+        c16 * kGPaPerPa, c26 * kGPaPerPa));
   }
   std::array<FamilyStiffness, 4> k = square_springs_eq33_as_printed(c, thickness);
   // ERRATA §2: the diagonals carry C16 = C26 = (k_n+ - k_n-) / (2 delta).

@@ -4,12 +4,13 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <numbers>
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
+#include "core/units.hpp"
 
 namespace plydem {
 
@@ -20,23 +21,20 @@ void CouponSpec::validate() const {
                                                   {"particle diameter", particle_diameter}};
   for (const auto& [name, value] : sizes) {
     require(std::isfinite(value), fmt::format("coupon {} is not a finite number", name));
-    require(value > 0, fmt::format("coupon {} must be positive, got {} mm", name, value * 1e3));
+    require(value > 0,
+            fmt::format("coupon {} must be positive, got {} mm", name, value * kMmPerMetre));
   }
   require(std::isfinite(ply_angle), "ply angle is not a finite number");
   require(length >= 4 * particle_diameter && width >= particle_diameter,
           fmt::format("a {} mm x {} mm coupon is too small for particles of diameter {} mm "
                       "(need length >= 4 and width >= 1 diameter)",
-                      length * 1e3, width * 1e3, particle_diameter * 1e3));
+                      length * kMmPerMetre, width * kMmPerMetre, particle_diameter * kMmPerMetre));
 }
 
 namespace {
 
 std::atomic<long> calibration_count{0};
 std::atomic<long> build_count{0};
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 }  // namespace
 
@@ -66,17 +64,17 @@ std::string Strategy::calibration_key(const CouponSpec& coupon) const {
 }
 
 Specimen Strategy::build(const CouponSpec& coupon) const {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   coupon.validate();
   Calibration calibration = calibrate_coupon(coupon);
   count_build_work(1, 0);
   Specimen specimen = build(coupon, calibration);
-  specimen.build_seconds = seconds_since(start);
+  specimen.build_seconds = clock.seconds();
   return specimen;
 }
 
 Specimen Strategy::build(const CouponSpec& coupon, const Calibration& calibration) const {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   coupon.validate();
   if (calibration.target.norm() > 0) {
     const Eigen::Matrix3d target =
@@ -90,7 +88,7 @@ Specimen Strategy::build(const CouponSpec& coupon, const Calibration& calibratio
   specimen.model = assemble(coupon, calibration);
   specimen.ply_calibrations.push_back(calibration);
   count_build_work(0, 1);
-  specimen.build_seconds = seconds_since(start);
+  specimen.build_seconds = clock.seconds();
   return specimen;
 }
 

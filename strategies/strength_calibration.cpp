@@ -17,6 +17,7 @@
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
 #include "core/parallel_bond.hpp"
+#include "core/units.hpp"
 #include "strategies/registry.hpp"
 
 namespace plydem {
@@ -52,7 +53,7 @@ PlyStress scaled(const PlyStress& s, double factor) {
 }
 
 double mpa(double pascal) {
-  return pascal * 1e-6;
+  return pascal * kMPaPerPa;
 }
 
 // The section stresses of a bond whose resultants per unit ply stress are `r`, under `stress`.

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "experiments/output/figures.hpp"
 
 namespace plydem {
@@ -14,7 +15,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kMm = 1e-3;
 constexpr std::size_t kDensitySamples = 200;
 
 void write_file(const fs::path& path, const std::string& text) {
@@ -80,9 +80,10 @@ CrackReport crack_report(const Model& model, const std::vector<BondBreak>& break
     double longest = 0;
     for (const Crack& c : r.cracks)
       if (c.interface == n.interface && c.ply == n.ply) longest = std::max(longest, c.length);
-    md += fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.4g} | {} / {} / {} |\n",
-                      crack_place(n.interface, n.ply), n.cracks, n.length / kMm, longest / kMm,
-                      n.density * kMm, n.tension, n.shear, n.mixed);
+    md +=
+        fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.4g} | {} / {} / {} |\n",
+                    crack_place(n.interface, n.ply), n.cracks, n.length / kMetresPerMm,
+                    longest / kMetresPerMm, n.density * kMetresPerMm, n.tension, n.shear, n.mixed);
   }
   md += "\n";
 
@@ -112,9 +113,9 @@ CrackReport crack_report(const Model& model, const std::vector<BondBreak>& break
     table += fmt::format("{:.8g}", strain[e]);
     for (std::size_t k = 0; k < plies.size(); ++k) {
       const double density = crack_density(now, plies[k], x_begin, x_begin + span);
-      table += fmt::format(",{:.6g}", density * kMm);
+      table += fmt::format(",{:.6g}", density * kMetresPerMm);
       curves[k].x.push_back(strain[e] * 100);
-      curves[k].y.push_back(density * kMm);
+      curves[k].y.push_back(density * kMetresPerMm);
     }
     table += "\n";
   }

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "experiments/output/external_tool.hpp"
 
 namespace plydem {
@@ -74,7 +75,7 @@ Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, cons
   const double x_end = window > 0 ? x_min + window : p.reference_position.col(0).maxCoeff();
   const double ply_shift = 1.15 * std::max(y_max - y_min, 1e-12);
   const int plies = p.ply.maxCoeff() + 1;
-  constexpr double mm = 1e3;
+  constexpr double mm = kMmPerMetre;
   std::string data = "# x1 [mm], y1 [mm], dx [mm], dy [mm], k_n [MN/m], ply\n";
   int drawn = 0;
   double k_min = INFINITY, k_max = -INFINITY;
@@ -153,7 +154,7 @@ Figure plot_bond_states(const Model& model, const fs::path& out_dir, const std::
   const double y_max = p.reference_position.col(1).maxCoeff();
   const double ply_shift = 1.15 * std::max(y_max - y_min, 1e-12);
   const int plies = p.ply.maxCoeff() + 1;
-  constexpr double mm = 1e3;
+  constexpr double mm = kMmPerMetre;
   // The bonds by state: intact, softened, broken in tension, broken in shear.
   std::string blocks[4];
   int counts[4] = {0, 0, 0, 0};

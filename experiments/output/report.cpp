@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/units.hpp"
+
 namespace plydem {
 namespace {
 
@@ -58,8 +60,8 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
     bool modulus;
   };
   const Row rows[] = {
-      {zero ? "E1  (Ex)" : "Ex", r.dem.Ex, r.theory.Ex, 1e-9, true},
-      {zero ? "E2  (Ey)" : "Ey", r.dem.Ey, r.theory.Ey, 1e-9, true},
+      {zero ? "E1  (Ex)" : "Ex", r.dem.Ex, r.theory.Ex, kGPaPerPa, true},
+      {zero ? "E2  (Ey)" : "Ey", r.dem.Ey, r.theory.Ey, kGPaPerPa, true},
       {zero ? "nu12 (nu_xy)" : "nu_xy", r.dem.nu_xy, r.theory.nu_xy, 1, false},
       {zero ? "nu21 (nu_yx)" : "nu_yx", r.dem.nu_yx, r.theory.nu_yx, 1, false},
   };
@@ -73,8 +75,9 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
   out += fmt::format("plydem tension test: strategy {}, material {}, {}, grips {}\n", r.strategy,
                      r.material.name, specimen, grips_name(s.grips));
   out += fmt::format("coupon {:g} mm x {:g} mm x {:g} mm{}, particle diameter {:g} mm\n\n",
-                     s.coupon.length * 1e3, s.coupon.width * 1e3, s.coupon.thickness * 1e3,
-                     s.layup.empty() ? "" : " per ply", s.coupon.particle_diameter * 1e3);
+                     s.coupon.length * kMmPerMetre, s.coupon.width * kMmPerMetre,
+                     s.coupon.thickness * kMmPerMetre, s.layup.empty() ? "" : " per ply",
+                     s.coupon.particle_diameter * kMmPerMetre);
   out += fmt::format("{:<14} {:>12} {:>12} {:>10}\n", "", "DEM", "CLT", "rel. error");
   for (const Row& row : rows) {
     const std::string unit = row.modulus ? " GPa" : "";
@@ -86,8 +89,8 @@ std::string format_tension_table(const TensionResult& r, const TensionSettings& 
   }
   if (r.specimen.volume > 0) {
     out += fmt::format("{:<14} {:>12} {:>12} {:>+9.3f}%\n", zero ? "G12 (Gxy)" : "Gxy",
-                       fmt::format("{:.3f} GPa", r.dem.Gxy * 1e-9),
-                       fmt::format("{:.3f} GPa", r.theory.Gxy * 1e-9),
+                       fmt::format("{:.3f} GPa", r.dem.Gxy * kGPaPerPa),
+                       fmt::format("{:.3f} GPa", r.theory.Gxy * kGPaPerPa),
                        100.0 * (r.dem.Gxy - r.theory.Gxy) / r.theory.Gxy);
   }
   out += fmt::format("{:<14} {:>12.4f} {:>12.4f}\n", "g_xy/e_x", r.dem.shear_coupling_x,
@@ -172,8 +175,7 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
   j["calibration"] = calibration_json(r.calibration);
   // What the user should know about the coupon (experiments/protocols/coupon.hpp).
   j["warnings"] = nlohmann::json::array();
-  const std::string narrow =
-      narrow_laminate_warning(s.coupon.width, s.coupon.thickness, s.layup);
+  const std::string narrow = narrow_laminate_warning(s.coupon.width, s.coupon.thickness, s.layup);
   if (!narrow.empty()) j["warnings"].push_back(narrow);
   return j;
 }
@@ -197,7 +199,7 @@ std::string format_same_coupon_table(const TensionResult& r, const SameCouponRef
     // Moduli: relative errors; Poisson's ratios: differences (a small ratio's relative error
     // says little).
     auto value = [&](double v) {
-      return row.modulus ? fmt::format("{:.3f} GPa", v * 1e-9) : fmt::format("{:.4f}", v);
+      return row.modulus ? fmt::format("{:.3f} GPa", v * kGPaPerPa) : fmt::format("{:.4f}", v);
     };
     auto error = [&](double a, double b) {
       return row.modulus ? fmt::format("{:+.3f}%", 100.0 * (a - b) / b)
@@ -274,8 +276,8 @@ std::string format_calibration(const Calibration& c, const std::string& strategy
   for (int r = 0; r < 3; ++r) {
     std::string line;
     for (const Eigen::Matrix3d* m : {&c.target, &c.relaxed, &c.affine}) {
-      line += fmt::format("{:9.4f} {:9.4f} {:9.4f}   ", (*m)(r, 0) * 1e-9, (*m)(r, 1) * 1e-9,
-                          (*m)(r, 2) * 1e-9);
+      line += fmt::format("{:9.4f} {:9.4f} {:9.4f}   ", (*m)(r, 0) * kGPaPerPa,
+                          (*m)(r, 1) * kGPaPerPa, (*m)(r, 2) * kGPaPerPa);
     }
     out += line + "\n";
   }
@@ -285,8 +287,8 @@ std::string format_calibration(const Calibration& c, const std::string& strategy
     out += fmt::format(
         "as simulated: Ex {:.4f} Ey {:.4f} Gxy {:.4f} GPa, nu_xy {:.4f} (target {:.4f} {:.4f} "
         "{:.4f} GPa, {:.4f})\n",
-        m.Ex * 1e-9, m.Ey * 1e-9, m.Gxy * 1e-9, m.nu_xy, t.Ex * 1e-9, t.Ey * 1e-9, t.Gxy * 1e-9,
-        t.nu_xy);
+        m.Ex * kGPaPerPa, m.Ey * kGPaPerPa, m.Gxy * kGPaPerPa, m.nu_xy, t.Ex * kGPaPerPa,
+        t.Ey * kGPaPerPa, t.Gxy * kGPaPerPa, t.nu_xy);
   }
   return out;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/units.hpp"
 #include "experiments/output/vtk_output.hpp"
 
 namespace plydem {
@@ -14,7 +15,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kDegree = std::numbers::pi / 180.0;
-constexpr double kMPa = 1e-6;
 
 std::string specimen_text(const StrengthResult& r) {
   if (r.layup.empty()) return fmt::format("ply angle {:g} deg", r.ply_angle / kDegree);
@@ -28,7 +28,7 @@ std::string scatter_text(const StrengthResult& r) {
 
 std::string mpa(double pascals) {
   if (!std::isfinite(pascals)) return "never";
-  return fmt::format("{:.2f} MPa", pascals * kMPa);
+  return fmt::format("{:.2f} MPa", pascals * kMPaPerPa);
 }
 
 nlohmann::json finite_or_null(double value) {
@@ -67,9 +67,10 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
   out += fmt::format(
       "coupon {:g} mm x {:g} mm x {:g} mm{}, particle diameter {:g} mm; {} particles, {} bonds; "
       "{}; {}\n\n",
-      s.coupon.length * 1e3, s.coupon.width * 1e3, s.coupon.thickness * 1e3,
-      r.layup.empty() ? "" : " per ply", s.coupon.particle_diameter * 1e3, r.particles, r.bonds,
-      s.strength_options.softening ? "linear-softening bonds" : "brittle bonds", scatter_text(r));
+      s.coupon.length * kMmPerMetre, s.coupon.width * kMmPerMetre, s.coupon.thickness * kMmPerMetre,
+      r.layup.empty() ? "" : " per ply", s.coupon.particle_diameter * kMmPerMetre, r.particles,
+      r.bonds, s.strength_options.softening ? "linear-softening bonds" : "brittle bonds",
+      scatter_text(r));
   out += fmt::format("{:<34} {:>14}\n", "strength (peak stress)", mpa(r.strength));
   out += fmt::format("{:<34} {:>13.4f}%\n", "strain at peak", r.strain_at_peak * 100);
   out += fmt::format("{:<34} {:>14}\n", "first-failure stress", mpa(r.first_failure_stress));
@@ -81,7 +82,9 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
         "bonds with bulk-consistent strength", r.edge_strengthened_bonds, r.edge_strength_factor);
   }
   const LaminaStrength& ls = r.material.strength;
-  auto given = [](double v) { return v > 0 ? fmt::format("{:g}", v * kMPa) : std::string("-"); };
+  auto given = [](double v) {
+    return v > 0 ? fmt::format("{:g}", v * kMPaPerPa) : std::string("-");
+  };
   out += fmt::format("\nlamina strengths [MPa]: XT {}, XC {}, YT {}, YC {}, S12 {}\n\n",
                      given(ls.XT), given(ls.XC), given(ls.YT), given(ls.YC), given(ls.S12));
   out += fmt::format("{:<15} {:>14}   DEM {} rel. to it\n",
@@ -218,21 +221,21 @@ Figure plot_strength_curve(const StrengthResult& r, const fs::path& out_dir,
   double max_strain = 0;
   for (std::size_t i = 0; i < r.strain.size(); ++i) {
     dem.x.push_back(r.strain[i] * 100);
-    dem.y.push_back(r.stress[i] * kMPa);
+    dem.y.push_back(r.stress[i] * kMPaPerPa);
     max_strain = std::max(max_strain, r.strain[i] * 100);
   }
   curves.push_back(dem);
-  curves.push_back({fmt::format("DEM peak {:.1f} MPa", r.strength * kMPa),
+  curves.push_back({fmt::format("DEM peak {:.1f} MPa", r.strength * kMPaPerPa),
                     {r.strain_at_peak * 100},
-                    {r.strength * kMPa},
+                    {r.strength * kMPaPerPa},
                     true});
   const double right = max_strain > 0 ? 1.05 * max_strain : 1.0;
   for (const CriterionStrength& t : r.theory) {
     if (!t.strength) continue;
     curves.push_back(
-        {fmt::format("{} {:.1f} MPa", criterion_label(t.criterion), *t.strength * kMPa),
+        {fmt::format("{} {:.1f} MPa", criterion_label(t.criterion), *t.strength * kMPaPerPa),
          {0.0, right},
-         {*t.strength * kMPa, *t.strength * kMPa},
+         {*t.strength * kMPaPerPa, *t.strength * kMPaPerPa},
          false});
   }
   return plot_curves(curves, out_dir, stem, title, "gauge strain eps_x [%]",

@@ -4,28 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <vector>
 
+#include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
 
 namespace plydem {
-namespace {
-
-// Union-find over particle indices.
-struct DisjointSets {
-  std::vector<int> parent;
-  explicit DisjointSets(int n) : parent(static_cast<size_t>(n)) {
-    std::iota(parent.begin(), parent.end(), 0);
-  }
-  int find(int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  void join(int a, int b) { parent[find(a)] = find(b); }
-};
-
-}  // namespace
 
 HoleRemoval remove_hole(Model& model, double centre_x, double centre_y, double diameter) {
   require(std::isfinite(centre_x) && std::isfinite(centre_y), "hole centre is not finite");

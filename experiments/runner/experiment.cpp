@@ -7,16 +7,8 @@
 #include <fstream>
 #include <sstream>
 
-// See core/material.cpp: link against Debian's compiled toml++ rather than re-instantiating it.
-#ifndef TOML_HEADER_ONLY
-#define TOML_HEADER_ONLY 0
-#ifndef TOML_SHARED_LIB
-#define TOML_SHARED_LIB 1
-#endif
-#endif
-#include <toml++/toml.h>
-
 #include "core/error.hpp"
+#include "core/toml_reader.hpp"
 
 namespace plydem {
 
@@ -52,12 +44,6 @@ Error wrong_type(const std::string& origin, const std::string& key, const toml::
       fmt::format("{}: key '{}' must be {}, got {}", origin, key, expected, type_name(node)));
 }
 
-std::optional<double> as_number(const toml::node& node) {
-  if (const auto* v = node.as_floating_point()) return v->get();
-  if (const auto* v = node.as_integer()) return static_cast<double>(v->get());
-  return std::nullopt;
-}
-
 void collect_keys(const toml::table& table, const std::string& prefix,
                   std::vector<std::string>& keys) {
   for (const auto& [key, node] : table) {
@@ -86,12 +72,9 @@ ExperimentConfig ExperimentConfig::load(const std::filesystem::path& path) {
 ExperimentConfig ExperimentConfig::parse(const std::string& text, const std::string& origin) {
   auto data = std::make_shared<Data>();
   data->origin = origin;
-  try {
-    data->table = toml::parse(text, origin);
-  } catch (const toml::parse_error& e) {
-    throw Error(fmt::format("{}:{}:{}: malformed TOML: {}", origin, e.source().begin.line,
-                            e.source().begin.column, e.description()));
-  }
+  data->table = parse_toml(text, origin, [&origin](const TomlSyntaxError& e) {
+    return fmt::format("{}:{}:{}: malformed TOML: {}", origin, e.line, e.column, e.description);
+  });
   ExperimentConfig config;
   config.data_ = std::move(data);
   config.path_ = origin;
@@ -132,7 +115,7 @@ std::string ExperimentConfig::string(const std::string& key, const std::string& 
 double ExperimentConfig::number(const std::string& key, double fallback) const {
   const toml::node_view<const toml::node> node = data_->table.at_path(key);
   if (!node) return fallback;
-  const std::optional<double> value = as_number(*node.node());
+  const std::optional<double> value = toml_number(*node.node());
   if (!value) throw wrong_type(data_->origin, key, *node.node(), "a number");
   if (!std::isfinite(*value)) {
     throw Error(fmt::format("{}: key '{}' must be finite, got {}", data_->origin, key, *value));
@@ -182,7 +165,7 @@ std::vector<double> ExperimentConfig::numbers(const std::string& key,
   if (!array) throw wrong_type(data_->origin, key, *node.node(), "an array of numbers");
   std::vector<double> out;
   for (const toml::node& element : *array) {
-    const std::optional<double> v = as_number(element);
+    const std::optional<double> v = toml_number(element);
     if (!v || !std::isfinite(*v)) {
       throw wrong_type(data_->origin, key, element, "an array of finite numbers; an element");
     }
@@ -211,42 +194,10 @@ void ExperimentConfig::require_known_keys(const std::vector<std::string>& known)
   }
 }
 
-void ExperimentRegistry::add(const std::string& kind, const std::string& description,
-                             ExperimentFactory factory) {
-  require(!kind.empty(), "an experiment kind needs a name");
-  if (entries_.count(kind)) {
-    throw Error(fmt::format("experiment kind '{}' is already registered", kind));
-  }
-  entries_.emplace(kind, Entry{description, std::move(factory)});
-}
-
-bool ExperimentRegistry::contains(const std::string& kind) const {
-  return entries_.count(kind) > 0;
-}
-
-std::unique_ptr<Experiment> ExperimentRegistry::create(const std::string& kind) const {
-  const auto it = entries_.find(kind);
-  if (it == entries_.end()) {
-    std::string names;
-    for (const auto& [name, entry] : entries_) {
-      names += fmt::format("{}{}", names.empty() ? "" : ", ", name);
-    }
-    throw Error(fmt::format("unknown experiment kind '{}' (registered: {})", kind, names));
-  }
-  return it->second.factory();
-}
-
-std::vector<std::string> ExperimentRegistry::kinds() const {
-  std::vector<std::string> out;
-  for (const auto& [name, entry] : entries_) out.push_back(name);
-  return out;
-}
-
-std::string ExperimentRegistry::description(const std::string& kind) const {
-  const auto it = entries_.find(kind);
-  require(it != entries_.end(), fmt::format("unknown experiment kind '{}'", kind));
-  return it->second.description;
-}
+ExperimentRegistry::ExperimentRegistry()
+    : FactoryRegistry<Experiment>({"experiment kind", "an experiment kind needs a name",
+                                   "experiment kind '{}' is already registered",
+                                   "unknown experiment kind '{}' (registered: {})"}) {}
 
 ExperimentRegistry& default_experiment_registry() {
   static ExperimentRegistry registry = [] {

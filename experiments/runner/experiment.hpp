@@ -27,6 +27,8 @@
 #include <string>
 #include <vector>
 
+#include "core/registry.hpp"
+
 namespace plydem {
 
 /// A parsed experiment config (TOML). Keys may be dotted to reach into tables ("fem.element").
@@ -108,7 +110,7 @@ class Experiment {
                                const ExperimentContext& context) const = 0;
 };
 
-using ExperimentFactory = std::function<std::unique_ptr<Experiment>()>;
+using ExperimentFactory = FactoryRegistry<Experiment>::Factory;
 
 /// An experiment kind written as three steps over its own settings struct, the shape of every
 /// built-in kind (one file each, experiments/runner/<kind>_experiment.cpp):
@@ -142,11 +144,13 @@ class ExperimentSteps : public Experiment {
   Report report_;
 };
 
-/// Experiment kinds by name, as strategies/registry.hpp does for strategies.
-class ExperimentRegistry {
+/// Experiment kinds by name (core/registry.hpp, as strategies/registry.hpp for strategies):
+/// add() throws plydem::Error if the kind is empty or taken, create() lists the registered kinds
+/// if `kind` is unknown.
+class ExperimentRegistry : public FactoryRegistry<Experiment> {
  public:
-  /// Throws plydem::Error if the kind is empty or taken.
-  void add(const std::string& kind, const std::string& description, ExperimentFactory factory);
+  ExperimentRegistry();
+  using FactoryRegistry<Experiment>::add;
   /// Registers a kind written as parse -> run -> report (ExperimentSteps).
   template <class Settings, class Results>
   void add(const std::string& kind, const std::string& description,
@@ -157,18 +161,7 @@ class ExperimentRegistry {
       return std::make_unique<ExperimentSteps<Settings, Results>>(parse, run, report);
     });
   }
-  bool contains(const std::string& kind) const;
-  /// Throws plydem::Error listing the registered kinds if `kind` is unknown.
-  std::unique_ptr<Experiment> create(const std::string& kind) const;
-  std::vector<std::string> kinds() const;
-  std::string description(const std::string& kind) const;
-
- private:
-  struct Entry {
-    std::string description;
-    ExperimentFactory factory;
-  };
-  std::map<std::string, Entry> entries_;
+  std::vector<std::string> kinds() const { return names(); }
 };
 
 /// The process-wide experiment registry, filled with the built-in kinds on first use.

@@ -1,0 +1,41 @@
+#pragma once
+/// \file
+/// Wall-clock seconds of a phase (std::chrono::steady_clock): the one stopwatch behind the
+/// phase timings the solvers, strategies and benchmarks report.
+///
+///   Stopwatch phase;
+///   assemble();
+///   seconds.assembly = phase.lap();  // and the next phase starts now
+///   factorize();
+///   seconds.factorization = phase.seconds();
+
+#include <chrono>
+
+namespace plydem {
+
+class Stopwatch {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  /// Starts now.
+  Stopwatch() : start_(Clock::now()) {}
+
+  /// Seconds since the start.
+  double seconds() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+
+  /// Seconds since the start, and starts again now.
+  double lap() {
+    const Clock::time_point now = Clock::now();
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    start_ = now;
+    return elapsed;
+  }
+
+  /// Starts again now.
+  void restart() { start_ = Clock::now(); }
+
+ private:
+  Clock::time_point start_;
+};
+
+}  // namespace plydem
