@@ -102,7 +102,7 @@ struct PullResult {
   std::vector<double> strain, lateral_strain, shear_strain, stress;  ///< fitted points [-, Pa]
   int particles = 0, bonds = 0;
   long cycles = 0;
-  double final_ratio = 0;    ///< unbalanced-force ratio at the last point
+  double final_ratio = 0;  ///< unbalanced-force ratio at the last point
   /// The static solve's linear solver (StaticResult::method_name) and its Krylov iterations (0
   /// for a direct factor); empty and 0 for explicit dynamics.
   std::string linear_solver;
@@ -188,6 +188,7 @@ class TensionTest {
 
  private:
   struct Checkpointing;
+  struct PullRun;  // one pull in progress, split into its steps
   PullResult pull(const Specimen& specimen, double ply_angle, Checkpointing* checkpointing) const;
   TensionSettings settings_;
   std::function<void(const TensionProgress&)> progress_;
