@@ -35,7 +35,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
 

@@ -24,7 +24,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/run_experiment.hpp"
 

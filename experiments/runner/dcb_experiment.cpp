@@ -1,5 +1,5 @@
 // The DCB experiment kind (`plydem run experiments/dcb.toml`, kind `dcb`): the double cantilever
-// beam of experiments/protocols/dcb_test.hpp opened to propagation, beside simple and corrected
+// beam of experiments/protocols/dcb.hpp opened to propagation, beside simple and corrected
 // beam theory. Config keys (README, "Delamination: the DCB"):
 //
 //   experiment = "dcb"
@@ -24,7 +24,7 @@
 #include "experiments/output/crack_report.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
-#include "experiments/protocols/dcb_test.hpp"
+#include "experiments/protocols/dcb.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/report_text.hpp"

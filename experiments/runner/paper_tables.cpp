@@ -15,7 +15,7 @@
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/report_text.hpp"
 #include "solvers/static_solver.hpp"
@@ -607,7 +607,7 @@ class LaminateExperiment : public Experiment {
         {name, case_name, "wall time", fmt::format("dem {}", s.strategy), dem_seconds, "s"});
     if (r.specimen.stiffness.norm() > 0) {
       // The same coupon's membrane stiffness under affine boundary displacements
-      // (experiments/protocols/stiffness_test.hpp): no grips, no free edges, the laminate's A/h as
+      // (experiments/protocols/stiffness.hpp): no grips, no free edges, the laminate's A/h as
       // the bonds carry it.
       Values membrane = values_of(r.specimen.constants);
       t += constants_line(fmt::format("DEM {} (membrane stiffness, affine boundary)", s.strategy),

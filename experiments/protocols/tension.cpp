@@ -1,4 +1,4 @@
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>

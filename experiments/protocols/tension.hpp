@@ -28,7 +28,7 @@
 #include "core/elasticity.hpp"
 #include "experiments/protocols/coupon.hpp"
 #include "experiments/protocols/resource_estimate.hpp"
-#include "experiments/protocols/stiffness_test.hpp"
+#include "experiments/protocols/stiffness.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "solvers/linear_solver.hpp"
 #include "strategies/laminate.hpp"
@@ -66,7 +66,7 @@ struct TensionSettings {
   /// converges to.
   TensionSolver solver = TensionSolver::kStatic;
   /// Also measure the specimen's membrane stiffness (and Gxy) with affine boundary displacements
-  /// (experiments/protocols/stiffness_test.hpp): three more static solves on the ply's coupon.
+  /// (experiments/protocols/stiffness.hpp): three more static solves on the ply's coupon.
   bool measure_specimen_stiffness = true;
   /// The static solves' factorization (solvers/linear_solver.hpp): by size, the hand-written
   /// supernodal Cholesky or CHOLMOD.

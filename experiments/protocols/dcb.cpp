@@ -1,4 +1,4 @@
-#include "experiments/protocols/dcb_test.hpp"
+#include "experiments/protocols/dcb.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>

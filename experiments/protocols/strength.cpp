@@ -1,4 +1,4 @@
-#include "experiments/protocols/strength_test.hpp"
+#include "experiments/protocols/strength.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
