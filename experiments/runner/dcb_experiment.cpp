@@ -231,7 +231,7 @@ class DcbExperiment : public Experiment {
 
     std::string& md = out.report_markdown;
     md += fmt::format(
-        "A side-view model of the DCB (experiments/protocols/dcb_test.hpp): the particle layer "
+        "A side-view model of the DCB (experiments/protocols/dcb.hpp): the particle layer "
         "is the beam's length-thickness plane, the {:g} mm width its out-of-plane thickness "
         "(plane stress, E1 = {:g} GPa along the beam). Laminate {} of {:g} mm plies: two arms of "
         "h = {:g} mm ({} strategy, {} rows of {:g} mm particles), {:g} mm long, joined on the "
