@@ -36,7 +36,7 @@
 #include "core/material.hpp"
 #include "core/stopwatch.hpp"
 #include "core/units.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
 

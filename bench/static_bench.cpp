@@ -5,7 +5,7 @@
 // The coupon is E-glass/MY750 at 0 deg with particle diameter 0.05 mm, shaped like the paper's
 // 10 x 0.83 mm coupon (length/width = 10/0.83) and scaled to hold about the requested number of
 // particles. It is loaded as the tension test's static path loads it
-// (experiments/protocols/tension_test.cpp, free grips): particles within two diameters of each end
+// (experiments/protocols/tension.cpp, free grips): particles within two diameters of each end
 // are grips with ux prescribed (+-half the travel of a 0.1 % nominal strain) and uz, theta_x,
 // theta_y held; the remaining rigid-body modes are pinned (StaticSettings::pin_rigid_modes).
 // Timings are on one thread: the phases of the first solve in wall-clock seconds (StaticTimings),
@@ -82,7 +82,7 @@ double peak_rss_mib() {
   return 0;
 }
 
-// The tension test's static constraints with free grips (experiments/protocols/tension_test.cpp).
+// The tension test's static constraints with free grips (experiments/protocols/tension.cpp).
 plydem::DofConstraints tension_constraints(const plydem::Model& model, double diameter) {
   using plydem::Dof;
   const plydem::Particles& p = model.particles;

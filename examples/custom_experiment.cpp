@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/run_experiment.hpp"
 

@@ -22,7 +22,7 @@
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
 #include "experiments/output/report.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "packings/hexagonal_layer.hpp"
 #include "strategies/hex2d.hpp"
 #include "strategies/registry.hpp"

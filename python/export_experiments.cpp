@@ -10,8 +10,8 @@
 #include "experiments/output/report.hpp"
 #include "experiments/output/strength_report.hpp"
 #include "experiments/output/vtk_output.hpp"
-#include "experiments/protocols/strength_test.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/strength.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "solvers/device_backend.hpp"
 #include "solvers/linear_solver.hpp"
 

@@ -4,7 +4,7 @@
 /// (semi-)definite matrix once, then solve with it for as many right-hand sides as needed. The
 /// static solver (solvers/static_solver.hpp) factors K_ff through it, and StaticSystem reuses one
 /// factor for every solve with the same matrix and prescribed dofs (the specimen stiffness' three
-/// strain cases, experiments/protocols/stiffness_test.cpp).
+/// strain cases, experiments/protocols/stiffness.cpp).
 ///
 /// Three implementations:
 /// - kDirect: plydem's own supernodal multifrontal Cholesky (solvers/sparse_cholesky.hpp), in the

@@ -16,7 +16,7 @@
 /// Under a uniform membrane strain an interface bond is loaded only through its lateral offset
 /// (small against the ply spacing), but plies whose lattices are turned against each other offset
 /// every bond differently, and the bulk of the laminate is stiffer than CLT's A/h by what they
-/// hold: measured in the interior of 3 x 0.83 mm coupons (experiments/protocols/stiffness_test.hpp,
+/// hold: measured in the interior of 3 x 0.83 mm coupons (experiments/protocols/stiffness.hpp,
 /// tests/test_laminate.cpp), the largest entry of A/h is off by 1.0%, 0.73% and 1.27% for [0/90]s,
 /// [45/-45]s and [0/45/-45/90]s with the default interface below, 0.48%, 0.03% and 0.60% with the
 /// paper's 1e14 / 1e13 N/m^3.

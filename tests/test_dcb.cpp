@@ -1,4 +1,4 @@
-// The double cantilever beam (experiments/protocols/dcb_test.hpp) against beam theory: the
+// The double cantilever beam (experiments/protocols/dcb.hpp) against beam theory: the
 // compliance of the simulated beam, its propagation load, and its curve reduced as ASTM D5528
 // reduces a test, with the references computed here from the closed forms.
 #include <doctest/doctest.h>
@@ -11,7 +11,7 @@
 
 #include "core/error.hpp"
 #include "experiments/output/external_tool.hpp"
-#include "experiments/protocols/dcb_test.hpp"
+#include "experiments/protocols/dcb.hpp"
 #include "experiments/runner/run_experiment.hpp"
 #include "strategies/laminate.hpp"
 #include "support/results_csv.hpp"

@@ -15,7 +15,7 @@
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
 #include "core/material.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "packings/hexagonal_layer.hpp"
 #include "strategies/boundary_cells.hpp"
 #include "strategies/hex2d.hpp"

@@ -12,7 +12,7 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "packings/hcp_lamina.hpp"
 #include "strategies/hcp.hpp"
 #include "strategies/registry.hpp"

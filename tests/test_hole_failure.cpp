@@ -13,7 +13,7 @@
 #include "core/material.hpp"
 #include "core/stress_concentration.hpp"
 #include "experiments/output/external_tool.hpp"
-#include "experiments/protocols/strength_test.hpp"
+#include "experiments/protocols/strength.hpp"
 #include "experiments/runner/run_experiment.hpp"
 #include "strategies/laminate.hpp"
 #include "support/results_csv.hpp"

@@ -6,7 +6,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
 #include "support/test_support.hpp"
@@ -143,7 +143,7 @@ TEST_CASE("a small [0/90/0] laminate runs the whole tension path near CLT") {
 
 namespace {
 
-// The interior window's membrane stiffness (experiments/protocols/stiffness_test.hpp) of a
+// The interior window's membrane stiffness (experiments/protocols/stiffness.hpp) of a
 // 3 x 0.83 mm coupon of `layup`, beside A/h written out by hand: the largest relative error of
 // its entries against the largest entry.
 double interior_membrane_error(const std::string& layup, double interface_normal = 0,

@@ -13,7 +13,7 @@
 
 #include "core/material.hpp"
 #include "experiments/fem/calculix.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "strategies/laminate.hpp"
 #include "support/have_ccx.hpp"
 #include "support/test_support.hpp"

@@ -14,8 +14,8 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "experiments/protocols/stiffness_test.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/stiffness.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "solvers/linear_solver.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/hex2d.hpp"

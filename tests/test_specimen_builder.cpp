@@ -12,7 +12,7 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/material.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "experiments/runner/hole_plate.hpp"
 #include "experiments/runner/run_experiment.hpp"
 #include "strategies/hex2d.hpp"

@@ -14,7 +14,7 @@
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "packings/square_layer.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/square.hpp"

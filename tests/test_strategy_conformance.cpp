@@ -15,7 +15,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/error.hpp"
-#include "experiments/protocols/stiffness_test.hpp"
+#include "experiments/protocols/stiffness.hpp"
 #include "strategies/registry.hpp"
 #include "support/test_support.hpp"
 

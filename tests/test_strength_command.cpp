@@ -1,4 +1,4 @@
-// The strength test to failure as users run it (experiments/protocols/strength_test.hpp, `plydem
+// The strength test to failure as users run it (experiments/protocols/strength.hpp, `plydem
 // strength`, the run kind `strength`): its JSON keys, the 0 and 90 deg strengths of a coupon
 // without scatter against XT and YT, the classical criteria it reports against closed forms
 // written out here, reproducible scatter, its clear errors and the run kind on a tiny config.
@@ -19,7 +19,7 @@
 #include "core/material.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/output/strength_report.hpp"
-#include "experiments/protocols/strength_test.hpp"
+#include "experiments/protocols/strength.hpp"
 #include "experiments/runner/run_experiment.hpp"
 #include "support/test_support.hpp"
 

@@ -7,8 +7,8 @@
 #include <numbers>
 
 #include "core/material.hpp"
-#include "experiments/protocols/stiffness_test.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/stiffness.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "strategies/registry.hpp"
 #include "support/test_support.hpp"
 

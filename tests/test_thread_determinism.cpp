@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/material.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 
 using namespace plydem;
 

@@ -4,7 +4,7 @@
 /// hexahedra, one or more elements through each ply, each ply with its own orthotropic material
 /// and orientation. plydem writes the input deck, runs `ccx -i job` in a temporary directory, reads
 /// the `.dat` file and measures the specimen the way the DEM tension test does
-/// (experiments/protocols/tension_test.hpp): grips at both ends moved apart along x, the reaction
+/// (experiments/protocols/tension.hpp): grips at both ends moved apart along x, the reaction
 /// force, and strains from a least-squares fit of the mid-plane displacements of the central gauge
 /// section. The facts this relies on (input conventions, output traps, boundary conditions) are
 /// collected in shared/FEM_NOTES.md.
@@ -48,7 +48,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/model.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 
 namespace plydem {
 

@@ -156,7 +156,7 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
   if (r.specimen.volume > 0) {
     j["specimen_stiffness"] = {
         {"method",
-         "affine boundary displacements, static solves (experiments/protocols/stiffness_test.hpp)"},
+         "affine boundary displacements, static solves (experiments/protocols/stiffness.hpp)"},
         {"stiffness", matrix_json(r.specimen.stiffness)},
         {"constants", constants_json(r.specimen.constants)},
         {"frame_particles", r.specimen.frame_particles},
@@ -165,7 +165,7 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
       j["specimen_stiffness"]["interior"] = {
           {"method",
            "virial stress and fitted strain of an interior window, the same solves "
-           "(experiments/protocols/stiffness_test.hpp)"},
+           "(experiments/protocols/stiffness.hpp)"},
           {"stiffness", matrix_json(r.specimen.interior_stiffness)},
           {"constants", constants_json(r.specimen.interior_constants)},
           {"particles", r.specimen.interior_particles},

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// How a strength test (experiments/protocols/strength_test.hpp) is shown: a table for people
+/// How a strength test (experiments/protocols/strength.hpp) is shown: a table for people
 /// (MPa, %), a JSON object for scripts (SI units, Pa), and its figures and ParaView files.
 ///
 /// The JSON keys strength, strain_at_peak, first_failure_stress [Pa], curve (list of [strain,
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "experiments/output/figures.hpp"
-#include "experiments/protocols/strength_test.hpp"
+#include "experiments/protocols/strength.hpp"
 
 namespace plydem {
 

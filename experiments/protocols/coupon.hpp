@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The coupon as the tests that pull it along x see it (the tension test,
-/// experiments/protocols/tension_test.hpp, and the strength test, strength_test.hpp): built by a
+/// experiments/protocols/tension.hpp, and the strength test, strength.hpp): built by a
 /// strategy as one ply or a laminate, gripped at both ends, measured on a central gauge section.
 ///
 /// Grips are the particles within `grip_length` of either end (BoundaryGroup kLeftGrip,

@@ -4,7 +4,7 @@
 /// bonds, and the free edge that leaves (the hole's, and the plate's own) completed as boundary
 /// cells of the strategy's layer. Shared by the elastic hole-in-plate experiment
 /// (experiments/runner/hole_plate.hpp, paper Fig. 16) and the strength test of a notched plate
-/// (strength_test.hpp, StrengthSettings::hole_diameter).
+/// (strength.hpp, StrengthSettings::hole_diameter).
 
 #include <string>
 

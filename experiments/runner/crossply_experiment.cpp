@@ -1,6 +1,6 @@
 // The cross-ply experiment kind (`plydem run experiments/crossply.toml`, kind `crossply`):
 // [0_m/90_n]s laminates pulled in tension (the strength test, experiments/protocols/
-// strength_test.hpp, with strength scatter) until they fail; per laminate the strength test's own
+// strength.hpp, with strength scatter) until they fail; per laminate the strength test's own
 // section (stress-strain, cracks, crack density against strain), the first-ply failure beside
 // CLT's closed form, and the laminate's secant stiffness against the 90° layer's crack density
 // beside the shear-lag model and the ply-discount limit (core/transverse_cracking.hpp) and
@@ -34,7 +34,7 @@
 #include "core/transverse_cracking.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
-#include "experiments/protocols/strength_test.hpp"
+#include "experiments/protocols/strength.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/report_text.hpp"

@@ -1,5 +1,5 @@
 // The DCB experiment kind (`plydem run experiments/dcb.toml`, kind `dcb`): the double cantilever
-// beam of experiments/protocols/dcb_test.hpp opened to propagation, beside simple and corrected
+// beam of experiments/protocols/dcb.hpp opened to propagation, beside simple and corrected
 // beam theory. Config keys (README, "Delamination: the DCB"):
 //
 //   experiment = "dcb"
@@ -24,7 +24,7 @@
 #include "experiments/output/crack_report.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
-#include "experiments/protocols/dcb_test.hpp"
+#include "experiments/protocols/dcb.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/report_text.hpp"
@@ -247,7 +247,7 @@ std::string dcb_markdown(const DcbResult& r, const DcbSettings& s, const DcbRedu
   const Figure& crack_map = figures.crack_map;
   std::string md;
   md += fmt::format(
-      "A side-view model of the DCB (experiments/protocols/dcb_test.hpp): the particle layer "
+      "A side-view model of the DCB (experiments/protocols/dcb.hpp): the particle layer "
       "is the beam's length-thickness plane, the {:g} mm width its out-of-plane thickness "
       "(plane stress, E1 = {:g} GPa along the beam). Laminate {} of {:g} mm plies: two arms of "
       "h = {:g} mm ({} strategy, {} rows of {:g} mm particles), {:g} mm long, joined on the "

@@ -1,6 +1,6 @@
 // The notched-plate experiment kind (`plydem run experiments/hole_failure.toml`, kind
 // `hole_failure`): the paper's Fig. 16 plate (a [0/90/0] E-glass/MY750 laminate with a central
-// hole) pulled to failure by the strength test (experiments/protocols/strength_test.hpp,
+// hole) pulled to failure by the strength test (experiments/protocols/strength.hpp,
 // StrengthSettings::hole_diameter), and the same plate without the hole for the unnotched
 // strength. Reported: both plates' grip force against grip travel, notched strength (gross and
 // net section) beside the unnotched one, the first failure and where it sits, beside Lekhnitskii's
@@ -31,7 +31,7 @@
 #include "core/stress_concentration.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
-#include "experiments/protocols/strength_test.hpp"
+#include "experiments/protocols/strength.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/report_text.hpp"

@@ -11,7 +11,7 @@
 
 #include "core/error.hpp"
 #include "experiments/output/figures.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/paper_tables.hpp"
 #include "experiments/runner/report_text.hpp"

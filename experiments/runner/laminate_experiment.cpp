@@ -13,7 +13,7 @@
 #include "core/error.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/paper_tables.hpp"
 #include "experiments/runner/report_text.hpp"
@@ -144,7 +144,7 @@ std::string dem_lines(const LaminateExperimentSettings& ls, const TensionResult&
       {name, case_name, "wall time", fmt::format("dem {}", s.strategy), dem_seconds, "s"});
   if (r.specimen.stiffness.norm() > 0) {
     // The same coupon's membrane stiffness under affine boundary displacements
-    // (experiments/protocols/stiffness_test.hpp): no grips, no free edges, the laminate's A/h as
+    // (experiments/protocols/stiffness.hpp): no grips, no free edges, the laminate's A/h as
     // the bonds carry it.
     Values membrane = values_of(r.specimen.constants);
     t += constants_line(fmt::format("DEM {} (membrane stiffness, affine boundary)", s.strategy),

@@ -15,7 +15,7 @@
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/report_text.hpp"
 #include "solvers/static_solver.hpp"

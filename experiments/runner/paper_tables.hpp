@@ -38,7 +38,7 @@
 #include "core/elasticity.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
-#include "experiments/protocols/tension_test.hpp"
+#include "experiments/protocols/tension.hpp"
 #include "experiments/runner/experiment.hpp"
 
 namespace plydem::paper_tables {

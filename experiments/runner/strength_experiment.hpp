@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The strength experiment kind (`plydem run experiments/strength_angles.toml`, kind `strength`):
-/// the tension test to failure (experiments/protocols/strength_test.hpp) of one ply or laminate at
+/// the tension test to failure (experiments/protocols/strength.hpp) of one ply or laminate at
 /// each angle of the config, each strength beside the four classical criteria
 /// (core/failure_criteria.hpp), and the sections and files `plydem strength --out` writes for one
 /// test. Config keys (README, "Strength"):
@@ -24,7 +24,7 @@
 #include <filesystem>
 #include <string>
 
-#include "experiments/protocols/strength_test.hpp"
+#include "experiments/protocols/strength.hpp"
 #include "experiments/runner/experiment.hpp"
 
 namespace plydem {

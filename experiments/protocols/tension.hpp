@@ -28,7 +28,7 @@
 #include "core/elasticity.hpp"
 #include "experiments/protocols/coupon.hpp"
 #include "experiments/protocols/resource_estimate.hpp"
-#include "experiments/protocols/stiffness_test.hpp"
+#include "experiments/protocols/stiffness.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "solvers/linear_solver.hpp"
 #include "strategies/laminate.hpp"
@@ -66,7 +66,7 @@ struct TensionSettings {
   /// converges to.
   TensionSolver solver = TensionSolver::kStatic;
   /// Also measure the specimen's membrane stiffness (and Gxy) with affine boundary displacements
-  /// (experiments/protocols/stiffness_test.hpp): three more static solves on the ply's coupon.
+  /// (experiments/protocols/stiffness.hpp): three more static solves on the ply's coupon.
   bool measure_specimen_stiffness = true;
   /// The static solves' factorization (solvers/linear_solver.hpp): by size, the hand-written
   /// supernodal Cholesky or CHOLMOD.
@@ -102,7 +102,7 @@ struct PullResult {
   std::vector<double> strain, lateral_strain, shear_strain, stress;  ///< fitted points [-, Pa]
   int particles = 0, bonds = 0;
   long cycles = 0;
-  double final_ratio = 0;    ///< unbalanced-force ratio at the last point
+  double final_ratio = 0;  ///< unbalanced-force ratio at the last point
   /// The static solve's linear solver (StaticResult::method_name) and its Krylov iterations (0
   /// for a direct factor); empty and 0 for explicit dynamics.
   std::string linear_solver;
@@ -188,6 +188,7 @@ class TensionTest {
 
  private:
   struct Checkpointing;
+  struct PullRun;  // one pull in progress, split into its steps
   PullResult pull(const Specimen& specimen, double ply_angle, Checkpointing* checkpointing) const;
   TensionSettings settings_;
   std::function<void(const TensionProgress&)> progress_;

@@ -1,4 +1,4 @@
-#include "experiments/protocols/stiffness_test.hpp"
+#include "experiments/protocols/stiffness.hpp"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "experiments/protocols/dcb_test.hpp"
+#include "experiments/protocols/dcb.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -127,6 +127,272 @@ DcbBeamTheory dcb_beam_theory(const Material& m, double b, double h, double a, d
   return t;
 }
 
+namespace {
+
+// The two arms of the side view in one model: plies of the side view, the lower at y in [0, h]
+// (its particles first), the upper above it.
+struct DcbArms {
+  Model model;
+  int lower_particles = 0;
+  std::string arm_description;  // the strategy's description of one arm
+};
+
+DcbArms build_arms(const Strategy& strategy, const DcbSettings& s) {
+  const double h = s.arm_thickness();
+  CouponSpec arm;
+  arm.material = s.material;
+  arm.ply_angle = 0;
+  arm.length = s.length;
+  arm.width = h;
+  arm.thickness = s.width;
+  arm.particle_diameter = s.particle_diameter;
+  SpecimenBuilder builder(strategy);
+  Specimen lower = builder.build(arm);
+  Model upper = lower.model;
+  upper.particles.reference_position.col(1) += h;
+  // Both arms are ply 0 (one ply in the side view: plan-view plots draw it as it is).
+  DcbArms arms;
+  arms.lower_particles = lower.model.particles.size();
+  arms.arm_description = lower.model.description;
+  Model& model = arms.model;
+  model.particles.append(lower.model.particles);
+  model.particles.append(upper.particles);
+  model.bonds.append(lower.model.bonds);
+  model.bonds.append(upper.bonds, arms.lower_particles);
+  model.thickness = s.width;
+  return arms;
+}
+
+// The arms' facing rows, column by column, and where the interface lies.
+struct InterfaceColumns {
+  std::vector<int> below, above;  // the facing rows' particles, sorted by x
+  double gap = 0;                 // between the facing rows' centres [m]
+  double x_load = 0, x_end = 0;   // the load line and the far end [m]
+  double spacing = 0;             // of the columns [m]
+  double share = 0;               // each column's share of the interface [m^2]
+};
+
+InterfaceColumns interface_columns(const Particles& p, int lower_particles, const DcbSettings& s) {
+  const double d = s.particle_diameter;
+  InterfaceColumns c;
+  c.below = facing_row(p, 0, lower_particles, true, d);
+  c.above = facing_row(p, lower_particles, p.size(), false, d);
+  const std::vector<int>& below = c.below;
+  const std::vector<int>& above = c.above;
+  require(below.size() == above.size() && below.size() >= 2,
+          fmt::format("dcb: the arms' facing rows hold {} and {} particles; the side-view DCB "
+                      "joins them column by column (use the square strategy)",
+                      below.size(), above.size()));
+  for (std::size_t k = 0; k < below.size(); ++k) {
+    require(
+        std::abs(p.reference_position(below[k], 0) - p.reference_position(above[k], 0)) <= 0.05 * d,
+        fmt::format(
+            "dcb: the {} strategy's rows facing the mid-plane are not above each other "
+            "(column {} is {:g} mm apart); the side-view DCB joins them column by "
+            "column (use the square strategy)",
+            s.strategy, k + 1,
+            std::abs(p.reference_position(below[k], 0) - p.reference_position(above[k], 0)) / kMm));
+  }
+  c.gap = p.reference_position(above.front(), 1) - p.reference_position(below.front(), 1);
+  require(c.gap > 0.5 * d, fmt::format("dcb: the arms' facing rows are {:g} mm apart, closer than "
+                                       "half a particle diameter",
+                                       c.gap / kMm));
+  c.x_load = p.reference_position.col(0).minCoeff();
+  c.x_end = p.reference_position.col(0).maxCoeff();
+  c.spacing = s.length / static_cast<double>(below.size());
+  c.share = s.width * c.spacing;
+  return c;
+}
+
+// An interface bond of the crack front and where its share of the interface starts.
+struct Front {
+  double x;  // start of the bond's share of interface
+  int bond;
+};
+
+// Interface bonds ahead of the starter crack (a column's share of the interface starts half a
+// spacing before it), appended to the model's bonds; every bond's strength radius. The front, in
+// x.
+std::vector<Front> join_arms(Model& model, const InterfaceColumns& columns,
+                             const InterfaceStiffness& k, const InterfaceStrength& strength,
+                             const DcbSettings& s) {
+  const Particles& p = model.particles;
+  const double spacing = columns.spacing;
+  Bonds between;
+  std::vector<std::pair<int, int>> pairs;
+  for (std::size_t c = 0; c < columns.below.size(); ++c) {
+    const double x = p.reference_position(columns.below[c], 0);
+    if (x - 0.5 * spacing < columns.x_load + s.crack - 1e-9 * s.length) continue;
+    pairs.emplace_back(columns.below[c], columns.above[c]);
+  }
+  require(pairs.size() >= 2,
+          fmt::format("dcb: the starter crack ({:g} mm) leaves fewer than two bonded columns",
+                      s.crack / kMm));
+  between.resize(static_cast<int>(pairs.size()));
+  for (int c = 0; c < between.size(); ++c) {
+    between.first(c) = pairs[c].first;
+    between.second(c) = pairs[c].second;
+    between.normal_stiffness(c) = k.normal * columns.share;
+    between.shear_stiffness(c) = k.shear * columns.share;
+    between.family(c) = 0;
+    between.kind(c) = static_cast<int>(BondKind::kInterface);
+    set_bond_geometry(p, between, c);
+  }
+  const int first_interface = model.bonds.size();
+  model.bonds.append(between);
+  Bonds& bonds = model.bonds;
+  for (int b = 0; b < bonds.size(); ++b) {
+    bonds.strength_radius(b) = std::min(p.radius(bonds.first(b)), p.radius(bonds.second(b)));
+  }
+  std::vector<Front> front;
+  for (int b = first_interface; b < bonds.size(); ++b) {
+    set_interface_bond_strength(bonds, b, columns.share, strength);
+    front.push_back({p.reference_position(bonds.first(b), 0) - 0.5 * spacing, b});
+  }
+  return front;
+}
+
+// The plane problem, the loading blocks (the end columns moved apart along y at the unit
+// opening) and the reaction (the upper end column's y).
+struct OpeningLoad {
+  DofConstraints unit;
+  DofFlags reaction;
+};
+
+OpeningLoad opening_load(const Particles& p, int lower_particles, const InterfaceColumns& columns) {
+  const int n = p.size();
+  OpeningLoad load{DofConstraints(n), DofFlags::Constant(n, kDofsPerParticle, false)};
+  for (int i = 0; i < n; ++i) {
+    load.unit.fix(i, Dof::kUz);
+    load.unit.fix(i, Dof::kThetaX);
+    load.unit.fix(i, Dof::kThetaY);
+    if (p.reference_position(i, 0) > columns.x_load + 0.25 * columns.spacing) continue;
+    const bool top = i >= lower_particles;
+    load.unit.fix(i, Dof::kUy, (top ? 0.5 : -0.5) * kUnitOpening);
+    if (top) load.reaction(i, static_cast<int>(Dof::kUy)) = true;
+  }
+  return load;
+}
+
+// The load-opening curve as the events solver reports its critical states, with the crack length
+// at each, the cohesive zone at the peak and the snapshots.
+struct DcbCurve {
+  DcbCurve(DcbResult& result, const std::vector<Front>& crack_front,
+           const InterfaceColumns& interface, bool snapshots)
+      : r(result), front(crack_front), columns(interface), record_snapshots(snapshots) {}
+
+  DcbResult& r;
+  const std::vector<Front>& front;
+  const InterfaceColumns& columns;
+  bool record_snapshots = false;
+  std::size_t tip = 0;  // the first interface bond (in x) not broken
+  double peak = -std::numeric_limits<double>::infinity();
+  std::shared_ptr<const Model> peak_state;
+  long peak_event = 0;
+  double peak_load = -std::numeric_limits<double>::infinity();
+
+  // The crack tip: the first interface bond (in x) not broken.
+  double crack_length(const Bonds& state) {
+    while (tip < front.size() && state.is_broken(front[tip].bond)) ++tip;
+    return (tip < front.size() ? front[tip].x : columns.x_end) - columns.x_load;
+  }
+
+  // The unloaded origin.
+  void start() {
+    r.opening.push_back(0);
+    r.load.push_back(0);
+    r.crack.push_back(r.initial_crack);
+  }
+
+  void on_event(const Model& state, const EventPoint& point) {
+    r.opening.push_back(point.load_factor * kUnitOpening);
+    r.load.push_back(point.reaction);
+    r.crack.push_back(crack_length(state.bonds));
+    if (point.reaction > peak_load) {
+      peak_load = point.reaction;
+      int softened = 0;
+      for (const Front& f : front) {
+        const double damage = state.bonds.damage(f.bond);
+        if (damage > 0 && damage < 1) ++softened;
+      }
+      r.cohesive_zone_at_peak = softened * columns.spacing;
+    }
+    if (!record_snapshots) return;
+    const long e = point.event;
+    if (e == 1 || (e & (e - 1)) == 0) {
+      r.snapshots.push_back({e, e == 1 ? "first softening" : fmt::format("event {}", e),
+                             std::make_shared<const Model>(state)});
+    }
+    if (point.reaction > peak) {
+      peak = point.reaction;
+      peak_event = e;
+      peak_state = !r.snapshots.empty() && r.snapshots.back().event == e
+                       ? r.snapshots.back().model
+                       : std::make_shared<const Model>(state);
+    }
+  }
+
+  // The peak (labelled, or added when it was not an event 2^k) and the final state, in event
+  // order.
+  void finish_snapshots(const std::shared_ptr<const Model>& final_state) {
+    if (peak_state && peak_event > 1 && (peak_event & (peak_event - 1)) != 0) {
+      r.snapshots.push_back({peak_event, "peak", peak_state});
+    } else {
+      for (DcbSnapshot& snapshot : r.snapshots)
+        if (snapshot.event == peak_event) snapshot.label += " (peak)";
+    }
+    r.snapshots.push_back({r.events + 1, "final", final_state});
+    std::stable_sort(r.snapshots.begin(), r.snapshots.end(),
+                     [](const DcbSnapshot& a, const DcbSnapshot& b) { return a.event < b.event; });
+  }
+};
+
+// The events solver opening the beam until the crack reaches s.max_crack (or the solver stops),
+// each critical state into `curve`.
+EventsResult open_beam(const DcbSettings& s,
+                       const std::function<void(const EventProgress&)>& progress,
+                       const OpeningLoad& load, Model& model, DcbCurve& curve) {
+  EventSettings events = s.events;
+  events.static_settings.pin_rigid_modes = true;
+  events.static_settings.linear_solver = s.linear_solver;
+  if (progress) events.on_progress = progress;
+  curve.start();
+  events.on_event = [&](const Model& state, const EventPoint& point) {
+    curve.on_event(state, point);
+  };
+  events.stop_after = [&](const Model& state, const EventPoint&) -> std::string {
+    if (curve.crack_length(state.bonds) >= s.max_crack)
+      return fmt::format("crack reached {:g} mm", s.max_crack / kMm);
+    return "";
+  };
+  return run_events(model, load.unit, load.reaction, events);
+}
+
+// The run's figures: the initial compliance, the peak, the crack grown and the energy released
+// per unit area of it.
+void take_events_result(const EventsResult& run, const DcbSettings& s, const Model& model,
+                        DcbCurve& curve, DcbResult& r) {
+  require(!run.path.empty(),
+          fmt::format("dcb: no interface bond was loaded to its strength ({})", run.stop));
+  require(r.load[1] > 0, "dcb: the opening gives no positive load on the upper arm");
+  r.breaks = run.breaks;
+  r.events = static_cast<long>(run.path.size());
+  r.stop = run.stop;
+  r.factorizations = run.factorizations;
+  r.solves = run.solves;
+  r.dissipated_energy = run.dissipated_energy;
+  r.initial_compliance = r.opening[1] / r.load[1];
+  const std::size_t at = static_cast<std::size_t>(run.peak) + 1;
+  r.propagation_load = r.load[at];
+  r.opening_at_peak = r.opening[at];
+  r.crack_at_peak = r.crack[at];
+  r.final_crack = curve.crack_length(model.bonds);
+  const double grown = r.final_crack - r.initial_crack;
+  r.released_per_area = grown > 0 ? r.dissipated_energy / (s.width * grown) : 0.0;
+}
+
+}  // namespace
+
 DcbResult run_dcb(const DcbSettings& s, const std::function<void(const EventProgress&)>& progress) {
   const auto start = std::chrono::steady_clock::now();
   s.validate();
@@ -146,208 +412,40 @@ DcbResult run_dcb(const DcbSettings& s, const std::function<void(const EventProg
   const double d = s.particle_diameter;
   const double h = r.arm_thickness;
 
-  // The two arms: plies of the side view, the lower at y in [0, h], the upper above it.
-  CouponSpec arm;
-  arm.material = s.material;
-  arm.ply_angle = 0;
-  arm.length = s.length;
-  arm.width = h;
-  arm.thickness = s.width;
-  arm.particle_diameter = d;
-  SpecimenBuilder builder(*strategy);
-  Specimen lower = builder.build(arm);
-  Model upper = lower.model;
-  upper.particles.reference_position.col(1) += h;
-  // Both arms are ply 0 (one ply in the side view: plan-view plots draw it as it is).
-  const int n_lower = lower.model.particles.size();
-  Model model;
-  model.particles.append(lower.model.particles);
-  model.particles.append(upper.particles);
-  model.bonds.append(lower.model.bonds);
-  model.bonds.append(upper.bonds, n_lower);
-  model.thickness = s.width;
-  Particles& p = model.particles;
+  DcbArms arms = build_arms(*strategy, s);
+  Model& model = arms.model;
+  const Particles& p = model.particles;
   const int n = p.size();
-
-  // The facing rows, column by column.
-  const std::vector<int> below = facing_row(p, 0, n_lower, true, d);
-  const std::vector<int> above = facing_row(p, n_lower, n, false, d);
-  require(below.size() == above.size() && below.size() >= 2,
-          fmt::format("dcb: the arms' facing rows hold {} and {} particles; the side-view DCB "
-                      "joins them column by column (use the square strategy)",
-                      below.size(), above.size()));
-  for (std::size_t c = 0; c < below.size(); ++c) {
-    require(
-        std::abs(p.reference_position(below[c], 0) - p.reference_position(above[c], 0)) <= 0.05 * d,
-        fmt::format(
-            "dcb: the {} strategy's rows facing the mid-plane are not above each other "
-            "(column {} is {:g} mm apart); the side-view DCB joins them column by "
-            "column (use the square strategy)",
-            s.strategy, c + 1,
-            std::abs(p.reference_position(below[c], 0) - p.reference_position(above[c], 0)) / kMm));
-  }
-  const double gap =
-      p.reference_position(above.front(), 1) - p.reference_position(below.front(), 1);
-  require(gap > 0.5 * d, fmt::format("dcb: the arms' facing rows are {:g} mm apart, closer than "
-                                     "half a particle diameter",
-                                     gap / kMm));
-  const double x_load = p.reference_position.col(0).minCoeff();
-  const double x_end = p.reference_position.col(0).maxCoeff();
-  const double spacing = s.length / static_cast<double>(below.size());
-  const double share = s.width * spacing;  // each column's share of the interface [m^2]
-
+  const InterfaceColumns columns = interface_columns(p, arms.lower_particles, s);
   InterfaceStiffness k = s.interface;
-  if (k.normal == 0) k.normal = s.material.E2 / gap;
-  if (k.shear == 0) k.shear = s.material.G12 / gap;
+  if (k.normal == 0) k.normal = s.material.E2 / columns.gap;
+  if (k.shear == 0) k.shear = s.material.G12 / columns.gap;
   r.interface = k;
   const InterfaceStrength strength = s.resolved_interface_strength();
   r.interface_strength = strength;
-
-  // Interface bonds ahead of the starter crack: a column's share of the interface starts half a
-  // spacing before it.
-  struct Front {
-    double x;  // start of the bond's share of interface
-    int bond;
-  };
-  std::vector<Front> front;
-  Bonds between;
-  std::vector<std::pair<int, int>> pairs;
-  for (std::size_t c = 0; c < below.size(); ++c) {
-    const double x = p.reference_position(below[c], 0);
-    if (x - 0.5 * spacing < x_load + s.crack - 1e-9 * s.length) continue;
-    pairs.emplace_back(below[c], above[c]);
-  }
-  require(pairs.size() >= 2,
-          fmt::format("dcb: the starter crack ({:g} mm) leaves fewer than two bonded columns",
-                      s.crack / kMm));
-  between.resize(static_cast<int>(pairs.size()));
-  for (int c = 0; c < between.size(); ++c) {
-    between.first(c) = pairs[c].first;
-    between.second(c) = pairs[c].second;
-    between.normal_stiffness(c) = k.normal * share;
-    between.shear_stiffness(c) = k.shear * share;
-    between.family(c) = 0;
-    between.kind(c) = static_cast<int>(BondKind::kInterface);
-    set_bond_geometry(p, between, c);
-  }
-  const int first_interface = model.bonds.size();
-  model.bonds.append(between);
-  Bonds& bonds = model.bonds;
-  for (int b = 0; b < bonds.size(); ++b) {
-    bonds.strength_radius(b) = std::min(p.radius(bonds.first(b)), p.radius(bonds.second(b)));
-  }
-  for (int b = first_interface; b < bonds.size(); ++b) {
-    set_interface_bond_strength(bonds, b, share, strength);
-    front.push_back({p.reference_position(bonds.first(b), 0) - 0.5 * spacing, b});
-  }
-  r.interface_ductility = bonds.ductility(first_interface);
+  const std::vector<Front> front = join_arms(model, columns, k, strength, s);
+  const int interface_bonds = static_cast<int>(front.size());
+  r.interface_ductility = model.bonds.ductility(front.front().bond);
   model.description =
       fmt::format("side-view DCB of {}: two arms of {} ({} rows of {:g} mm), {} interface bonds",
-                  format_layup(s.layup), lower.model.description,
-                  static_cast<int>(std::round(h / d)), d / kMm, between.size());
+                  format_layup(s.layup), arms.arm_description, static_cast<int>(std::round(h / d)),
+                  d / kMm, interface_bonds);
   model.check_consistency();
   r.particles = n;
-  r.bonds = bonds.size();
-  r.interface_bonds = between.size();
-  r.initial_crack = front.front().x - x_load;
+  r.bonds = model.bonds.size();
+  r.interface_bonds = interface_bonds;
+  r.initial_crack = front.front().x - columns.x_load;
   r.theory = dcb_beam_theory(s.material, s.width, h, r.initial_crack, strength.GIc);
   spdlog::debug("dcb: {} particles, {} bonds, load line x = {:g} mm, far end {:g} mm, a0 = {:g} mm",
-                n, bonds.size(), x_load / kMm, x_end / kMm, r.initial_crack / kMm);
+                n, model.bonds.size(), columns.x_load / kMm, columns.x_end / kMm,
+                r.initial_crack / kMm);
 
-  // The plane problem, the loading blocks and the reaction.
-  DofConstraints unit(n);
-  DofFlags reaction = DofFlags::Constant(n, kDofsPerParticle, false);
-  for (int i = 0; i < n; ++i) {
-    unit.fix(i, Dof::kUz);
-    unit.fix(i, Dof::kThetaX);
-    unit.fix(i, Dof::kThetaY);
-    if (p.reference_position(i, 0) > x_load + 0.25 * spacing) continue;
-    const bool top = i >= n_lower;
-    unit.fix(i, Dof::kUy, (top ? 0.5 : -0.5) * kUnitOpening);
-    if (top) reaction(i, static_cast<int>(Dof::kUy)) = true;
-  }
-
-  // The crack tip: the first interface bond (in x) not broken.
-  std::size_t tip = 0;
-  auto crack_length = [&](const Bonds& state) {
-    while (tip < front.size() && state.is_broken(front[tip].bond)) ++tip;
-    return (tip < front.size() ? front[tip].x : x_end) - x_load;
-  };
-
-  EventSettings events = s.events;
-  events.static_settings.pin_rigid_modes = true;
-  events.static_settings.linear_solver = s.linear_solver;
-  if (progress) events.on_progress = progress;
-  r.opening.push_back(0);
-  r.load.push_back(0);
-  r.crack.push_back(r.initial_crack);
-  double peak = -std::numeric_limits<double>::infinity();
-  std::shared_ptr<const Model> peak_state;
-  long peak_event = 0;
-  double peak_load = -std::numeric_limits<double>::infinity();
-  events.on_event = [&](const Model& state, const EventPoint& point) {
-    r.opening.push_back(point.load_factor * kUnitOpening);
-    r.load.push_back(point.reaction);
-    r.crack.push_back(crack_length(state.bonds));
-    if (point.reaction > peak_load) {
-      peak_load = point.reaction;
-      int softened = 0;
-      for (const Front& f : front) {
-        const double damage = state.bonds.damage(f.bond);
-        if (damage > 0 && damage < 1) ++softened;
-      }
-      r.cohesive_zone_at_peak = softened * spacing;
-    }
-    if (!s.record_snapshots) return;
-    const long e = point.event;
-    if (e == 1 || (e & (e - 1)) == 0) {
-      r.snapshots.push_back({e, e == 1 ? "first softening" : fmt::format("event {}", e),
-                             std::make_shared<const Model>(state)});
-    }
-    if (point.reaction > peak) {
-      peak = point.reaction;
-      peak_event = e;
-      peak_state = !r.snapshots.empty() && r.snapshots.back().event == e
-                       ? r.snapshots.back().model
-                       : std::make_shared<const Model>(state);
-    }
-  };
-  events.stop_after = [&](const Model& state, const EventPoint&) -> std::string {
-    if (crack_length(state.bonds) >= s.max_crack)
-      return fmt::format("crack reached {:g} mm", s.max_crack / kMm);
-    return "";
-  };
-  const EventsResult run = run_events(model, unit, reaction, events);
-  require(!run.path.empty(),
-          fmt::format("dcb: no interface bond was loaded to its strength ({})", run.stop));
-  require(r.load[1] > 0, "dcb: the opening gives no positive load on the upper arm");
-
-  r.breaks = run.breaks;
-  r.events = static_cast<long>(run.path.size());
-  r.stop = run.stop;
-  r.factorizations = run.factorizations;
-  r.solves = run.solves;
-  r.dissipated_energy = run.dissipated_energy;
-  r.initial_compliance = r.opening[1] / r.load[1];
-  const std::size_t at = static_cast<std::size_t>(run.peak) + 1;
-  r.propagation_load = r.load[at];
-  r.opening_at_peak = r.opening[at];
-  r.crack_at_peak = r.crack[at];
-  r.final_crack = crack_length(model.bonds);
-  const double grown = r.final_crack - r.initial_crack;
-  r.released_per_area = grown > 0 ? r.dissipated_energy / (s.width * grown) : 0.0;
+  const OpeningLoad load = opening_load(p, arms.lower_particles, columns);
+  DcbCurve curve(r, front, columns, s.record_snapshots);
+  const EventsResult run = open_beam(s, progress, load, model, curve);
+  take_events_result(run, s, model, curve, r);
   auto final_state = std::make_shared<const Model>(std::move(model));
-  if (s.record_snapshots) {
-    if (peak_state && peak_event > 1 && (peak_event & (peak_event - 1)) != 0) {
-      r.snapshots.push_back({peak_event, "peak", peak_state});
-    } else {
-      for (DcbSnapshot& snapshot : r.snapshots)
-        if (snapshot.event == peak_event) snapshot.label += " (peak)";
-    }
-    r.snapshots.push_back({r.events + 1, "final", final_state});
-    std::stable_sort(r.snapshots.begin(), r.snapshots.end(),
-                     [](const DcbSnapshot& a, const DcbSnapshot& b) { return a.event < b.event; });
-  }
+  if (s.record_snapshots) curve.finish_snapshots(final_state);
   r.model = std::move(final_state);
   r.wall_seconds = seconds_since(start);
   return r;

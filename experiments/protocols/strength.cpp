@@ -1,4 +1,4 @@
-#include "experiments/protocols/strength_test.hpp"
+#include "experiments/protocols/strength.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -289,6 +290,428 @@ StrengthResult StrengthTest::run() const {
   return run(builder);
 }
 
+namespace {
+
+// The plies as CLT sees them, bottom to top (a laminate's angles into result.layup).
+std::vector<Ply> coupon_plies(const StrengthSettings& s, StrengthResult& result) {
+  std::vector<Ply> plies;
+  if (s.layup.empty()) {
+    plies.push_back({s.coupon.material, s.coupon.ply_angle, s.coupon.thickness});
+  } else {
+    plies = laminate_plies({s.coupon, s.layup, s.interface});
+    for (const Ply& ply : plies) result.layup.push_back(ply.angle);
+  }
+  return plies;
+}
+
+// Strengths of each distinct ply, before the coupon is built (a strategy or target the
+// calibration refuses fails here); the builder keeps the stiffness calibrations for the build.
+std::vector<StrengthCalibration> calibrate_ply_strengths(SpecimenBuilder& builder,
+                                                         const StrengthSettings& s,
+                                                         const std::vector<Ply>& plies) {
+  std::vector<StrengthCalibration> strengths;
+  std::map<std::string, StrengthCalibration> calibrated;
+  for (const Ply& ply : plies) {
+    CouponSpec spec = s.coupon;
+    spec.ply_angle = ply.angle;
+    const std::string key = builder.strategy().calibration_key(spec);
+    auto it = calibrated.find(key);
+    if (it == calibrated.end()) {
+      // Family strengths stated for the coupon's particles (the report's numbers are the bonds').
+      StrengthOptions options = s.strength_options;
+      if (options.particle_diameter == 0) options.particle_diameter = s.coupon.particle_diameter;
+      it = calibrated
+               .emplace(key, calibrate_strengths(builder.strategy(), builder.calibration(spec),
+                                                 s.coupon.material, ply.angle, s.coupon.thickness,
+                                                 options))
+               .first;
+    }
+    strengths.push_back(it->second);
+  }
+  return strengths;
+}
+
+// The coupon, as the tension test builds it. A hole is cut into the coupon built without edge
+// completion, and its edges then completed (result.hole, result.hole_centre).
+Specimen build_strength_coupon(SpecimenBuilder& builder, const StrengthSettings& s,
+                               StrengthResult& result) {
+  std::optional<BoundaryCompletion> completion;
+  CouponSpec coupon = s.coupon;
+  if (s.hole_diameter > 0) {
+    if (coupon.complete_boundary_cells)
+      completion = hole_boundary_completion(builder.strategy(), s.strategy);
+    coupon.complete_boundary_cells = false;
+  }
+  Specimen specimen = build_coupon(builder, coupon, s.layup, s.interface, s.coupon.ply_angle);
+  if (s.hole_diameter > 0) {
+    const Particles& q = specimen.model.particles;
+    const Eigen::Vector3d low = q.reference_position.colwise().minCoeff().transpose();
+    const Eigen::Vector3d high = q.reference_position.colwise().maxCoeff().transpose();
+    result.hole_centre = 0.5 * (low + high).head<2>();
+    result.hole = remove_hole(specimen.model, result.hole_centre.x(), result.hole_centre.y(),
+                              s.hole_diameter);
+    if (completion) complete_ply_boundary_cells(specimen.model, *completion);
+  }
+  return specimen;
+}
+
+// Each classical criterion's strength of the plies (a criterion needing a strength the material
+// does not give: the reason instead).
+std::vector<CriterionStrength> classical_strengths(const std::vector<Ply>& plies,
+                                                   const LaminaStrength& strength) {
+  std::vector<CriterionStrength> theory;
+  for (FailureCriterion criterion : all_criteria()) {
+    CriterionStrength t{criterion, std::nullopt, ""};
+    try {
+      t.strength = first_ply_failure_stress(criterion, plies, strength);
+    } catch (const Error& e) {
+      t.missing = e.what();  // a strength the criterion needs is not given
+    }
+    theory.push_back(t);
+  }
+  return theory;
+}
+
+// The calibrated bulk's own first failure under the coupon's load.
+double bulk_first_failure(const std::vector<Ply>& plies,
+                          const std::vector<StrengthCalibration>& ply_strengths) {
+  double factor = std::numeric_limits<double>::infinity();
+  const std::vector<PlyStress> stresses = unit_ply_stresses(plies);
+  for (std::size_t k = 0; k < plies.size(); ++k)
+    factor = std::min(factor, ply_strengths[k].first_failure_factor(stresses[k]));
+  return factor;
+}
+
+// The gripped coupon at the unit load: its gauge section, the grips' prescribed values and the
+// degrees of freedom whose reactions sum to the load.
+struct UnitLoading {
+  CouponGrips grips;
+  GaugeSection gauge;
+  DofConstraints unit;
+  DofFlags reaction_dofs;
+};
+
+// Uniform grips: the relaxed bulk's uniform state under sigma_x, the plies' relaxed stiffness
+// summed as CLT sums Q-bar, its strain per unit eps_xx, and each ply's spin under that strain
+// (into result.uniform_strain and result.uniform_spin).
+DofConstraints uniform_unit_load(const Strategy& strategy, double thickness,
+                                 const std::vector<Calibration>& calibrations, const Particles& p,
+                                 StrengthResult& result) {
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  for (const Calibration& c : calibrations) A += c.relaxed;
+  Eigen::Vector3d e = A.ldlt().solve(Eigen::Vector3d(1, 0, 0));
+  require(e(0) > 0, "the coupon's relaxed stiffness gives no positive strain under sigma_x");
+  e /= e(0);
+  result.uniform_strain = e;
+  for (const Calibration& c : calibrations) {
+    const std::optional<UnitCell> cell = strategy.unit_cell(c, thickness);
+    double spin = 0;
+    if (cell && cell->basis.size() == 1) {
+      std::vector<FamilyStiffness> families;
+      for (const FamilyCalibration& f : c.families) families.push_back(f.stiffness);
+      Vector6d voigt;
+      voigt << e(0), e(1), 0, 0, 0, e(2);
+      spin = relaxed_motion(*cell, families, voigt).rotation[0].z();
+    }
+    result.uniform_spin.push_back(spin);
+  }
+  std::vector<double> spin = result.uniform_spin;
+  for (double& w : spin) w *= kUnitNominalStrain;
+  return uniform_grip_constraints(p, kUnitNominalStrain * e, spin);
+}
+
+// Grips, gauge section, the unit loading.
+UnitLoading grip_coupon(const Strategy& strategy, const StrengthSettings& s,
+                        const std::vector<Calibration>& calibrations, Model& model,
+                        StrengthResult& result) {
+  Particles& p = model.particles;
+  UnitLoading l;
+  const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * s.coupon.particle_diameter;
+  l.grips = assign_grips(p, grip);
+  l.gauge = gauge_section(p, l.grips, s.gauge_fraction, s.edge_band_diameters,
+                          s.coupon.particle_diameter);
+  if (s.grips == StrengthGrips::kUniform) {
+    l.unit = uniform_unit_load(strategy, s.coupon.thickness, calibrations, p, result);
+  } else {
+    l.unit = grip_constraints(
+        p, 0.0, kUnitNominalStrain * l.grips.span,
+        s.grips == StrengthGrips::kClamped ? GripCondition::kClamped : GripCondition::kFree);
+  }
+  l.reaction_dofs = DofFlags::Constant(p.size(), kDofsPerParticle, false);
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.group(i) == static_cast<int>(BoundaryGroup::kRightGrip))
+      l.reaction_dofs(i, static_cast<int>(Dof::kUx)) = true;
+  }
+  result.particles = p.size();
+  result.bonds = model.bonds.size();
+  result.cross_section = l.gauge.cross_section;
+  result.span = l.grips.span;
+  return l;
+}
+
+// StrengthSettings::consistent_edges: the bonds that would fail before the relaxed bulk raised to
+// fail with it, after the scatter (if any) is drawn on the strengths as assigned.
+void make_edges_consistent(const StrengthSettings& s, const std::vector<Ply>& plies,
+                           const std::vector<Calibration>& calibrations,
+                           const std::vector<bool>& scattered_plies, const DofConstraints& unit,
+                           const StaticSettings& grip_settings, Model& model,
+                           StrengthResult& result) {
+  std::vector<PlyStress> ply_stress;
+  for (std::size_t k = 0; k < plies.size(); ++k) {
+    const Eigen::Vector3d sigma =
+        calibrations[k].relaxed * (kUnitNominalStrain * result.uniform_strain);
+    ply_stress.push_back(to_ply_axes(sigma(0), sigma(1), sigma(2), plies[k].angle));
+  }
+  const std::vector<double> factors =
+      edge_strength_factors(model, unit, grip_settings, result.ply_strengths, ply_stress,
+                            result.hole_centre, s.hole_diameter > 0 ? 1.5 * s.hole_diameter : 0.0);
+  if (result.weibull_modulus > 0) {
+    Specimen scattered{std::move(model), calibrations, 0.0};
+    assign_bond_strengths(scattered, result.ply_strengths, s.interface_strength,
+                          result.weibull_modulus, s.seed, scattered_plies,
+                          s.scatter_per_crack_site);
+    model = std::move(scattered.model);
+  }
+  raise_strengths(model.bonds, factors);
+  for (double f : factors) {
+    if (f == 1.0) continue;
+    ++result.edge_strengthened_bonds;
+    result.edge_strength_factor = std::max(result.edge_strength_factor, f);
+  }
+}
+
+// The stress-strain curve as the events solver reports its critical states, the snapshots on
+// the way and the peak's state; all of it goes into checkpoints.
+struct StrengthCurve {
+  StrengthCurve(StrengthResult& run_result, const GaugeSection& section, bool snapshots)
+      : result(run_result), gauge(section), record_snapshots(snapshots) {}
+
+  StrengthResult& result;
+  const GaugeSection& gauge;
+  bool record_snapshots = false;
+  double peak_stress = -std::numeric_limits<double>::infinity();
+  std::shared_ptr<const Model> peak_state;
+  long peak_event = 0;
+
+  // The unloaded origin.
+  void start() {
+    result.strain.push_back(0.0);
+    result.stress.push_back(0.0);
+    result.nominal_strain.push_back(0.0);
+  }
+
+  void on_event(const Model& state, const EventPoint& point) {
+    result.strain.push_back(fit_gauge_strain(state.particles, gauge.particles).exx);
+    result.stress.push_back(point.reaction / gauge.cross_section);
+    result.nominal_strain.push_back(point.load_factor * kUnitNominalStrain);
+    if (!record_snapshots) return;
+    const long e = point.event;
+    if (e == 1 || (e & (e - 1)) == 0) {
+      result.snapshots.push_back({e, e == 1 ? "first failure" : fmt::format("event {}", e),
+                                  std::make_shared<const Model>(state)});
+    }
+    if (result.stress.back() > peak_stress) {
+      peak_stress = result.stress.back();
+      peak_event = e;
+      peak_state = !result.snapshots.empty() && result.snapshots.back().event == e
+                       ? result.snapshots.back().model
+                       : std::make_shared<const Model>(state);
+    }
+  }
+
+  void write(CheckpointWriter& w) const {
+    w.section("strength");
+    w.doubles(result.strain);
+    w.doubles(result.stress);
+    w.doubles(result.nominal_strain);
+    w.f64(peak_stress);
+    w.i64(peak_event);
+    w.boolean(peak_state != nullptr);
+    if (peak_state) write_model(w, *peak_state);
+    w.u64(result.snapshots.size());
+    for (const StrengthSnapshot& snapshot : result.snapshots) {
+      w.i64(snapshot.event);
+      w.str(snapshot.label);
+      write_model(w, *snapshot.model);
+    }
+  }
+
+  void read(CheckpointReader& in) {
+    in.section("strength");
+    result.strain = in.doubles();
+    result.stress = in.doubles();
+    result.nominal_strain = in.doubles();
+    peak_stress = in.f64();
+    peak_event = in.i64();
+    if (in.boolean()) {
+      auto m = std::make_shared<Model>();
+      read_model(in, *m);
+      peak_state = std::move(m);
+    }
+    const std::uint64_t snapshots = in.u64();
+    for (std::uint64_t k = 0; k < snapshots; ++k) {
+      StrengthSnapshot snapshot;
+      snapshot.event = in.i64();
+      snapshot.label = in.str();
+      auto m = std::make_shared<Model>();
+      read_model(in, *m);
+      snapshot.model = std::move(m);
+      // The peak's snapshot is the peak state itself (as the run shares it).
+      if (peak_state && snapshot.event == peak_event) snapshot.model = peak_state;
+      result.snapshots.push_back(std::move(snapshot));
+    }
+  }
+
+  // The peak (labelled, or added when it was not an event 2^k) and the final state, in event
+  // order.
+  void finish_snapshots(const std::shared_ptr<const Model>& final_state) {
+    if (peak_state && peak_event > 1 && (peak_event & (peak_event - 1)) != 0) {
+      result.snapshots.push_back({peak_event, "peak", peak_state});
+    } else {
+      for (StrengthSnapshot& snapshot : result.snapshots)
+        if (snapshot.event == peak_event) snapshot.label += " (peak)";
+    }
+    result.snapshots.push_back({result.events + 1, "final", final_state});
+    std::stable_sort(
+        result.snapshots.begin(), result.snapshots.end(),
+        [](const StrengthSnapshot& a, const StrengthSnapshot& b) { return a.event < b.event; });
+  }
+};
+
+// What a checkpoint of this run must match: the settings and the model as it starts (strengths
+// assigned) with its unit load.
+CheckpointHeader strength_run_header(const StrengthSettings& s, const Model& model,
+                                     const DofConstraints& unit) {
+  CheckpointHeader header = strength_checkpoint_header(s);
+  add_model_fingerprint(header, model);
+  CheckpointWriter unit_bytes;
+  for (Eigen::Index i = 0; i < unit.fixed.size(); ++i) unit_bytes.boolean(unit.fixed.data()[i]);
+  unit_bytes.doubles({unit.value.data(), static_cast<std::size_t>(unit.value.size())});
+  header.add("unit_load", fmt::format("{:016x}", fnv1a64(unit_bytes.bytes())));
+  return header;
+}
+
+// A restart: the curve so far into `curve`, the model's state into `model`, and the events
+// solver's state to continue from.
+EventsState restore_strength_run(const std::filesystem::path& restart,
+                                 const CheckpointHeader& header, Model& model,
+                                 StrengthCurve& curve) {
+  CheckpointFile f = read_checkpoint(restart);
+  const std::string file = restart.string();
+  check_same_run(f.header, header, file);
+  CheckpointReader& in = f.payload;
+  curve.read(in);
+  Model saved;
+  read_model(in, saved);
+  static constexpr std::string_view kRunFields[] = {"displacement",
+                                                    "rotation",
+                                                    "force",
+                                                    "torque",
+                                                    "normal_stiffness",
+                                                    "shear_stiffness",
+                                                    "bending_stiffness",
+                                                    "twisting_stiffness",
+                                                    "damage",
+                                                    "state"};
+  check_same_model(model, saved, kRunFields, file);
+  EventsState resume = read_events_state(in);
+  in.finish();
+  if (curve.result.strain.size() != resume.result.path.size() + 1)
+    in.corrupt("the curve and the events differ in length");
+  model.particles = std::move(saved.particles);
+  model.bonds = std::move(saved.bonds);
+  spdlog::info("restarting from {} after event {} ({} bonds broken)", file, resume.events,
+               resume.broken);
+  return resume;
+}
+
+// The events solver from the unit load to failure, each critical state into `curve`, with the
+// checkpoints and restart of s.checkpoint.
+EventsResult run_to_failure(const StrengthSettings& s,
+                            const std::function<void(const EventProgress&)>& progress,
+                            const StaticSettings& grip_settings, const UnitLoading& loading,
+                            Model& model, StrengthCurve& curve) {
+  EventSettings events = s.events;
+  events.static_settings.pin_rigid_modes = grip_settings.pin_rigid_modes;
+  events.static_settings.linear_solver = grip_settings.linear_solver;
+  events.on_progress = progress;
+  curve.start();
+  events.on_event = [&](const Model& state, const EventPoint& point) {
+    curve.on_event(state, point);
+  };
+
+  const CheckpointOptions& ck = s.checkpoint;
+  CheckpointHeader header;
+  if (ck.writes() || !ck.restart.empty()) header = strength_run_header(s, model, loading.unit);
+  std::optional<EventsState> resume;
+  if (!ck.restart.empty()) resume = restore_strength_run(ck.restart, header, model, curve);
+  if (ck.writes()) {
+    events.checkpoint_every = ck.every;
+    events.on_checkpoint = [&](const Model& state, const EventsState& run_state) {
+      CheckpointWriter w;
+      curve.write(w);
+      write_model(w, state);
+      write_events_state(w, run_state);
+      write_checkpoint(ck.file, header, w);
+    };
+  }
+  return run_events(model, loading.unit, loading.reaction_dofs, events,
+                    resume ? &*resume : nullptr);
+}
+
+// The run's figures: the path, the peak and the first failure.
+void take_events_result(const EventsResult& run, StrengthResult& result) {
+  require(!run.path.empty(),
+          fmt::format("no bond of the coupon broke under the grips' pull ({}): nothing to "
+                      "measure",
+                      run.stop));
+  require(result.strain.size() == run.path.size() + 1,
+          "the events solver did not report every critical state");
+  result.path = run.path;
+  result.breaks = run.breaks;
+  result.peak = run.peak >= 0 ? run.peak : 0;
+  result.events = static_cast<long>(run.path.size());
+  result.stop = run.stop;
+  result.factorizations = run.factorizations;
+  result.solves = run.solves;
+  result.dissipated_energy = run.dissipated_energy;
+  const std::size_t peak = static_cast<std::size_t>(result.peak) + 1;
+  result.strength = result.stress[peak];
+  result.strain_at_peak = result.strain[peak];
+  result.first_failure_stress = result.stress[1];
+  result.first_failure_strain = result.strain[1];
+}
+
+// Broken bonds by family and mode; every family of the coupon is listed.
+void count_broken_bonds(const Model& model, StrengthResult& result) {
+  const Particles& p = model.particles;
+  const Bonds& bonds = model.bonds;
+  std::map<std::pair<bool, std::string>, BrokenBonds> counts;
+  for (int b = 0; b < bonds.size(); ++b) {
+    const bool interface = bonds.is_interface(b);
+    const std::string label =
+        interface ? fmt::format("interface {}/{}", bonds.family(b), bonds.family(b) + 1)
+                  : family_label(
+                        result.ply_strengths[static_cast<std::size_t>(p.ply(bonds.first(b)))],
+                        bonds.family(b));
+    BrokenBonds& c = counts[{interface, label}];
+    c.family = label;
+    c.interface = interface;
+    if (bonds.state(b) == static_cast<int>(BondState::kBrokenTension)) {
+      ++c.tension;
+      ++result.broken_tension;
+    } else if (bonds.state(b) == static_cast<int>(BondState::kBrokenShear)) {
+      ++c.shear;
+      ++result.broken_shear;
+    } else if (bonds.damage(b) > 0) {
+      ++result.damaged;
+    }
+  }
+  for (auto& [key, c] : counts) result.broken.push_back(c);
+}
+
+}  // namespace
+
 StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   const auto start = Clock::now();
   const StrengthSettings& s = settings_;
@@ -315,53 +738,11 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   result.weibull_modulus = s.effective_weibull_modulus();
   result.seed = s.seed;
 
-  // The plies as CLT sees them, bottom to top.
-  std::vector<Ply> plies;
-  if (s.layup.empty()) {
-    plies.push_back({material, s.coupon.ply_angle, s.coupon.thickness});
-  } else {
-    plies = laminate_plies({s.coupon, s.layup, s.interface});
-    for (const Ply& ply : plies) result.layup.push_back(ply.angle);
-  }
-  // Strengths of each distinct ply, before the coupon is built (a strategy or target the
-  // calibration refuses fails here); the builder keeps the stiffness calibrations for the build.
-  std::map<std::string, StrengthCalibration> calibrated;
-  for (const Ply& ply : plies) {
-    CouponSpec spec = s.coupon;
-    spec.ply_angle = ply.angle;
-    const std::string key = builder.strategy().calibration_key(spec);
-    auto it = calibrated.find(key);
-    if (it == calibrated.end()) {
-      // Family strengths stated for the coupon's particles (the report's numbers are the bonds').
-      StrengthOptions options = s.strength_options;
-      if (options.particle_diameter == 0) options.particle_diameter = s.coupon.particle_diameter;
-      it = calibrated
-               .emplace(key, calibrate_strengths(builder.strategy(), builder.calibration(spec),
-                                                 material, ply.angle, s.coupon.thickness, options))
-               .first;
-    }
-    result.ply_strengths.push_back(it->second);
-  }
+  const std::vector<Ply> plies = coupon_plies(s, result);
+  result.ply_strengths = calibrate_ply_strengths(builder, s, plies);
 
-  // The coupon, as the tension test builds it, and the strength of every bond.
-  // A hole is cut into the coupon built without edge completion, and its edges then completed.
-  std::optional<BoundaryCompletion> completion;
-  CouponSpec coupon = s.coupon;
-  if (s.hole_diameter > 0) {
-    if (coupon.complete_boundary_cells)
-      completion = hole_boundary_completion(builder.strategy(), s.strategy);
-    coupon.complete_boundary_cells = false;
-  }
-  Specimen specimen = build_coupon(builder, coupon, s.layup, s.interface, s.coupon.ply_angle);
-  if (s.hole_diameter > 0) {
-    const Particles& q = specimen.model.particles;
-    const Eigen::Vector3d low = q.reference_position.colwise().minCoeff().transpose();
-    const Eigen::Vector3d high = q.reference_position.colwise().maxCoeff().transpose();
-    result.hole_centre = 0.5 * (low + high).head<2>();
-    result.hole = remove_hole(specimen.model, result.hole_centre.x(), result.hole_centre.y(),
-                              s.hole_diameter);
-    if (completion) complete_ply_boundary_cells(specimen.model, *completion);
-  }
+  // The coupon, and the strength of every bond.
+  Specimen specimen = build_strength_coupon(builder, s, result);
   result.build_seconds = specimen.build_seconds;
   result.calibration = specimen.ply_calibrations.front();
   require(plies.size() == specimen.ply_calibrations.size(),
@@ -376,274 +757,24 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
                         s.scatter_per_crack_site);
 
   // Theory, and the calibrated bulk's own first failure under the same load.
-  for (FailureCriterion criterion : all_criteria()) {
-    CriterionStrength theory{criterion, std::nullopt, ""};
-    try {
-      theory.strength = first_ply_failure_stress(criterion, plies, material.strength);
-    } catch (const Error& e) {
-      theory.missing = e.what();  // a strength the criterion needs is not given
-    }
-    result.theory.push_back(theory);
-  }
-  {
-    double factor = std::numeric_limits<double>::infinity();
-    const std::vector<PlyStress> stresses = unit_ply_stresses(plies);
-    for (std::size_t k = 0; k < plies.size(); ++k)
-      factor = std::min(factor, result.ply_strengths[k].first_failure_factor(stresses[k]));
-    result.model_first_failure = factor;
-  }
+  result.theory = classical_strengths(plies, material.strength);
+  result.model_first_failure = bulk_first_failure(plies, result.ply_strengths);
 
-  // Grips, gauge section, the unit loading.
   const std::vector<Calibration> specimen_calibrations = specimen.ply_calibrations;
   auto model = std::make_shared<Model>(std::move(specimen.model));
-  Particles& p = model->particles;
-  const double grip = s.grip_length > 0 ? s.grip_length : 2.0 * s.coupon.particle_diameter;
-  const CouponGrips grips = assign_grips(p, grip);
-  const GaugeSection gauge =
-      gauge_section(p, grips, s.gauge_fraction, s.edge_band_diameters, s.coupon.particle_diameter);
-  DofConstraints unit;
-  if (s.grips == StrengthGrips::kUniform) {
-    // The relaxed bulk's uniform state under sigma_x: the plies' relaxed stiffness summed as CLT
-    // sums Q-bar, its strain per unit eps_xx, and each ply's spin under that strain.
-    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-    for (const Calibration& c : specimen_calibrations) A += c.relaxed;
-    Eigen::Vector3d e = A.ldlt().solve(Eigen::Vector3d(1, 0, 0));
-    require(e(0) > 0, "the coupon's relaxed stiffness gives no positive strain under sigma_x");
-    e /= e(0);
-    result.uniform_strain = e;
-    for (const Calibration& c : specimen_calibrations) {
-      const std::optional<UnitCell> cell = builder.strategy().unit_cell(c, s.coupon.thickness);
-      double spin = 0;
-      if (cell && cell->basis.size() == 1) {
-        std::vector<FamilyStiffness> families;
-        for (const FamilyCalibration& f : c.families) families.push_back(f.stiffness);
-        Vector6d voigt;
-        voigt << e(0), e(1), 0, 0, 0, e(2);
-        spin = relaxed_motion(*cell, families, voigt).rotation[0].z();
-      }
-      result.uniform_spin.push_back(spin);
-    }
-    std::vector<double> spin = result.uniform_spin;
-    for (double& w : spin) w *= kUnitNominalStrain;
-    unit = uniform_grip_constraints(p, kUnitNominalStrain * e, spin);
-  } else {
-    unit = grip_constraints(
-        p, 0.0, kUnitNominalStrain * grips.span,
-        s.grips == StrengthGrips::kClamped ? GripCondition::kClamped : GripCondition::kFree);
-  }
-  DofFlags reaction_dofs = DofFlags::Constant(p.size(), kDofsPerParticle, false);
-  for (int i = 0; i < p.size(); ++i) {
-    if (p.group(i) == static_cast<int>(BoundaryGroup::kRightGrip))
-      reaction_dofs(i, static_cast<int>(Dof::kUx)) = true;
-  }
-  result.particles = p.size();
-  result.bonds = model->bonds.size();
-  result.cross_section = gauge.cross_section;
-  result.span = grips.span;
-
+  const UnitLoading loading =
+      grip_coupon(builder.strategy(), s, specimen_calibrations, *model, result);
   const StaticSettings grip_settings = grip_solve_settings(s.linear_solver, s.force);
   if (consistent_edges) {
-    std::vector<PlyStress> ply_stress;
-    for (std::size_t k = 0; k < plies.size(); ++k) {
-      const Eigen::Vector3d sigma =
-          specimen_calibrations[k].relaxed * (kUnitNominalStrain * result.uniform_strain);
-      ply_stress.push_back(to_ply_axes(sigma(0), sigma(1), sigma(2), plies[k].angle));
-    }
-    const std::vector<double> factors = edge_strength_factors(
-        *model, unit, grip_settings, result.ply_strengths, ply_stress, result.hole_centre,
-        s.hole_diameter > 0 ? 1.5 * s.hole_diameter : 0.0);
-    if (result.weibull_modulus > 0) {
-      Specimen scattered{std::move(*model), specimen_calibrations, 0.0};
-      assign_bond_strengths(scattered, result.ply_strengths, s.interface_strength,
-                            result.weibull_modulus, s.seed, scattered_plies,
-                            s.scatter_per_crack_site);
-      *model = std::move(scattered.model);
-    }
-    raise_strengths(model->bonds, factors);
-    for (double f : factors) {
-      if (f == 1.0) continue;
-      ++result.edge_strengthened_bonds;
-      result.edge_strength_factor = std::max(result.edge_strength_factor, f);
-    }
+    make_edges_consistent(s, plies, specimen_calibrations, scattered_plies, loading.unit,
+                          grip_settings, *model, result);
   }
 
-  EventSettings events = s.events;
-  events.static_settings.pin_rigid_modes = grip_settings.pin_rigid_modes;
-  events.static_settings.linear_solver = grip_settings.linear_solver;
-  events.on_progress = progress_;
-  result.strain.push_back(0.0);
-  result.stress.push_back(0.0);
-  result.nominal_strain.push_back(0.0);
-  double peak_stress = -std::numeric_limits<double>::infinity();
-  std::shared_ptr<const Model> peak_state;
-  long peak_event = 0;
-  events.on_event = [&](const Model& state, const EventPoint& point) {
-    result.strain.push_back(fit_gauge_strain(state.particles, gauge.particles).exx);
-    result.stress.push_back(point.reaction / gauge.cross_section);
-    result.nominal_strain.push_back(point.load_factor * kUnitNominalStrain);
-    if (!s.record_snapshots) return;
-    const long e = point.event;
-    if (e == 1 || (e & (e - 1)) == 0) {
-      result.snapshots.push_back({e, e == 1 ? "first failure" : fmt::format("event {}", e),
-                                  std::make_shared<const Model>(state)});
-    }
-    if (result.stress.back() > peak_stress) {
-      peak_stress = result.stress.back();
-      peak_event = e;
-      peak_state = !result.snapshots.empty() && result.snapshots.back().event == e
-                       ? result.snapshots.back().model
-                       : std::make_shared<const Model>(state);
-    }
-  };
-
-  // Checkpoints: the settings and the model as it starts (strengths assigned) must match.
-  const CheckpointOptions& ck = s.checkpoint;
-  CheckpointHeader header;
-  if (ck.writes() || !ck.restart.empty()) {
-    header = strength_checkpoint_header(s);
-    add_model_fingerprint(header, *model);
-    CheckpointWriter unit_bytes;
-    for (Eigen::Index i = 0; i < unit.fixed.size(); ++i) unit_bytes.boolean(unit.fixed.data()[i]);
-    unit_bytes.doubles({unit.value.data(), static_cast<std::size_t>(unit.value.size())});
-    header.add("unit_load", fmt::format("{:016x}", fnv1a64(unit_bytes.bytes())));
-  }
-  auto write_result_state = [&](CheckpointWriter& w) {
-    w.section("strength");
-    w.doubles(result.strain);
-    w.doubles(result.stress);
-    w.doubles(result.nominal_strain);
-    w.f64(peak_stress);
-    w.i64(peak_event);
-    w.boolean(peak_state != nullptr);
-    if (peak_state) write_model(w, *peak_state);
-    w.u64(result.snapshots.size());
-    for (const StrengthSnapshot& snapshot : result.snapshots) {
-      w.i64(snapshot.event);
-      w.str(snapshot.label);
-      write_model(w, *snapshot.model);
-    }
-  };
-  std::optional<EventsState> resume;
-  if (!ck.restart.empty()) {
-    CheckpointFile f = read_checkpoint(ck.restart);
-    const std::string file = ck.restart.string();
-    check_same_run(f.header, header, file);
-    CheckpointReader& in = f.payload;
-    in.section("strength");
-    result.strain = in.doubles();
-    result.stress = in.doubles();
-    result.nominal_strain = in.doubles();
-    peak_stress = in.f64();
-    peak_event = in.i64();
-    if (in.boolean()) {
-      auto m = std::make_shared<Model>();
-      read_model(in, *m);
-      peak_state = std::move(m);
-    }
-    const std::uint64_t snapshots = in.u64();
-    for (std::uint64_t k = 0; k < snapshots; ++k) {
-      StrengthSnapshot snapshot;
-      snapshot.event = in.i64();
-      snapshot.label = in.str();
-      auto m = std::make_shared<Model>();
-      read_model(in, *m);
-      snapshot.model = std::move(m);
-      // The peak's snapshot is the peak state itself (as the run shares it).
-      if (peak_state && snapshot.event == peak_event) snapshot.model = peak_state;
-      result.snapshots.push_back(std::move(snapshot));
-    }
-    Model saved;
-    read_model(in, saved);
-    static constexpr std::string_view kRunFields[] = {"displacement",
-                                                      "rotation",
-                                                      "force",
-                                                      "torque",
-                                                      "normal_stiffness",
-                                                      "shear_stiffness",
-                                                      "bending_stiffness",
-                                                      "twisting_stiffness",
-                                                      "damage",
-                                                      "state"};
-    check_same_model(*model, saved, kRunFields, file);
-    resume = read_events_state(in);
-    in.finish();
-    if (result.strain.size() != resume->result.path.size() + 1)
-      in.corrupt("the curve and the events differ in length");
-    model->particles = std::move(saved.particles);
-    model->bonds = std::move(saved.bonds);
-    spdlog::info("restarting from {} after event {} ({} bonds broken)", file, resume->events,
-                 resume->broken);
-  }
-  if (ck.writes()) {
-    events.checkpoint_every = ck.every;
-    events.on_checkpoint = [&](const Model& state, const EventsState& run_state) {
-      CheckpointWriter w;
-      write_result_state(w);
-      write_model(w, state);
-      write_events_state(w, run_state);
-      write_checkpoint(ck.file, header, w);
-    };
-  }
-  const EventsResult run =
-      run_events(*model, unit, reaction_dofs, events, resume ? &*resume : nullptr);
-
-  require(!run.path.empty(),
-          fmt::format("no bond of the coupon broke under the grips' pull ({}): nothing to "
-                      "measure",
-                      run.stop));
-  require(result.strain.size() == run.path.size() + 1,
-          "the events solver did not report every critical state");
-  result.path = run.path;
-  result.breaks = run.breaks;
-  result.peak = run.peak >= 0 ? run.peak : 0;
-  result.events = static_cast<long>(run.path.size());
-  result.stop = run.stop;
-  result.factorizations = run.factorizations;
-  result.solves = run.solves;
-  result.dissipated_energy = run.dissipated_energy;
-  const std::size_t peak = static_cast<std::size_t>(result.peak) + 1;
-  result.strength = result.stress[peak];
-  result.strain_at_peak = result.strain[peak];
-  result.first_failure_stress = result.stress[1];
-  result.first_failure_strain = result.strain[1];
-
-  // Broken bonds by family and mode; every family of the coupon is listed.
-  const Bonds& bonds = model->bonds;
-  std::map<std::pair<bool, std::string>, BrokenBonds> counts;
-  for (int b = 0; b < bonds.size(); ++b) {
-    const bool interface = bonds.is_interface(b);
-    const std::string label =
-        interface ? fmt::format("interface {}/{}", bonds.family(b), bonds.family(b) + 1)
-                  : family_label(
-                        result.ply_strengths[static_cast<std::size_t>(p.ply(bonds.first(b)))],
-                        bonds.family(b));
-    BrokenBonds& c = counts[{interface, label}];
-    c.family = label;
-    c.interface = interface;
-    if (bonds.state(b) == static_cast<int>(BondState::kBrokenTension)) {
-      ++c.tension;
-      ++result.broken_tension;
-    } else if (bonds.state(b) == static_cast<int>(BondState::kBrokenShear)) {
-      ++c.shear;
-      ++result.broken_shear;
-    } else if (bonds.damage(b) > 0) {
-      ++result.damaged;
-    }
-  }
-  for (auto& [key, c] : counts) result.broken.push_back(c);
-
-  if (s.record_snapshots) {
-    if (peak_state && peak_event > 1 && (peak_event & (peak_event - 1)) != 0) {
-      result.snapshots.push_back({peak_event, "peak", peak_state});
-    } else {
-      for (StrengthSnapshot& snapshot : result.snapshots)
-        if (snapshot.event == peak_event) snapshot.label += " (peak)";
-    }
-    result.snapshots.push_back({result.events + 1, "final", model});
-    std::stable_sort(
-        result.snapshots.begin(), result.snapshots.end(),
-        [](const StrengthSnapshot& a, const StrengthSnapshot& b) { return a.event < b.event; });
-  }
+  StrengthCurve curve(result, loading.gauge, s.record_snapshots);
+  const EventsResult run = run_to_failure(s, progress_, grip_settings, loading, *model, curve);
+  take_events_result(run, result);
+  count_broken_bonds(*model, result);
+  if (s.record_snapshots) curve.finish_snapshots(model);
   result.model = std::move(model);
   result.wall_seconds = seconds_since(start);
   return result;
