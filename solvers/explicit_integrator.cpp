@@ -120,8 +120,8 @@ struct FusedState {
     for (int c = 0; c < 3; ++c)
       arrays += velocity[c].bytes() + angular_velocity[c].bytes() + contact_force[c].bytes() +
                 contact_torque[c].bytes();
-    arrays += inverse_mass.bytes() + inverse_inertia.bytes() + work_sum.bytes() +
-              damping_sum.bytes();
+    arrays +=
+        inverse_mass.bytes() + inverse_inertia.bytes() + work_sum.bytes() + damping_sum.bytes();
     return arrays + bonds.bytes() + (order.size() + position.size()) * sizeof(int) + motion.size() +
            classes.size() * sizeof(MotionClass) + partial.size() * sizeof(double) +
            contact_block.size();
@@ -169,14 +169,10 @@ struct StepArgs {
 // - F (v_old + v_new) where it is prescribed (blocks with prescribed particles only), and the
 // second halves (v_new alone) on the report cycle.
 template <bool kReport>
-[[gnu::always_inline]] inline void account_lanes(const lanes::Doubles& f,
-                                                 const lanes::Doubles& damping,
-                                                 const lanes::Doubles& v_old,
-                                                 const lanes::Doubles& v, const lanes::Mask& fixed,
-                                                 bool prescribed, lanes::Doubles& damping_sum,
-                                                 lanes::Doubles& work_sum,
-                                                 lanes::Doubles& damping_half,
-                                                 lanes::Doubles& work_half) {
+[[gnu::always_inline]] inline void account_lanes(
+    const lanes::Doubles& f, const lanes::Doubles& damping, const lanes::Doubles& v_old,
+    const lanes::Doubles& v, const lanes::Mask& fixed, bool prescribed, lanes::Doubles& damping_sum,
+    lanes::Doubles& work_sum, lanes::Doubles& damping_half, lanes::Doubles& work_half) {
   using lanes::Doubles;
   using lanes::Mask;
   const Doubles both = v_old + v;
@@ -186,6 +182,35 @@ template <bool kReport>
     damping_half += (Doubles)((Mask)(damping * v) & ~fixed);
     if (prescribed) work_half -= (Doubles)((Mask)(f * v) & fixed);
   }
+}
+
+// The prescribed motions of a block's particles, lane by lane: which components are fixed, their
+// imposed velocities, and which particles count as free. Most blocks hold free particles only.
+struct BlockMotions {
+  lanes::Mask fix_velocity[3] = {}, fix_angular_velocity[3] = {};
+  lanes::Doubles velocity[3] = {}, angular_velocity[3] = {};
+  lanes::Mask counts_free = lanes::Mask{} - 1;
+};
+
+// Fills `m` for the block starting at particle `first`; returns the block's eight motion classes
+// packed in one word (0: all free, and `m` keeps its defaults).
+[[gnu::always_inline]] inline std::uint64_t load_block_motions(const FusedState& k, int first,
+                                                               BlockMotions& m) {
+  std::uint64_t classes;
+  std::memcpy(&classes, k.motion.data() + first, sizeof classes);
+  if (classes != 0) {
+    for (int l = 0; l < lanes::kCount; ++l) {
+      const MotionClass& motion = k.classes[k.motion[first + l]];
+      for (int c = 0; c < 3; ++c) {
+        m.fix_velocity[c][l] = motion.fix_velocity[c];
+        m.fix_angular_velocity[c][l] = motion.fix_angular_velocity[c];
+        m.velocity[c][l] = motion.velocity[c];
+        m.angular_velocity[c][l] = motion.angular_velocity[c];
+      }
+      m.counts_free[l] = motion.free;
+    }
+  }
+  return classes;
 }
 
 template <bool kReport, int kMode>
@@ -229,24 +254,13 @@ template <bool kReport, int kMode>
       gather_bond_block<kReport>(k.bonds, first, state, force, torque, energy, bond_force);
     }
 
-    // Prescribed motions of the block's particles (most blocks hold free particles only).
-    Mask fix_v[3] = {}, fix_w[3] = {};
-    Doubles imposed_v[3] = {}, imposed_w[3] = {};
-    Mask counts_free = Mask{} - 1;
-    std::uint64_t classes;
-    std::memcpy(&classes, k.motion.data() + first, sizeof classes);
-    if (classes != 0) {
-      for (int l = 0; l < kLanes; ++l) {
-        const MotionClass& m = k.classes[k.motion[first + l]];
-        for (int c = 0; c < 3; ++c) {
-          fix_v[c][l] = m.fix_velocity[c];
-          fix_w[c][l] = m.fix_angular_velocity[c];
-          imposed_v[c][l] = m.velocity[c];
-          imposed_w[c][l] = m.angular_velocity[c];
-        }
-        counts_free[l] = m.free;
-      }
-    }
+    BlockMotions motions;
+    const std::uint64_t classes = load_block_motions(k, first, motions);
+    const Mask(&fix_v)[3] = motions.fix_velocity;
+    const Mask(&fix_w)[3] = motions.fix_angular_velocity;
+    const Doubles(&imposed_v)[3] = motions.velocity;
+    const Doubles(&imposed_w)[3] = motions.angular_velocity;
+    const Mask& counts_free = motions.counts_free;
     Doubles inverse_mass, inverse_inertia;
     lanes::load(k.inverse_mass.data() + first, inverse_mass);
     lanes::load(k.inverse_inertia.data() + first, inverse_inertia);
@@ -429,7 +443,8 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     intact_[2](b) = scale * bonds.bending_stiffness(b);
     intact_[3](b) = scale * bonds.twisting_stiffness(b);
     damaged |= bonds.damage(b) > 0;
-    const bool breakable = std::isfinite(bonds.tensile_strength(b)) || std::isfinite(bonds.cohesion(b));
+    const bool breakable =
+        std::isfinite(bonds.tensile_strength(b)) || std::isfinite(bonds.cohesion(b));
     const BondStrength strength = bond_strength(bonds, b);
     softening |= breakable && may_soften(strength);
     kappa_(b) = softening_history(bonds.damage(b), strength);
@@ -464,8 +479,7 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
     k.order = kernel_order(model, settings.particle_order);
     k.position.assign(k.order.size(), 0);
     for (std::size_t i = 0; i < k.order.size(); ++i) k.position[k.order[i]] = static_cast<int>(i);
-    k.bonds =
-        GatherBonds(model.bonds, k.order, {breaking_, softening_, settings.strength_storage});
+    k.bonds = GatherBonds(model.bonds, k.order, {breaking_, softening_, settings.strength_storage});
     k.particles = p.size();
     const int padded = k.bonds.padded_count();
     k.blocks = padded / lanes::kCount;
@@ -707,10 +721,11 @@ CycleReport ExplicitIntegrator::step(long cycles) {
     double kinetic = 0;
     for (int i = 0; i < now.size(); ++i)
       for (int c = 0; c < 3; ++c) {
-        if (!fixed_velocity_(i, c)) kinetic += now.mass(i) * now.velocity(i, c) * now.velocity(i, c);
+        if (!fixed_velocity_(i, c))
+          kinetic += now.mass(i) * now.velocity(i, c) * now.velocity(i, c);
         if (!fixed_angular_velocity_(i, c))
-          kinetic += now.moment_of_inertia(i) * now.angular_velocity(i, c) *
-                     now.angular_velocity(i, c);
+          kinetic +=
+              now.moment_of_inertia(i) * now.angular_velocity(i, c) * now.angular_velocity(i, c);
       }
     initial_energy_ = bond_strain_energy(now, model_.bonds) + 0.5 * kinetic;
     initial_set_ = true;
@@ -1002,10 +1017,9 @@ void ExplicitIntegrator::store_bonds() {
     if (cells[0] < 0) continue;  // broken before the table was built
     const auto first = static_cast<std::size_t>(cells[0]);
     const auto second = static_cast<std::size_t>(cells[1]);
-    const bool agree =
-        g.holds(first) == g.holds(second) && g.holds(first) == !bonds.is_broken(b) &&
-        (!g.softening() || (g.slot_damage()[first] == g.slot_damage()[second] &&
-                            g.slot_kappa()[first] == g.slot_kappa()[second]));
+    const bool agree = g.holds(first) == g.holds(second) && g.holds(first) == !bonds.is_broken(b) &&
+                       (!g.softening() || (g.slot_damage()[first] == g.slot_damage()[second] &&
+                                           g.slot_kappa()[first] == g.slot_kappa()[second]));
     if (!agree) {
       const bool soft = g.softening();
       throw Error(fmt::format(
@@ -1299,8 +1313,8 @@ CycleReport ExplicitIntegrator::reference_cycle(bool last) {
   const int n = p.size();
   // One component: the imposed velocity, or the damped central difference; with the account's
   // sums (EnergyAccount).
-  auto advance = [&](double& u, double& v, double force, double inertia, bool fixed,
-                     double imposed, int i) {
+  auto advance = [&](double& u, double& v, double force, double inertia, bool fixed, double imposed,
+                     int i) {
     const double v_old = v;
     if (fixed) {
       v = imposed;
@@ -1311,8 +1325,7 @@ CycleReport ExplicitIntegrator::reference_cycle(bool last) {
       }
       return;
     }
-    const double damping =
-        alpha * std::abs(force) * (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0));
+    const double damping = alpha * std::abs(force) * (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0));
     v += dt * (force - damping) / inertia;
     u += dt * v;
     kinetic2 += inertia * v_old * v;
@@ -1430,6 +1443,53 @@ void ExplicitIntegrator::save(CheckpointWriter& out) const {
   out.i64(contact_countdown_);
 }
 
+void ExplicitIntegrator::restore_account(CheckpointReader& in, int n) {
+  Eigen::ArrayXd work, damping;
+  Vector3Array force, torque;
+  in.array(work);
+  in.array(damping);
+  in.array(force);
+  in.array(torque);
+  if (work.size() != n || damping.size() != n || force.rows() != n || torque.rows() != n)
+    in.corrupt("the energy account has the wrong size");
+  if (fused_) {
+    FusedState& k = fused_->state;
+    for (int i = 0; i < n; ++i) {
+      const int j = k.position[i];
+      k.work_sum[j] = work(i);
+      k.damping_sum[j] = damping(i);
+      for (int c = 0; c < 3; ++c) {
+        k.contact_force[c][j] = force(i, c);
+        k.contact_torque[c][j] = torque(i, c);
+      }
+    }
+  } else {
+    work_sum_ = work;
+    damping_sum_ = damping;
+    contact_force_ = force;
+    contact_torque_ = torque;
+  }
+}
+
+// The fused kernel's slots: the bonds broken since the table was built, the softening histories.
+void ExplicitIntegrator::restore_slots(const Bonds& bonds, const Eigen::ArrayXd& kappa) {
+  GatherBonds& g = fused_->state.bonds;
+  const int padded = g.padded_count();
+  for (int b = 0; b < bonds.size(); ++b) {
+    for (const std::int64_t cell : g.bond_cells(b)) {
+      if (cell < 0) continue;
+      const auto c = static_cast<std::size_t>(cell);
+      if (bonds.is_broken(b)) {
+        if (g.holds(c))
+          g.clear_slot(static_cast<int>(cell % padded), static_cast<int>(cell / padded));
+      } else if (g.softening()) {
+        g.slot_damage()[c] = bonds.damage(b);
+        g.slot_kappa()[c] = kappa(b);
+      }
+    }
+  }
+}
+
 void ExplicitIntegrator::restore(CheckpointReader& in) {
   require(!running_, "restore() was called during a run");
   const std::string& file = in.file();
@@ -1483,34 +1543,7 @@ void ExplicitIntegrator::restore(CheckpointReader& in) {
   pending_damping_ = in.f64();
   released_ = in.f64();
   released_pending_ = in.f64();
-  const int n = state.particles.size();
-  if (breaking_) {
-    Eigen::ArrayXd work, damping;
-    Vector3Array force, torque;
-    in.array(work);
-    in.array(damping);
-    in.array(force);
-    in.array(torque);
-    if (work.size() != n || damping.size() != n || force.rows() != n || torque.rows() != n)
-      in.corrupt("the energy account has the wrong size");
-    if (fused_) {
-      FusedState& k = fused_->state;
-      for (int i = 0; i < n; ++i) {
-        const int j = k.position[i];
-        k.work_sum[j] = work(i);
-        k.damping_sum[j] = damping(i);
-        for (int c = 0; c < 3; ++c) {
-          k.contact_force[c][j] = force(i, c);
-          k.contact_torque[c][j] = torque(i, c);
-        }
-      }
-    } else {
-      work_sum_ = work;
-      damping_sum_ = damping;
-      contact_force_ = force;
-      contact_torque_ = torque;
-    }
-  }
+  if (breaking_) restore_account(in, state.particles.size());
   const bool contacts = in.boolean();
   if (contacts != (contacts_ != nullptr))
     throw Error(fmt::format("checkpoint {} is for another run: contacts are {} there, {} here",
@@ -1528,24 +1561,7 @@ void ExplicitIntegrator::restore(CheckpointReader& in) {
   }
   contact_countdown_ = in.i64();
 
-  // The fused kernel's slots: the bonds broken since, the softening histories.
-  if (fused_ && breaking_) {
-    GatherBonds& g = fused_->state.bonds;
-    const int padded = g.padded_count();
-    for (int b = 0; b < state.bonds.size(); ++b) {
-      for (const std::int64_t cell : g.bond_cells(b)) {
-        if (cell < 0) continue;
-        const auto c = static_cast<std::size_t>(cell);
-        if (state.bonds.is_broken(b)) {
-          if (g.holds(c))
-            g.clear_slot(static_cast<int>(cell % padded), static_cast<int>(cell / padded));
-        } else if (g.softening()) {
-          g.slot_damage()[c] = state.bonds.damage(b);
-          g.slot_kappa()[c] = kappa(b);
-        }
-      }
-    }
-  }
+  if (fused_ && breaking_) restore_slots(state.bonds, kappa);
   model_.particles = std::move(state.particles);
   model_.bonds = std::move(state.bonds);
   kappa_ = std::move(kappa);

@@ -325,6 +325,10 @@ class ExplicitIntegrator {
   ContactState contact_state() const;
   // Writes the fused kernel's bond damage back to the model; throws if two ends disagree.
   void store_bonds();
+  // restore()'s parts: the breaking run's energy account of n particles, and the fused kernel's
+  // slots (broken bonds cleared, softening histories) from the checkpoint's bonds and kappa.
+  void restore_account(CheckpointReader& in, int n);
+  void restore_slots(const Bonds& bonds, const Eigen::ArrayXd& kappa);
   void log_break(int bond, BondState mode, long cycle, const double* first_displacement);
 
   Model& model_;

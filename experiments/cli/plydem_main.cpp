@@ -681,6 +681,104 @@ int check_command(const TensionOptions& tension, bool strength_given,
   return 0;
 }
 
+struct CalibrateCommand {
+  TensionOptions options;
+  bool json = false;
+};
+
+CLI::App* add_calibrate_command(CLI::App& app, CalibrateCommand& c) {
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate",
+      "bond stiffness of each family, lattice orientation, and the stiffness the model has as "
+      "simulated beside the target");
+  TensionOptions& o = c.options;
+  add_ply_options(*calibrate, o);
+  calibrate->add_option("--thickness-mm", o.thickness_mm, "ply thickness [mm]")
+      ->capture_default_str();
+  calibrate
+      ->add_option("--length-mm", o.length_mm,
+                   "length of the coupon calibrated [mm] (lattice calibrates each coupon's own "
+                   "packing; the other strategies do not depend on it)")
+      ->capture_default_str();
+  calibrate->add_option("--width-mm", o.width_mm, "coupon width [mm] (lattice)")
+      ->capture_default_str();
+  calibrate->add_option("--diameter-mm", o.diameter_mm, "particle diameter [mm] (lattice)")
+      ->capture_default_str();
+  calibrate->add_flag("--json", c.json, "print one JSON object (SI units)");
+  return calibrate;
+}
+
+struct RunCommand {
+  plydem::RunOptions options;
+  std::string config, out;
+  bool list = false;
+};
+
+CLI::App* add_run_command(CLI::App& app, RunCommand& c) {
+  CLI::App* run = app.add_subcommand(
+      "run",
+      "run an experiment config (experiments/NAME.toml): report.md, results.csv, figures and VTU "
+      "files in the output folder");
+  run->add_option("config", c.config, "the experiment's TOML file, e.g. experiments/table4.toml");
+  run->add_option("--out", c.out, "output folder; default results/NAME");
+  run->add_flag("--quick", c.options.quick,
+                "smaller coupons and fewer cycles (seconds instead of minutes)");
+  run->add_option("--ccx", c.options.calculix, "the CalculiX executable")->capture_default_str();
+  run->add_flag("--list", c.list,
+                "list the configs in ./experiments (else the source tree's) with their "
+                "descriptions");
+  run->add_flag("--force", c.options.force,
+                "build coupons even when their memory estimate exceeds the machine's available "
+                "memory");
+  return run;
+}
+
+int print_strategies() {
+  const plydem::Registry& registry = plydem::default_registry();
+  for (const std::string& name : registry.names()) {
+    std::cout << fmt::format("{:<14} {}\n", name, registry.description(name));
+    for (const plydem::StrategyOption& option : registry.create(name)->options()) {
+      std::cout << fmt::format("{:<14}   --strategy-option {}={:g}: {}\n", "", option.name,
+                               option.value, option.description);
+    }
+  }
+  return 0;
+}
+
+int print_materials() {
+  for (const std::string& name : plydem::builtin_material_names()) {
+    const plydem::Material m = plydem::load_material(name);
+    std::cout << fmt::format(
+        "{:<14} E1 {:g} GPa, E2 {:g} GPa, G12 {:g} GPa, nu12 {:g}, nu23 {:g}, density {:g} "
+        "kg/m^3\n",
+        m.name, m.E1 * 1e-9, m.E2 * 1e-9, m.G12 * 1e-9, m.nu12, m.nu23, m.density);
+  }
+  return 0;
+}
+
+int run_config_command(RunCommand& c) {
+  if (c.list) {
+    const std::filesystem::path folder = plydem::default_experiments_folder();
+    std::cout << fmt::format("experiment configs in {}:\n", folder.string());
+    for (const plydem::ConfigListing& listing : plydem::list_experiment_configs(folder)) {
+      std::cout << fmt::format("  {:<10} {}\n", listing.name, listing.description);
+    }
+    return 0;
+  }
+  plydem::require(!c.config.empty(),
+                  "plydem run needs an experiment config (e.g. experiments/table4.toml) or "
+                  "--list");
+  c.options.config = c.config;
+  c.options.out_dir = c.out;
+  const plydem::RunSummary summary = plydem::run_experiment(c.options);
+  log_build_statistics();
+  std::cout << fmt::format("{} done in {:.1f} s: {} rows in {}, report {}\n",
+                           c.options.config.string(), summary.wall_seconds,
+                           summary.output.rows.size(), summary.results.string(),
+                           summary.report.string());
+  return 0;
+}
+
 }  // namespace
 
 /// The command line without main(): `check_only` parses, refuses what does not apply, converts
@@ -712,49 +810,16 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
       "tension test to failure: strength, strain at peak, first-failure stress and broken bonds "
       "beside XT, YT, S12 and the max-stress, Tsai-Hill, Tsai-Wu and Hashin criteria");
   add_strength_options(*strength, strength_options);
-  TensionOptions calibrate_options;
-  bool calibrate_json = false;
-  CLI::App* calibrate = app.add_subcommand(
-      "calibrate",
-      "bond stiffness of each family, lattice orientation, and the stiffness the model has as "
-      "simulated beside the target");
-  add_ply_options(*calibrate, calibrate_options);
-  calibrate->add_option("--thickness-mm", calibrate_options.thickness_mm, "ply thickness [mm]")
-      ->capture_default_str();
-  calibrate
-      ->add_option("--length-mm", calibrate_options.length_mm,
-                   "length of the coupon calibrated [mm] (lattice calibrates each coupon's own "
-                   "packing; the other strategies do not depend on it)")
-      ->capture_default_str();
-  calibrate->add_option("--width-mm", calibrate_options.width_mm, "coupon width [mm] (lattice)")
-      ->capture_default_str();
-  calibrate
-      ->add_option("--diameter-mm", calibrate_options.diameter_mm, "particle diameter [mm] (lattice)")
-      ->capture_default_str();
-  calibrate->add_flag("--json", calibrate_json, "print one JSON object (SI units)");
+  CalibrateCommand calibrate_command;
+  CLI::App* calibrate = add_calibrate_command(app, calibrate_command);
+  TensionOptions& calibrate_options = calibrate_command.options;
   CLI::App* strategies = app.add_subcommand("strategies", "list the registered strategies");
   CLI::App* materials = app.add_subcommand("materials", "list the built-in materials");
   for (CLI::App* command : {tension, strength, calibrate, strategies, materials}) {
     add_log_options(*command, log_options);
   }
-  plydem::RunOptions run_options;
-  std::string run_config, run_out;
-  bool run_list = false;
-  CLI::App* run = app.add_subcommand(
-      "run",
-      "run an experiment config (experiments/NAME.toml): report.md, results.csv, figures and VTU "
-      "files in the output folder");
-  run->add_option("config", run_config, "the experiment's TOML file, e.g. experiments/table4.toml");
-  run->add_option("--out", run_out, "output folder; default results/NAME");
-  run->add_flag("--quick", run_options.quick,
-                "smaller coupons and fewer cycles (seconds instead of minutes)");
-  run->add_option("--ccx", run_options.calculix, "the CalculiX executable")->capture_default_str();
-  run->add_flag("--list", run_list,
-                "list the configs in ./experiments (else the source tree's) with their "
-                "descriptions");
-  run->add_flag("--force", run_options.force,
-                "build coupons even when their memory estimate exceeds the machine's available "
-                "memory");
+  RunCommand run_command;
+  CLI::App* run = add_run_command(app, run_command);
   add_log_options(*run, log_options);
 
   std::vector<std::string> plugins;
@@ -775,64 +840,24 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
                                           : spdlog::level::info);
     if (*tension) refuse_inapplicable(*tension, tension_options);
     if (*strength) refuse_inapplicable(*strength, strength_options);
-    if (*run && run_list) {
+    if (*run && run_command.list) {
       refuse_given(*run, {"config", "--out", "--quick", "--ccx", "--force"},
                    "--list only lists the configs");
     }
     if (check_only) {
       return check_command(*tension ? tension_options : defaults, strength->parsed(),
                            strength_options, calibrate->parsed(), calibrate_options, run->parsed(),
-                           run_list, run_config);
+                           run_command.list, run_command.config);
     }
-    if (*strategies) {
-      const plydem::Registry& registry = plydem::default_registry();
-      for (const std::string& name : registry.names()) {
-        std::cout << fmt::format("{:<14} {}\n", name, registry.description(name));
-        for (const plydem::StrategyOption& option : registry.create(name)->options()) {
-          std::cout << fmt::format("{:<14}   --strategy-option {}={:g}: {}\n", "", option.name,
-                                   option.value, option.description);
-        }
-      }
-      return 0;
-    }
-    if (*materials) {
-      for (const std::string& name : plydem::builtin_material_names()) {
-        const plydem::Material m = plydem::load_material(name);
-        std::cout << fmt::format(
-            "{:<14} E1 {:g} GPa, E2 {:g} GPa, G12 {:g} GPa, nu12 {:g}, nu23 {:g}, density {:g} "
-            "kg/m^3\n",
-            m.name, m.E1 * 1e-9, m.E2 * 1e-9, m.G12 * 1e-9, m.nu12, m.nu23, m.density);
-      }
-      return 0;
-    }
-    if (*calibrate) return run_calibrate(calibrate_options, calibrate_json);
+    if (*strategies) return print_strategies();
+    if (*materials) return print_materials();
+    if (*calibrate) return run_calibrate(calibrate_options, calibrate_command.json);
     if (*strength) {
       std::string command_line = "plydem";
       for (int i = 1; i < argc; ++i) command_line += fmt::format(" {}", argv[i]);
       return run_strength(strength_options, command_line);
     }
-    if (*run) {
-      if (run_list) {
-        const std::filesystem::path folder = plydem::default_experiments_folder();
-        std::cout << fmt::format("experiment configs in {}:\n", folder.string());
-        for (const plydem::ConfigListing& c : plydem::list_experiment_configs(folder)) {
-          std::cout << fmt::format("  {:<10} {}\n", c.name, c.description);
-        }
-        return 0;
-      }
-      plydem::require(!run_config.empty(),
-                      "plydem run needs an experiment config (e.g. experiments/table4.toml) or "
-                      "--list");
-      run_options.config = run_config;
-      run_options.out_dir = run_out;
-      const plydem::RunSummary summary = plydem::run_experiment(run_options);
-      log_build_statistics();
-      std::cout << fmt::format("{} done in {:.1f} s: {} rows in {}, report {}\n",
-                               run_options.config.string(), summary.wall_seconds,
-                               summary.output.rows.size(), summary.results.string(),
-                               summary.report.string());
-      return 0;
-    }
+    if (*run) return run_config_command(run_command);
     return run_tension(*tension ? tension_options : defaults);
   };
   try {
