@@ -285,7 +285,7 @@ TEST_CASE("strength test: clear errors") {
     s.interface_strength.normal = -1;
     CHECK_THROWS_AS(StrengthTest{s}, Error);
   }
-  SUBCASE("the explicit method is refused until the integrator breaks bonds") {
+  SUBCASE("the explicit method is refused until the strength protocol has one") {
     StrengthSettings s = small_coupon(0);
     s.method = StrengthMethod::kExplicit;
     CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("--method events"), Error);

@@ -720,8 +720,9 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   require_strengths(material, "plydem strength", s.strength_options.softening);
   if (s.method == StrengthMethod::kExplicit) {
     throw Error(
-        "the explicit method of the strength test is not available in this build (the explicit "
-        "integrator does not break bonds yet); use the events method (--method events)");
+        "the strength test has no explicit method yet: its protocol (peak, snapshots, restart) is "
+        "written for the events solver only, although the explicit integrator itself breaks "
+        "bonds (plydem.ExplicitIntegrator in Python); use the events method (--method events)");
   }
 
   require(s.strength_options.softening ||
