@@ -38,4 +38,10 @@ class Stopwatch {
   Clock::time_point start_;
 };
 
+/// Seconds since `start`, for code that keeps time points of Stopwatch::Clock (a progress meter's
+/// last report, a run's start held in a struct).
+inline double seconds_since(Stopwatch::Clock::time_point start) {
+  return std::chrono::duration<double>(Stopwatch::Clock::now() - start).count();
+}
+
 }  // namespace plydem

@@ -16,6 +16,7 @@
 #include "contacts/bond_kernel.hpp"
 #include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 
 namespace plydem {
 
@@ -44,15 +45,11 @@ void EventSettings::validate() const {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Clock = Stopwatch::Clock;
 
 // The smallest pivot of the capacitance matrix, relative to its column of W^-1, that the updates
 // accept (see UnitLoadSolver::change).
 constexpr double kPivotFloor = 1e-8;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 Eigen::Vector3d segment(const Eigen::VectorXd& u, int particle, int offset) {
   return u.segment<3>(kDofsPerParticle * particle + offset);

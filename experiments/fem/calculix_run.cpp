@@ -17,18 +17,15 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 #include "experiments/fem/calculix_detail.hpp"
 #include "experiments/output/external_tool.hpp"
 
 namespace plydem {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Clock = Stopwatch::Clock;
 namespace fs = std::filesystem;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

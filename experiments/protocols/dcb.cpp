@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/specimen.hpp"
 
@@ -21,10 +22,6 @@ constexpr double kMm = 1e-3;
 constexpr double kDegree = std::numbers::pi / 180.0;
 /// The opening at load factor 1 [m] (the solve is linear: any value gives the same path).
 constexpr double kUnitOpening = 1e-3;
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 void require_size(double value, const char* what) {
   require(std::isfinite(value) && value > 0,

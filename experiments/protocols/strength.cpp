@@ -17,16 +17,13 @@
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
 #include "core/measurements.hpp"
+#include "core/stopwatch.hpp"
 #include "strategies/registry.hpp"
 
 namespace plydem {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using Clock = Stopwatch::Clock;
 
 // The right grip's travel at load factor 1: a nominal strain of 1e-3 (the tension test's target
 // strain), so that load factors are of order one. Any value gives the same path: the model is

@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/measurements.hpp"
 #include "core/progress.hpp"
+#include "core/stopwatch.hpp"
 #include "experiments/protocols/coupon.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/registry.hpp"
@@ -20,11 +21,7 @@
 namespace plydem {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using Clock = Stopwatch::Clock;
 
 // Cycles between the explicit run's checks where only progress reports need them (a check costs
 // about one cycle), and while relaxing, where the stage ends at the first cycle within the

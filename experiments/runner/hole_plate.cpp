@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "core/stopwatch.hpp"
 #include "experiments/output/external_tool.hpp"
 #include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/plate_hole.hpp"
@@ -21,11 +22,7 @@
 namespace plydem {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using Clock = Stopwatch::Clock;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 

@@ -12,6 +12,7 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "core/stopwatch.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
@@ -211,10 +212,6 @@ Curve pull_curve(const std::string& label, const PullResult& pull) {
 
 Curve theory_line(const std::string& label, double modulus, double max_strain) {
   return {label, {0.0, max_strain * 100}, {0.0, modulus * max_strain * 1e-6}, false};
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 std::string degrees_label(double degrees) {

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "core/elasticity.hpp"
+#include "core/stopwatch.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/protocols/tension.hpp"
@@ -115,8 +116,6 @@ std::string write_model(const Model& model, const std::filesystem::path& out_dir
 Curve pull_curve(const std::string& label, const PullResult& pull);
 
 Curve theory_line(const std::string& label, double modulus, double max_strain);
-
-double seconds_since(std::chrono::steady_clock::time_point start);
 
 std::string degrees_label(double degrees);
 
