@@ -5,7 +5,6 @@
 // at the same cycles, on any number of threads; the energy account closes; closed cracks carry
 // compression through contacts.
 #include <doctest/doctest.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -21,6 +20,7 @@
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/registry.hpp"
 #include "support/coupon_fixtures.hpp"
+#include "support/threads.hpp"
 
 using namespace plydem;
 using namespace plydem::test;
@@ -28,13 +28,6 @@ using namespace plydem::test;
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-
-// Sets the number of OpenMP threads for one scope.
-struct Threads {
-  explicit Threads(int n) : previous(omp_get_max_threads()) { omp_set_num_threads(n); }
-  ~Threads() { omp_set_num_threads(previous); }
-  int previous;
-};
 
 // Two particles bonded along the unit `direction` (the bond from `first` to the other one),
 // particle 0 in the left grip, particle 1 in the right one.

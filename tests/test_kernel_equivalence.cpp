@@ -2,7 +2,6 @@
 // the same result on one or two threads and under any particle numbering; and the space-filling
 // curve it numbers particles by.
 #include <doctest/doctest.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +15,7 @@
 #include "core/material.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
+#include "support/threads.hpp"
 
 using namespace plydem;
 
@@ -140,12 +140,7 @@ void check_reports_close(const CycleReport& a, const CycleReport& b, double tole
   CHECK(a.unbalanced_force_ratio == doctest::Approx(b.unbalanced_force_ratio).epsilon(tolerance));
 }
 
-// Sets the number of OpenMP threads for one scope.
-struct Threads {
-  explicit Threads(int n) : previous(omp_get_max_threads()) { omp_set_num_threads(n); }
-  ~Threads() { omp_set_num_threads(previous); }
-  int previous;
-};
+using plydem::test::Threads;
 
 }  // namespace
 

@@ -4,24 +4,19 @@
 // run. The model is built inside each thread scope, so that its calibration and edge balancing are
 // held to the same rule as the kernel.
 #include <doctest/doctest.h>
-#include <omp.h>
 
 #include <cstring>
 #include <vector>
 
 #include "core/material.hpp"
 #include "experiments/protocols/tension.hpp"
+#include "support/threads.hpp"
 
 using namespace plydem;
 
 namespace {
 
-// Sets the number of OpenMP threads for one scope.
-struct Threads {
-  explicit Threads(int n) : previous(omp_get_max_threads()) { omp_set_num_threads(n); }
-  ~Threads() { omp_set_num_threads(previous); }
-  int previous;
-};
+using plydem::test::Threads;
 
 bool same_bits(double a, double b) {
   return std::memcmp(&a, &b, sizeof a) == 0;
