@@ -5,7 +5,12 @@
 /// kMetresPerMm is in metres, and likewise for the others. Each constant is the literal it
 /// names, so `x * kGPaPerPa` rounds exactly as `x * 1e-9` does.
 
+#include <numbers>
+
 namespace plydem {
+
+/// One degree in radians: an angle in degrees times kDegree is in radians.
+inline constexpr double kDegree = std::numbers::pi / 180.0;
 
 inline constexpr double kMmPerMetre = 1e3;
 inline constexpr double kMetresPerMm = 1e-3;

@@ -17,8 +17,6 @@
 namespace plydem {
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
 // Bending and twisting of a circular parallel bond of radius R carrying contact stiffnesses k_n,
 // k_s (eqs. 1-2): k_b = k_n R^2/4, k_t = k_s R^2/2, as for hex2d. In the three-particle cell the
 // particles of different layers turn differently under a uniform strain, so these enter the

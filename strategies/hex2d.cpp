@@ -17,11 +17,7 @@
 #include "strategies/specimen.hpp"
 
 namespace plydem {
-namespace {
-
-constexpr double kDegree = std::numbers::pi / 180.0;
-
-}  // namespace
+namespace {}  // namespace
 
 std::array<FamilyStiffness, 3> hexagonal_springs_eq27(const Eigen::Matrix3d& c, double thickness) {
   const double s3 = std::sqrt(3.0);

@@ -26,8 +26,6 @@
 namespace plydem {
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
 // Voigt index pairs (11, 22, 33, 23, 13, 12).
 constexpr int kVoigt[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
 

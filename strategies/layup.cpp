@@ -9,12 +9,11 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "strategies/laminate.hpp"
 
 namespace plydem {
 namespace {
-
-constexpr double kDegree = std::numbers::pi / 180.0;
 
 // One angle in degrees, or the pair 45/-45 for "±45" / "+-45".
 std::vector<double> parse_ply(const std::string& token, const std::string& layup) {

@@ -21,8 +21,6 @@
 namespace plydem {
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
 // Bending and twisting of a circular parallel bond of radius R (the particle radius, as for
 // hex2d, also on the diagonals) carrying contact stiffnesses k_n = A kbar_n, k_s = A kbar_s
 // (eqs. 1-2): k_b = k_n R^2/4, k_t = k_s R^2/2. A uniform strain of a one-particle lattice never

@@ -24,7 +24,6 @@ namespace plydem {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kDegree = std::numbers::pi / 180.0;
 /// A target counts as met when the model's first failure lies within this of it (relative).
 constexpr double kReachedTolerance = 1e-9;
 /// Families within this angle of the fibre get G_fibre, the others G_matrix.

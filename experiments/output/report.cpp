@@ -10,8 +10,6 @@
 namespace plydem {
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
 const char* grips_name(GripCondition g) {
   return g == GripCondition::kFree ? "free" : "clamped";
 }

@@ -14,8 +14,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
 std::string specimen_text(const StrengthResult& r) {
   if (r.layup.empty()) return fmt::format("ply angle {:g} deg", r.ply_angle / kDegree);
   return fmt::format("laminate {}", format_layup(r.layup));

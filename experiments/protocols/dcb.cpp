@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "strategies/registry.hpp"
 #include "strategies/specimen.hpp"
 
@@ -18,8 +19,6 @@ namespace plydem {
 
 namespace {
 
-constexpr double kMm = 1e-3;
-constexpr double kDegree = std::numbers::pi / 180.0;
 /// The opening at load factor 1 [m] (the solve is linear: any value gives the same path).
 constexpr double kUnitOpening = 1e-3;
 
@@ -75,18 +74,18 @@ void DcbSettings::validate() const {
   require(crack < max_crack,
           fmt::format("dcb: the starter crack ({:g} mm) must be shorter than the crack length at "
                       "which the run stops ({:g} mm)",
-                      crack / kMm, max_crack / kMm));
+                      crack / kMetresPerMm, max_crack / kMetresPerMm));
   require(max_crack < length,
           fmt::format("dcb: the crack length at which the run stops ({:g} mm) must be shorter "
                       "than the beam ({:g} mm)",
-                      max_crack / kMm, length / kMm));
+                      max_crack / kMetresPerMm, length / kMetresPerMm));
   const double rows = arm_thickness() / particle_diameter;
   require(std::abs(rows - std::round(rows)) < 1e-6 && std::round(rows) >= 2,
           fmt::format("dcb: each arm is {:g} mm thick ({} plies of {:g} mm), which is {:.4g} "
                       "particle diameters of {:g} mm; it must be a whole number of them, at least "
                       "2",
-                      arm_thickness() / kMm, layup.size() / 2, ply_thickness / kMm, rows,
-                      particle_diameter / kMm));
+                      arm_thickness() / kMetresPerMm, layup.size() / 2,
+                      ply_thickness / kMetresPerMm, rows, particle_diameter / kMetresPerMm));
   require(length / particle_diameter <= 1e6,
           fmt::format("dcb: {:.3g} particle columns along the beam is more than this test builds "
                       "(1e6)",
@@ -188,12 +187,13 @@ InterfaceColumns interface_columns(const Particles& p, int lower_particles, cons
             "(column {} is {:g} mm apart); the side-view DCB joins them column by "
             "column (use the square strategy)",
             s.strategy, k + 1,
-            std::abs(p.reference_position(below[k], 0) - p.reference_position(above[k], 0)) / kMm));
+            std::abs(p.reference_position(below[k], 0) - p.reference_position(above[k], 0)) /
+                kMetresPerMm));
   }
   c.gap = p.reference_position(above.front(), 1) - p.reference_position(below.front(), 1);
   require(c.gap > 0.5 * d, fmt::format("dcb: the arms' facing rows are {:g} mm apart, closer than "
                                        "half a particle diameter",
-                                       c.gap / kMm));
+                                       c.gap / kMetresPerMm));
   c.x_load = p.reference_position.col(0).minCoeff();
   c.x_end = p.reference_position.col(0).maxCoeff();
   c.spacing = s.length / static_cast<double>(below.size());
@@ -224,7 +224,7 @@ std::vector<Front> join_arms(Model& model, const InterfaceColumns& columns,
   }
   require(pairs.size() >= 2,
           fmt::format("dcb: the starter crack ({:g} mm) leaves fewer than two bonded columns",
-                      s.crack / kMm));
+                      s.crack / kMetresPerMm));
   between.resize(static_cast<int>(pairs.size()));
   for (int c = 0; c < between.size(); ++c) {
     between.first(c) = pairs[c].first;
@@ -359,7 +359,7 @@ EventsResult open_beam(const DcbSettings& s,
   };
   events.stop_after = [&](const Model& state, const EventPoint&) -> std::string {
     if (curve.crack_length(state.bonds) >= s.max_crack)
-      return fmt::format("crack reached {:g} mm", s.max_crack / kMm);
+      return fmt::format("crack reached {:g} mm", s.max_crack / kMetresPerMm);
     return "";
   };
   return run_events(model, load.unit, load.reaction, events);
@@ -426,7 +426,7 @@ DcbResult run_dcb(const DcbSettings& s, const std::function<void(const EventProg
   model.description =
       fmt::format("side-view DCB of {}: two arms of {} ({} rows of {:g} mm), {} interface bonds",
                   format_layup(s.layup), arms.arm_description, static_cast<int>(std::round(h / d)),
-                  d / kMm, interface_bonds);
+                  d / kMetresPerMm, interface_bonds);
   model.check_consistency();
   r.particles = n;
   r.bonds = model.bonds.size();
@@ -434,8 +434,8 @@ DcbResult run_dcb(const DcbSettings& s, const std::function<void(const EventProg
   r.initial_crack = front.front().x - columns.x_load;
   r.theory = dcb_beam_theory(s.material, s.width, h, r.initial_crack, strength.GIc);
   spdlog::debug("dcb: {} particles, {} bonds, load line x = {:g} mm, far end {:g} mm, a0 = {:g} mm",
-                n, model.bonds.size(), columns.x_load / kMm, columns.x_end / kMm,
-                r.initial_crack / kMm);
+                n, model.bonds.size(), columns.x_load / kMetresPerMm, columns.x_end / kMetresPerMm,
+                r.initial_crack / kMetresPerMm);
 
   const OpeningLoad load = opening_load(p, arms.lower_particles, columns);
   DcbCurve curve(r, front, columns, s.record_snapshots);

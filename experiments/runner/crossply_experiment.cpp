@@ -32,6 +32,7 @@
 
 #include "core/error.hpp"
 #include "core/transverse_cracking.hpp"
+#include "core/units.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/protocols/strength.hpp"
@@ -48,9 +49,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kMm = 1e-3;
-constexpr double kMPa = 1e-6;
-constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr std::size_t kStiffnessSamples = 100;
 
 bool at_angle(double angle, double degrees) {
@@ -216,12 +214,12 @@ CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentConte
   base.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
                                                  fmt::format("{}: strategy_options", origin));
   base.coupon = coupon_from_config(c, context.quick);
-  base.grip_length = c.number("coupon.grip_mm", 0) * kMm;
+  base.grip_length = c.number("coupon.grip_mm", 0) * kMetresPerMm;
   base.interface.normal = c.number("interface.normal", 0);
   base.interface.shear = c.number("interface.shear", 0);
   base.interface.transverse_shear = c.boolean("interface.transverse_shear", true);
   FemSettings fem;
-  fem.mesh.element_size = c.number("fem.element_mm", 0) * kMm;
+  fem.mesh.element_size = c.number("fem.element_mm", 0) * kMetresPerMm;
   fem.mesh.elements_per_ply = static_cast<int>(c.integer("fem.elements_per_ply", 2));
   fem.threads = static_cast<int>(c.integer("fem.threads", 1));
   if (fem.mesh.element_size == 0) fem.mesh.element_size = 0.5 * base.coupon.particle_diameter;
@@ -378,8 +376,9 @@ StiffnessSamples sample_stiffness(const LaminateRun& run) {
     const double free_density = ninety_density(planes, x_begin, x_end, true);
     const double ratio = r.stress[e] / r.strain[e] / e0;
     planes_csv += fmt::format("{},{:.8g},{:.6g},{:.6g},{:.6g},{:.6g}\n", e, r.strain[e],
-                              r.stress[e] * kMPa, density * kMm, free_density * kMm, ratio);
-    dem.x.push_back(density * kMm);
+                              r.stress[e] * kMPaPerPa, density * kMetresPerMm,
+                              free_density * kMetresPerMm, ratio);
+    dem.x.push_back(density * kMetresPerMm);
     dem.y.push_back(ratio);
     // Up to the peak: after it the 0° plies break and the laminate is failing.
     if (static_cast<long>(e) <= r.peak + 1) {
@@ -424,25 +423,25 @@ void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const f
   const double top = std::max(2.0 * last_density, 1.0 / (2.0 * t * (m + n)));
   for (int j = 0; j <= 60; ++j) {
     const double density = top * j / 60;
-    lag.x.push_back(density * kMm);
+    lag.x.push_back(density * kMetresPerMm);
     lag.y.push_back(shear_lag_stiffness_ratio(material, b, d, density));
   }
   curves.push_back(lag);
   const double discount = ply_discount_stiffness_ratio(material, b, d);
   curves.push_back(
-      {fmt::format("ply discount {}", text), {0, top * kMm}, {discount, discount}, false});
+      {fmt::format("ply discount {}", text), {0, top * kMetresPerMm}, {discount, discount}, false});
   const double lag_ratio = shear_lag_stiffness_ratio(material, b, d, last_density);
   if (!fem_same.skipped.empty()) fem_notes += fmt::format("- {}: {}\n", text, fem_same.skipped);
   double fpf = NAN;
   for (const CriterionStrength& cs : r.theory)
     if (cs.criterion == FailureCriterion::kMaxStress && cs.strength) fpf = *cs.strength;
-  table += markdown_row({text, fmt::format("{:.2f}", r.first_failure_stress * kMPa),
-                         fmt::format("{:.2f}", fpf * kMPa),
+  table += markdown_row({text, fmt::format("{:.2f}", r.first_failure_stress * kMPaPerPa),
+                         fmt::format("{:.2f}", fpf * kMPaPerPa),
                          fmt::format("{:+.2f}%", 100 * (r.first_failure_stress / fpf - 1)),
-                         fmt::format("{:.1f}", r.strength * kMPa),
+                         fmt::format("{:.1f}", r.strength * kMPaPerPa),
                          fmt::format("{:.3f}", r.strain_at_peak * 100),
-                         fmt::format("{:.3g}", last_density * kMm),
-                         fmt::format("{:.3g}", traction_free_density * kMm),
+                         fmt::format("{:.3g}", last_density * kMetresPerMm),
+                         fmt::format("{:.3g}", traction_free_density * kMetresPerMm),
                          fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
                          fmt::format("{:.3f}", discount), fmt::format("{:.3f}", dem_grips),
                          fem_same.skipped.empty() ? fmt::format("{:.3f}", fem_same.ratio) : "-",
@@ -451,14 +450,15 @@ void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const f
                  const std::string& unit) {
     if (std::isfinite(value)) out.rows.push_back({name, text, quantity, source, value, unit});
   };
-  row("first ply failure stress", "clt max-stress", fpf * kMPa, "MPa");
-  row("crack density 90 at peak", fmt::format("dem {}", r.strategy), last_density * kMm, "1/mm");
+  row("first ply failure stress", "clt max-stress", fpf * kMPaPerPa, "MPa");
+  row("crack density 90 at peak", fmt::format("dem {}", r.strategy), last_density * kMetresPerMm,
+      "1/mm");
   row("stiffness ratio at peak", fmt::format("dem {}", r.strategy), last_ratio, "1");
   row("stiffness ratio at peak", "shear lag", lag_ratio, "1");
   row("stiffness ratio", "ply discount", discount, "1");
   row("stiffness ratio at peak between grips", fmt::format("dem {}", r.strategy), dem_grips, "1");
   row("traction-free crack density 90 at peak", fmt::format("dem {}", r.strategy),
-      traction_free_density * kMm, "1/mm");
+      traction_free_density * kMetresPerMm, "1/mm");
   if (fem_same.skipped.empty()) {
     row("stiffness ratio at peak between grips", "calculix same cracks", fem_same.ratio, "1");
     row("cracks cut in calculix", "calculix same cracks", fem_same.cracks, "1");
@@ -501,9 +501,9 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
       "strategy {}, Weibull strength scatter m = {:g} (seed {}) in {}, uniform grips, events "
       "(sequentially linear: each point a critical state, the path unloading to the origin, so "
       "stress / strain there is the damaged laminate's secant stiffness). {}\n\n",
-      material.name, base.coupon.length / kMm, base.coupon.width / kMm, t / kMm,
-      base.coupon.particle_diameter / kMm, base.strategy, base.effective_weibull_modulus(),
-      base.seed,
+      material.name, base.coupon.length / kMetresPerMm, base.coupon.width / kMetresPerMm,
+      t / kMetresPerMm, base.coupon.particle_diameter / kMetresPerMm, base.strategy,
+      base.effective_weibull_modulus(), base.seed,
       cs.scatter_ninety ? "the 90° plies (the 0° plies at their calibrated strengths)"
                         : "every ply",
       base.interface_strength.given()
@@ -525,7 +525,7 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
       "free laterally) with the DEM's transverse crack planes at the peak cut in "
       "(traction-free; planes of different 90° plies within a quarter diameter of each other "
       "one crack through them), over the intact laminate's. {}\n\n{}{}\n{}\n",
-      100 * kSpanningFraction, fem.mesh.element_size / kMm, fem.mesh.elements_per_ply,
+      100 * kSpanningFraction, fem.mesh.element_size / kMetresPerMm, fem.mesh.elements_per_ply,
       base.interface.transverse_shear
           ? "The plies carry the laminate's transverse shear (G13, G23; interface "
             "transverse_shear, strategies/laminate.hpp)."

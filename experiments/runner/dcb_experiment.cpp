@@ -21,6 +21,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "experiments/output/crack_report.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
@@ -34,8 +35,6 @@ namespace plydem {
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr double kMm = 1e-3;
 
 // A `dcb` config's settings: the test's, and the case's name (the layup as written).
 struct DcbExperimentSettings {
@@ -88,12 +87,14 @@ DcbExperimentSettings parse_dcb(const ExperimentConfig& c, const ExperimentConte
   std::string layup = c.string("laminate.layup", format_layup(s.layup));
   if (quick) layup = c.string("quick.layup", layup);
   s.layup = parse_layup(layup);
-  s.ply_thickness = number("laminate", "ply_thickness_mm", s.ply_thickness / kMm) * kMm;
-  s.length = number("coupon", "length_mm", s.length / kMm) * kMm;
-  s.width = number("coupon", "width_mm", s.width / kMm) * kMm;
-  s.crack = number("coupon", "crack_mm", s.crack / kMm) * kMm;
-  s.particle_diameter = number("coupon", "diameter_mm", s.particle_diameter / kMm) * kMm;
-  s.max_crack = number("coupon", "max_crack_mm", s.max_crack / kMm) * kMm;
+  s.ply_thickness =
+      number("laminate", "ply_thickness_mm", s.ply_thickness / kMetresPerMm) * kMetresPerMm;
+  s.length = number("coupon", "length_mm", s.length / kMetresPerMm) * kMetresPerMm;
+  s.width = number("coupon", "width_mm", s.width / kMetresPerMm) * kMetresPerMm;
+  s.crack = number("coupon", "crack_mm", s.crack / kMetresPerMm) * kMetresPerMm;
+  s.particle_diameter =
+      number("coupon", "diameter_mm", s.particle_diameter / kMetresPerMm) * kMetresPerMm;
+  s.max_crack = number("coupon", "max_crack_mm", s.max_crack / kMetresPerMm) * kMetresPerMm;
   s.interface.normal = c.number("interface.normal", 0);
   s.interface.shear = c.number("interface.shear", 0);
   s.interface_strength.normal = c.number("interface.strength_normal", 0);
@@ -120,8 +121,8 @@ DcbResult run_dcb_experiment(const DcbExperimentSettings& settings, const Experi
   const DcbSettings& s = settings.test;
   const std::string& case_name = settings.case_name;
   spdlog::info("dcb {}: {} x {} mm, arms {:g} mm, a0 {:g} mm, particles of {:g} mm", case_name,
-               s.length / kMm, s.width / kMm, s.arm_thickness() / kMm, s.crack / kMm,
-               s.particle_diameter / kMm);
+               s.length / kMetresPerMm, s.width / kMetresPerMm, s.arm_thickness() / kMetresPerMm,
+               s.crack / kMetresPerMm, s.particle_diameter / kMetresPerMm);
   return run_dcb(s, [&](const EventProgress& p) {
     spdlog::info("dcb {}: {} events, {} bonds broken, peak load {:.4g} N, {:.0f} s", case_name,
                  p.events, p.broken, p.peak_reaction, p.elapsed_seconds);
@@ -172,10 +173,10 @@ DcbFigures dcb_figures(const DcbResult& r, const DcbSettings& s, const fs::path&
   Curve dem{fmt::format("DEM {}", r.strategy), {}, {}, true};
   Curve crack{fmt::format("DEM {}", r.strategy), {}, {}, true};
   for (std::size_t i = 0; i < r.load.size(); ++i) {
-    dem.x.push_back(r.opening[i] / kMm);
+    dem.x.push_back(r.opening[i] / kMetresPerMm);
     dem.y.push_back(r.load[i]);
-    crack.x.push_back(r.opening[i] / kMm);
-    crack.y.push_back(r.crack[i] / kMm);
+    crack.x.push_back(r.opening[i] / kMetresPerMm);
+    crack.y.push_back(r.crack[i] / kMetresPerMm);
   }
   std::vector<Curve> load_curves{dem};
   std::vector<Curve> crack_curves{crack};
@@ -190,10 +191,10 @@ DcbFigures dcb_figures(const DcbResult& r, const DcbSettings& s, const fs::path&
           dcb_beam_theory(r.material, r.width, r.arm_thickness, length, r.interface_strength.GIc);
       const double load = corrected ? at.corrected_propagation_load : at.propagation_load;
       const double compliance = corrected ? at.corrected_compliance : at.compliance;
-      p.x.push_back(load * compliance / kMm);
+      p.x.push_back(load * compliance / kMetresPerMm);
       p.y.push_back(load);
-      a.x.push_back(load * compliance / kMm);
-      a.y.push_back(length / kMm);
+      a.x.push_back(load * compliance / kMetresPerMm);
+      a.y.push_back(length / kMetresPerMm);
     }
     load_curves.push_back(p);
     crack_curves.push_back(a);
@@ -256,12 +257,13 @@ std::string dcb_markdown(const DcbResult& r, const DcbSettings& s, const DcbRedu
       "Starter delamination a0 = {:g} mm from the load line (as built). The end columns are "
       "pulled apart (sequentially linear analysis: each point a critical state); the run "
       "stopped: {} after {} events ({} factorizations, {:.1f} s).\n\n",
-      r.width / kMm, r.material.E1 * 1e-9, case_name, s.ply_thickness / kMm, r.arm_thickness / kMm,
-      r.strategy, static_cast<int>(std::round(r.arm_thickness / r.particle_diameter)),
-      r.particle_diameter / kMm, r.length / kMm, r.interface_bonds,
+      r.width / kMetresPerMm, r.material.E1 * 1e-9, case_name, s.ply_thickness / kMetresPerMm,
+      r.arm_thickness / kMetresPerMm, r.strategy,
+      static_cast<int>(std::round(r.arm_thickness / r.particle_diameter)),
+      r.particle_diameter / kMetresPerMm, r.length / kMetresPerMm, r.interface_bonds,
       r.interface_strength.normal * 1e-6, r.interface_strength.shear * 1e-6, r.interface.normal,
-      r.interface.shear, r.interface_strength.GIc, r.interface_ductility, r.initial_crack / kMm,
-      r.stop, r.events, r.factorizations, r.wall_seconds);
+      r.interface.shear, r.interface_strength.GIc, r.interface_ductility,
+      r.initial_crack / kMetresPerMm, r.stop, r.events, r.factorizations, r.wall_seconds);
   md += markdown_row(
             {"quantity", "DEM", "beam theory", "DEM vs it", "corrected beam theory", "DEM vs it"}) +
         "|---|--:|--:|--:|--:|--:|\n";
@@ -271,10 +273,10 @@ std::string dcb_markdown(const DcbResult& r, const DcbSettings& s, const DcbRedu
                       fmt::format("{:.4g}", t.corrected_propagation_load),
                       percent_change(r.propagation_load, t.corrected_propagation_load)});
   md += markdown_row({"initial compliance C (mm/N)",
-                      fmt::format("{:.5g}", r.initial_compliance / kMm),
-                      fmt::format("{:.5g}", t.compliance / kMm),
+                      fmt::format("{:.5g}", r.initial_compliance / kMetresPerMm),
+                      fmt::format("{:.5g}", t.compliance / kMetresPerMm),
                       percent_change(r.initial_compliance, t.compliance),
-                      fmt::format("{:.5g}", t.corrected_compliance / kMm),
+                      fmt::format("{:.5g}", t.corrected_compliance / kMetresPerMm),
                       percent_change(r.initial_compliance, t.corrected_compliance)});
   md += fmt::format(
       "\nThe DEM's propagation load is its peak load (at crack length {:.4g} mm, opening "
@@ -284,7 +286,8 @@ std::string dcb_markdown(const DcbResult& r, const DcbSettings& s, const DcbRedu
       "corrected theory uses a + chi h with chi = {:.4g} (Hashemi, Kinloch & Williams 1990), "
       "for the root rotation and the uncracked part's elastic foundation. Both are linear, as "
       "the model is.\n\n",
-      r.crack_at_peak / kMm, r.opening_at_peak / kMm, r.cohesive_zone_at_peak / kMm, t.chi);
+      r.crack_at_peak / kMetresPerMm, r.opening_at_peak / kMetresPerMm,
+      r.cohesive_zone_at_peak / kMetresPerMm, t.chi);
   if (mbt.points >= 3) {
     md += fmt::format(
         "The DEM curve reduced as an experiment is (ASTM D5528, modified beam theory, {} "
@@ -292,8 +295,8 @@ std::string dcb_markdown(const DcbResult& r, const DcbSettings& s, const DcbRedu
         "chi h = {:.4g} mm) and a flexural modulus of {:.4g} GPa (E1 {:.4g}); G_I = 3 P delta / "
         "(2 b (a + |Delta|)) averages {:.4g} J/m^2 against the interface's GIc {:g} ({}). The "
         "energy released per crack area grown is {:.4g} J/m^2.\n\n",
-        mbt.points, mbt.delta / kMm, t.chi * r.arm_thickness / kMm, mbt.flexural_modulus * 1e-9,
-        r.material.E1 * 1e-9, mbt.GIc, r.interface_strength.GIc,
+        mbt.points, mbt.delta / kMetresPerMm, t.chi * r.arm_thickness / kMetresPerMm,
+        mbt.flexural_modulus * 1e-9, r.material.E1 * 1e-9, mbt.GIc, r.interface_strength.GIc,
         percent_change(mbt.GIc, r.interface_strength.GIc), r.released_per_area);
   }
   md += figure_markdown(load_figure, "Load against opening: DEM beside beam theory") + "\n";

@@ -29,6 +29,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/stress_concentration.hpp"
+#include "core/units.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/strength.hpp"
@@ -44,9 +45,6 @@ namespace plydem {
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr double kMm = 1e-3;
-constexpr double kMPa = 1e-6;
 
 // A break lies "at the hole's edge" when its contact point is within this many particle diameters
 // of the hole's circle: the first column of particles left by the cut sits up to one diameter
@@ -121,7 +119,7 @@ HoleFailureSettings parse_hole_failure(const ExperimentConfig& c,
   const std::string origin = c.path().string();
   auto size = [&](const std::string& key, double fallback_mm) {
     const double full = c.number(fmt::format("coupon.{}", key), fallback_mm);
-    return (context.quick ? c.number(fmt::format("quick.{}", key), full) : full) * kMm;
+    return (context.quick ? c.number(fmt::format("quick.{}", key), full) : full) * kMetresPerMm;
   };
   StrengthSettings unnotched;
   unnotched.force = context.force;
@@ -160,7 +158,7 @@ HoleFailureSettings parse_hole_failure(const ExperimentConfig& c,
   const double hole = size("hole_diameter_mm", 3);
   require(hole > 0, fmt::format("{}: coupon.hole_diameter_mm must be positive (the notched "
                                 "plate needs a hole), got {} mm",
-                                origin, hole / kMm));
+                                origin, hole / kMetresPerMm));
   std::vector<double> fractions = c.numbers("maps.load_fractions", {0.5, 0.8, 1.0});
   for (double f : fractions) {
     require(std::isfinite(f) && f > 0 && f <= 1,
@@ -298,15 +296,15 @@ void add_notched_rows(const HoleFailureSettings& s, const NotchedMeasures& m,
                       const StrengthResult& n, const StrengthResult& u, ExperimentOutput& out) {
   const std::string dem = fmt::format("dem {}", s.unnotched.strategy);
   const auto row = row_adder(out, s.name);
-  row("notched", "strength gross", dem, m.notched_gross * kMPa, "MPa");
-  row("notched", "strength net section", dem, m.notched_net * kMPa, "MPa");
+  row("notched", "strength gross", dem, m.notched_gross * kMPaPerPa, "MPa");
+  row("notched", "strength net section", dem, m.notched_net * kMPaPerPa, "MPa");
   row("notched", "peak grip force", dem, m.notched_peak_force, "N");
-  row("notched", "first failure gross stress", dem, m.notched_first * kMPa, "MPa");
-  row("notched", "first failure gross stress", "unnotched dem / Kt", m.predicted_first * kMPa,
+  row("notched", "first failure gross stress", dem, m.notched_first * kMPaPerPa, "MPa");
+  row("notched", "first failure gross stress", "unnotched dem / Kt", m.predicted_first * kMPaPerPa,
       "MPa");
-  row("notched", "first failure gross stress", "clt max-stress / Kt", m.clt_first / m.kt * kMPa,
-      "MPa");
-  row("notched", "first failure distance from hole edge", dem, m.from_edge / kMm, "mm");
+  row("notched", "first failure gross stress", "clt max-stress / Kt",
+      m.clt_first / m.kt * kMPaPerPa, "MPa");
+  row("notched", "first failure distance from hole edge", dem, m.from_edge / kMetresPerMm, "mm");
   row("notched", "first failure ply", dem, m.first_ply, "1");
   row("notched", "Kt infinite plate", "lekhnitskii", m.kt_inf, "1");
   row("notched", "finite width factor", "heywood", m.fwc, "1");
@@ -314,9 +312,9 @@ void add_notched_rows(const HoleFailureSettings& s, const NotchedMeasures& m,
   row("notched", "notched to unnotched strength", dem, m.notched_gross / m.unnotched_strength, "1");
   row("notched", "hole particles removed", dem, n.hole.particles, "1");
   row("notched", "particles", dem, n.particles, "1");
-  row("unnotched", "strength gross", dem, m.unnotched_strength * kMPa, "MPa");
+  row("unnotched", "strength gross", dem, m.unnotched_strength * kMPaPerPa, "MPa");
   row("unnotched", "peak grip force", dem, m.unnotched_peak_force, "N");
-  row("unnotched", "first failure gross stress", dem, m.unnotched_first * kMPa, "MPa");
+  row("unnotched", "first failure gross stress", dem, m.unnotched_first * kMPaPerPa, "MPa");
   row("unnotched", "particles", dem, u.particles, "1");
 }
 
@@ -326,12 +324,13 @@ Figure load_displacement_figure(const HoleFailureSettings& s, const StrengthResu
   const Material& material = s.unnotched.coupon.material;
   std::vector<Curve> curves;
   for (const auto* r : {&n, &u}) {
-    Curve curve{r == &n ? fmt::format("with the {:g} mm hole", s.hole / kMm) : "without the hole",
-                {},
-                {},
-                true};
+    Curve curve{
+        r == &n ? fmt::format("with the {:g} mm hole", s.hole / kMetresPerMm) : "without the hole",
+        {},
+        {},
+        true};
     for (std::size_t k = 0; k < r->stress.size(); ++k) {
-      curve.x.push_back(grip_travel(*r, k) / kMm);
+      curve.x.push_back(grip_travel(*r, k) / kMetresPerMm);
       curve.y.push_back(grip_force(*r, k));
     }
     curves.push_back(curve);
@@ -384,7 +383,7 @@ DamageMaps damage_maps(const HoleFailureSettings& s, const NotchedMeasures& m,
       per_ply += fmt::format("{}{}: {}", k == 0 ? "" : ", ", k, count);
     }
     map_table += markdown_row({label, fmt::format("{}", event), fmt::format("{:.1f}", force),
-                               fmt::format("{:.2f}", force / m.gross_area * kMPa),
+                               fmt::format("{:.2f}", force / m.gross_area * kMPaPerPa),
                                fmt::format("{}", so_far.size()), per_ply});
     const std::string stem = file_stem(fmt::format("{}_damage_{}", name, label));
     const Figure f = plot_bond_states(
@@ -427,9 +426,9 @@ std::string hole_failure_markdown(const HoleFailureSettings& s, const NotchedMea
       "strength test (uniform grips, events, brittle bonds{}). {} The gross stress is the grip "
       "force over the unnotched plate's cross-section ({:.4g} mm²), the net-section stress "
       "the gross over 1 - D/W.\n\n{}\n\n",
-      material.name, s.layup_text, s.unnotched.coupon.length / kMm, m.width / kMm,
-      s.unnotched.coupon.thickness / kMm, m.d / kMm, s.unnotched.strategy, s.hole / kMm,
-      s.hole / m.width,
+      material.name, s.layup_text, s.unnotched.coupon.length / kMetresPerMm, m.width / kMetresPerMm,
+      s.unnotched.coupon.thickness / kMetresPerMm, m.d / kMetresPerMm, s.unnotched.strategy,
+      s.hole / kMetresPerMm, s.hole / m.width,
       s.unnotched.effective_weibull_modulus() > 0
           ? fmt::format(", Weibull scatter m = {:g}, seed {}",
                         s.unnotched.effective_weibull_modulus(), s.unnotched.seed)
@@ -437,7 +436,7 @@ std::string hole_failure_markdown(const HoleFailureSettings& s, const NotchedMea
       s.unnotched.interface_strength.given() ? "The interfaces break at the strengths given."
                                              : "The interfaces do not break (no interface "
                                                "strengths given).",
-      m.gross_area / (kMm * kMm), strength_model_note(s.unnotched));
+      m.gross_area / (kMetresPerMm * kMetresPerMm), strength_model_note(s.unnotched));
   md += "## Summary\n\n";
   md += markdown_row({"quantity", "notched", "unnotched", "unit"}) + "|---|--:|--:|---|\n";
   md += markdown_row(
@@ -447,12 +446,12 @@ std::string hole_failure_markdown(const HoleFailureSettings& s, const NotchedMea
                       fmt::format("{:.1f}", u.wall_seconds), "s"});
   md += markdown_row({"peak grip force", fmt::format("{:.1f}", m.notched_peak_force),
                       fmt::format("{:.1f}", m.unnotched_peak_force), "N"});
-  md += markdown_row({"strength (gross)", fmt::format("{:.2f}", m.notched_gross * kMPa),
-                      fmt::format("{:.2f}", m.unnotched_strength * kMPa), "MPa"});
+  md += markdown_row({"strength (gross)", fmt::format("{:.2f}", m.notched_gross * kMPaPerPa),
+                      fmt::format("{:.2f}", m.unnotched_strength * kMPaPerPa), "MPa"});
   md += markdown_row(
-      {"strength (net section)", fmt::format("{:.2f}", m.notched_net * kMPa), "–", "MPa"});
-  md += markdown_row({"first failure (gross)", fmt::format("{:.2f}", m.notched_first * kMPa),
-                      fmt::format("{:.2f}", m.unnotched_first * kMPa), "MPa"});
+      {"strength (net section)", fmt::format("{:.2f}", m.notched_net * kMPaPerPa), "–", "MPa"});
+  md += markdown_row({"first failure (gross)", fmt::format("{:.2f}", m.notched_first * kMPaPerPa),
+                      fmt::format("{:.2f}", m.unnotched_first * kMPaPerPa), "MPa"});
   md += markdown_row({"notched / unnotched strength",
                       fmt::format("{:.3f}", m.notched_gross / m.unnotched_strength), "", ""});
   md += fmt::format(
@@ -469,10 +468,11 @@ std::string hole_failure_markdown(const HoleFailureSettings& s, const NotchedMea
       "the discrete plate concentrates less than the continuum, and its first failure "
       "approaches the closed form as the particles shrink (README, \"Notched strength\").\n\n",
       m.first_ply >= 0 ? fmt::format("ply {}", m.first_ply) : std::string("an interface"),
-      m.from_edge / kMm, m.at_edge ? "at the hole's edge" : "away from the hole's edge",
-      m.notched_first * kMPa, m.kt_inf, m.laminate.Ex * 1e-9, m.laminate.Ey * 1e-9,
-      m.laminate.nu_xy, m.laminate.Gxy * 1e-9, m.fwc, m.kt, m.predicted_first * kMPa,
-      percent_change(m.notched_first, m.predicted_first), m.clt_first / m.kt * kMPa, s.hole / m.d);
+      m.from_edge / kMetresPerMm, m.at_edge ? "at the hole's edge" : "away from the hole's edge",
+      m.notched_first * kMPaPerPa, m.kt_inf, m.laminate.Ex * 1e-9, m.laminate.Ey * 1e-9,
+      m.laminate.nu_xy, m.laminate.Gxy * 1e-9, m.fwc, m.kt, m.predicted_first * kMPaPerPa,
+      percent_change(m.notched_first, m.predicted_first), m.clt_first / m.kt * kMPaPerPa,
+      s.hole / m.d);
   md += figure_markdown(load, "grip force against grip travel, with and without the hole") + "\n\n";
   md +=
       "## Damage maps of the notched plate\n\nAt each chosen fraction of the peak grip force "
@@ -490,7 +490,7 @@ ExperimentOutput report_hole_failure(const HoleFailureSettings& s, const HoleFai
   ExperimentOutput out;
   const Material& material = s.unnotched.coupon.material;
   out.title = fmt::format("Notched strength: {} {} plate with a {:g} mm hole to failure",
-                          material.name, s.layup_text, s.hole / kMm);
+                          material.name, s.layup_text, s.hole / kMetresPerMm);
   std::string sections;
   for (const auto& [label, result] :
        {std::pair<std::string, const StrengthResult*>{"notched", &r.notched},

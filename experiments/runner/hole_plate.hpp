@@ -159,7 +159,7 @@ GridComparison sample_dem_on_grid(const Model& dem, int plies, const ComparisonG
 struct HolePlateMaps {
   std::vector<std::filesystem::path> files;  ///< the map data, then each PNG and its .gp
   std::vector<std::string> figures;          ///< the PNGs
-  std::string figure_note;  ///< why no figure was drawn (gnuplot missing), or ""
+  std::string figure_note;                   ///< why no figure was drawn (gnuplot missing), or ""
 };
 
 /// The top ply's displacement maps of the plate and of the window around the hole (`plate`,

@@ -58,8 +58,8 @@ LaminaAnglesSettings parse_lamina_angles(const ExperimentConfig& c,
   s.ccx_available = calculix_availability(context.calculix).available;
   s.window = figure_window(c, s.coupon);
   if (s.run_fem && s.ccx_available) {
-    s.fem_length = c.number("fem.length_mm", s.coupon.length / kMm) * kMm;
-    s.fem_width = c.number("fem.width_mm", s.coupon.width / kMm) * kMm;
+    s.fem_length = c.number("fem.length_mm", s.coupon.length / kMetresPerMm) * kMetresPerMm;
+    s.fem_width = c.number("fem.width_mm", s.coupon.width / kMetresPerMm) * kMetresPerMm;
   }
   for (const double angle_deg : s.angles) {
     const std::string paper_key = fmt::format("paper.{:g}", angle_deg);
@@ -164,7 +164,7 @@ std::string angle_table(const LaminaAnglesSettings& settings, std::size_t k, con
           file_stem(fmt::format("{}_{}_{:g}deg", name, strategy_name, angle_deg)),
           fmt::format("{} at {:g}°: bonds coloured by normal stiffness (plan view, first {:g} "
                       "mm)",
-                      strategy_name, angle_deg, settings.window / kMm),
+                      strategy_name, angle_deg, settings.window / kMetresPerMm),
           settings.window, out);
     } catch (const Error& e) {
       refused(e.what());
@@ -230,8 +230,8 @@ ExperimentOutput report_lamina_angles(const LaminaAnglesSettings& settings,
       "tension tests (Ex, νxy along x; Ey, νyx from the ply turned by −90°), Gxy from the "
       "specimen's membrane stiffness. The paper's columns E1, E2, ν12, ν21 of Table 3 are Ex, "
       "Ey, νxy, νyx here. Relative errors against correct CLT (Q̄ of the ply).\n\n",
-      coupon.length / kMm, coupon.width / kMm, coupon.thickness / kMm,
-      coupon.particle_diameter / kMm, grips_sentence(settings.grips));
+      coupon.length / kMetresPerMm, coupon.width / kMetresPerMm, coupon.thickness / kMetresPerMm,
+      coupon.particle_diameter / kMetresPerMm, grips_sentence(settings.grips));
   md += tables;
   if (any_flag) md += fmt::format("{}\n", paper_theory_note());
   md += fmt::format("## Figures\n\n{}{}", stress_strain, figures);

@@ -267,7 +267,7 @@ void report_strategy(const LaminaStrategiesSettings& settings, std::size_t k,
         table.figures += write_model(
             *r.along_x.model, out_dir, file_stem(fmt::format("{}_{}", name, strategy_name)),
             fmt::format("{}: bonds coloured by normal stiffness (plan view, first {:g} mm)",
-                        strategy_name, settings.window / kMm),
+                        strategy_name, settings.window / kMetresPerMm),
             settings.window, out);
       } catch (const Error& e) {
         refused = e.what();
@@ -327,8 +327,8 @@ ExperimentOutput report_lamina_strategies(const LaminaStrategiesSettings& settin
   std::string& md = out.report_markdown;
   md += fmt::format(
       "Coupon {:g} × {:g} mm, ply thickness {:g} mm, particle diameter {:g} mm; {}.\n\n",
-      coupon.length / kMm, coupon.width / kMm, coupon.thickness / kMm,
-      coupon.particle_diameter / kMm, grips_sentence(base.grips));
+      coupon.length / kMetresPerMm, coupon.width / kMetresPerMm, coupon.thickness / kMetresPerMm,
+      coupon.particle_diameter / kMetresPerMm, grips_sentence(base.grips));
   md +=
       "## Table 2: elastic constants\n\n"
       "DEM moduli from the static tension test (one sparse solve per pull; the state an "

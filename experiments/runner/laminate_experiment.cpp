@@ -87,8 +87,9 @@ LaminateExperimentSettings parse_laminate(const ExperimentConfig& c,
     if (c.contains("fem.length_mm") || c.contains("fem.width_mm")) {
       // The free-edge zone of a laminate is about one thickness wide: left out of the strain
       // fit.
-      FemSpecimen specimen{plies, c.number("fem.length_mm", s.coupon.length / kMm) * kMm,
-                           c.number("fem.width_mm", s.coupon.width / kMm) * kMm};
+      FemSpecimen specimen{plies,
+                           c.number("fem.length_mm", s.coupon.length / kMetresPerMm) * kMetresPerMm,
+                           c.number("fem.width_mm", s.coupon.width / kMetresPerMm) * kMetresPerMm};
       const FemSettings fem_settings =
           fem_settings_from(c, context, std::min(h, 0.25 * specimen.width));
       ls.wide = std::pair{specimen, fem_settings};
@@ -188,7 +189,7 @@ std::string fem_lines(const LaminateExperimentSettings& ls, const LaminateResult
     t += constants_line(
         fmt::format("CalculiX, the same {:g} × {:g} mm coupon ({}, {} + {} elements, {} per "
                     "ply)",
-                    s.coupon.length / kMm, s.coupon.width / kMm,
+                    s.coupon.length / kMetresPerMm, s.coupon.width / kMetresPerMm,
                     fem_element_name(same.along_x.element), same.along_x.elements,
                     same.along_y.elements, twin.mesh.elements_per_ply),
         v, clt);
@@ -215,7 +216,7 @@ std::string fem_lines(const LaminateExperimentSettings& ls, const LaminateResult
       fem_seconds += fem.along_x.wall_seconds + fem.along_y.wall_seconds;
       const Values v = values_of(fem.fem, false);
       t += constants_line(fmt::format("CalculiX, a {:g} × {:g} mm coupon ({}, {} + {} elements)",
-                                      specimen.length / kMm, specimen.width / kMm,
+                                      specimen.length / kMetresPerMm, specimen.width / kMetresPerMm,
                                       fem_element_name(fem.along_x.element), fem.along_x.elements,
                                       fem.along_y.elements),
                           v, clt);
@@ -263,7 +264,7 @@ std::string laminate_figures(const LaminateExperimentSettings& ls, const Tension
       solved, out_dir, file_stem(name),
       fmt::format("{} {}: bonds coloured by normal stiffness, plies side by side (plan view, first "
                   "{:g} mm)",
-                  layup_text, s.strategy, window / kMm),
+                  layup_text, s.strategy, window / kMetresPerMm),
       window, out, ply_labels);
   {
     const Particles& p = solved.particles;
@@ -271,9 +272,9 @@ std::string laminate_figures(const LaminateExperimentSettings& ls, const Tension
     const int top = p.ply.maxCoeff();
     for (int i = 0; i < p.size(); ++i) {
       if (p.ply(i) != top) continue;
-      x.push_back(p.reference_position(i, 0) / kMm);
-      y.push_back(p.reference_position(i, 1) / kMm);
-      ux.push_back(p.displacement(i, 0) / kMm * 1e3);
+      x.push_back(p.reference_position(i, 0) / kMetresPerMm);
+      y.push_back(p.reference_position(i, 1) / kMetresPerMm);
+      ux.push_back(p.displacement(i, 0) / kMetresPerMm * 1e3);
     }
     const Figure map = plot_field_map(
         x, y, ux, out_dir, fmt::format("{}_ux", file_stem(name)),
@@ -314,8 +315,8 @@ ExperimentOutput report_laminate(const LaminateExperimentSettings& ls,
       "diameter {:g} mm; {} plies joined by interface bonds of normal stiffness {:.3g} N/m³ and "
       "shear stiffness {:.3g} N/m³ per unit area{}.\n\n",
       layup_text, case_name == layup_text ? "" : fmt::format(" = {}", case_name), s.layup.size(),
-      s.coupon.thickness / kMm, s.coupon.length / kMm, s.coupon.width / kMm,
-      s.coupon.particle_diameter / kMm, s.strategy,
+      s.coupon.thickness / kMetresPerMm, s.coupon.length / kMetresPerMm,
+      s.coupon.width / kMetresPerMm, s.coupon.particle_diameter / kMetresPerMm, s.strategy,
       s.interface.resolved(s.coupon.material, s.coupon.thickness).normal,
       s.interface.resolved(s.coupon.material, s.coupon.thickness).shear,
       s.interface.normal == 0 && s.interface.shear == 0

@@ -88,8 +88,8 @@ FemSettings fem_settings_from(const ExperimentConfig& c, const ExperimentContext
   else
     throw Error(fmt::format("{}: fem.element must be C3D8I or C3D20R", c.path().string()));
   s.mesh.elements_per_ply = static_cast<int>(c.integer("fem.elements_per_ply", 1));
-  s.mesh.element_size = c.number("fem.element_size_mm", 0) * kMm;
-  s.edge_band = c.number("fem.edge_band_mm", default_edge_band / kMm) * kMm;
+  s.mesh.element_size = c.number("fem.element_size_mm", 0) * kMetresPerMm;
+  s.edge_band = c.number("fem.edge_band_mm", default_edge_band / kMetresPerMm) * kMetresPerMm;
   s.loading.grips = grips_from_config(c);
   s.validate();
   return s;
@@ -106,11 +106,11 @@ Values values_of(const InPlaneConstants& k, bool with_gxy) {
 std::optional<Values> paper_values(const ExperimentConfig& c, const std::string& key) {
   if (!c.contains(key)) return std::nullopt;
   Values v;
-  v.Ex = c.number(key + ".E1", kNaN) * kGPa;
-  v.Ey = c.number(key + ".E2", kNaN) * kGPa;
+  v.Ex = c.number(key + ".E1", kNaN) * kPaPerGPa;
+  v.Ey = c.number(key + ".E2", kNaN) * kPaPerGPa;
   v.nu_xy = c.number(key + ".nu12", kNaN);
   v.nu_yx = c.number(key + ".nu21", kNaN);
-  v.Gxy = c.number(key + ".G12", kNaN) * kGPa;
+  v.Gxy = c.number(key + ".G12", kNaN) * kPaPerGPa;
   return v;
 }
 
@@ -197,7 +197,7 @@ std::string write_model(const Model& model, const fs::path& out_dir, const std::
 }
 
 double figure_window(const ExperimentConfig& c, const CouponSpec& coupon) {
-  return c.number("figures.window_mm", std::min(coupon.length / kMm, 2.0)) * kMm;
+  return c.number("figures.window_mm", std::min(coupon.length / kMetresPerMm, 2.0)) * kMetresPerMm;
 }
 
 // Static stress-strain points of a pull [%, MPa].

@@ -37,6 +37,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/protocols/tension.hpp"
@@ -45,8 +46,6 @@
 namespace plydem::paper_tables {
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-inline constexpr double kMm = 1e-3;
-inline constexpr double kGPa = 1e9;
 /// A paper theory value further than this from correct CLT is flagged (ERRATA §1).
 inline constexpr double kPaperTheoryTolerance = 0.01;
 

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "experiments/output/crack_report.hpp"
 #include "experiments/output/figures.hpp"
 #include "experiments/output/strength_report.hpp"
@@ -21,12 +22,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-constexpr double kMPa = 1e-6;
-constexpr double kMm = 1e-3;
-
 std::string mpa_cell(double pascals) {
-  return std::isfinite(pascals) ? fmt::format("{:.2f}", pascals * kMPa) : "–";
+  return std::isfinite(pascals) ? fmt::format("{:.2f}", pascals * kMPaPerPa) : "–";
 }
 
 const char* source_name(FailureCriterion c) {
@@ -75,11 +72,11 @@ ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_di
     if (std::isfinite(value))
       out.rows.push_back({experiment, case_name, quantity, source, value, unit});
   };
-  row("strength", dem, r.strength * kMPa, "MPa");
+  row("strength", dem, r.strength * kMPaPerPa, "MPa");
   row("strain at peak", dem, r.strain_at_peak * 100, "%");
-  row("first failure stress", dem, r.first_failure_stress * kMPa, "MPa");
-  row("first failure stress", fmt::format("{} calibrated bulk", dem), r.model_first_failure * kMPa,
-      "MPa");
+  row("first failure stress", dem, r.first_failure_stress * kMPaPerPa, "MPa");
+  row("first failure stress", fmt::format("{} calibrated bulk", dem),
+      r.model_first_failure * kMPaPerPa, "MPa");
   row("broken bonds in tension", dem, r.broken_tension, "1");
   row("broken bonds in shear", dem, r.broken_shear, "1");
   for (const BrokenBonds& b : r.broken) {
@@ -90,7 +87,7 @@ ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_di
   row("energy released", dem, r.dissipated_energy, "J");
   row("wall time", dem, r.wall_seconds, "s");
   for (const CriterionStrength& t : r.theory) {
-    if (t.strength) row("strength", source_name(t.criterion), *t.strength * kMPa, "MPa");
+    if (t.strength) row("strength", source_name(t.criterion), *t.strength * kMPaPerPa, "MPa");
   }
 
   std::string& md = out.report_markdown;
@@ -165,7 +162,7 @@ ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_di
   for (const CrackCount& n : crack_summary.counts) {
     const std::string where = crack_place(n.interface, n.ply);
     row(fmt::format("cracks {}", where), dem, n.cracks, "1");
-    row(fmt::format("crack density {}", where), dem, n.density * kMm, "1/mm");
+    row(fmt::format("crack density {}", where), dem, n.density * kMetresPerMm, "1/mm");
   }
   return out;
 }
@@ -228,7 +225,7 @@ StrengthExperimentSettings parse_strength(const ExperimentConfig& c,
                                                  fmt::format("{}: strategy_options", origin));
   base.coupon = coupon_from_config(c, context.quick);
   base.grips = parse_strength_grips(c.string("coupon.grips", "uniform"));
-  base.grip_length = c.number("coupon.grip_mm", 0) * kMm;
+  base.grip_length = c.number("coupon.grip_mm", 0) * kMetresPerMm;
   base.gauge_fraction = c.number("coupon.gauge_fraction", base.gauge_fraction);
   const std::string layup_text = c.string("layup", "");
   if (!layup_text.empty()) base.layup = parse_layup(layup_text);
@@ -361,7 +358,7 @@ std::vector<Curve> strength_curves(const StrengthExperimentSettings& settings,
         }
         line.x.push_back(degree);
         line.y.push_back(first_ply_failure_stress(criterion, plies, base.coupon.material.strength) *
-                         kMPa);
+                         kMPaPerPa);
       }
     } catch (const Error& e) {
       spdlog::warn("{}: no {} curve: {}", name, criterion_label(criterion), e.what());
@@ -414,9 +411,9 @@ ExperimentOutput report_strength(const StrengthExperimentSettings& settings,
     cells.push_back(percent_change(criteria_compared_stress(r), tsai_wu));
     table += markdown_row(cells);
     dem_points.x.push_back(angle_deg);
-    dem_points.y.push_back(r.strength * kMPa);
+    dem_points.y.push_back(r.strength * kMPaPerPa);
     dem_first.x.push_back(angle_deg);
-    dem_first.y.push_back(r.first_failure_stress * kMPa);
+    dem_first.y.push_back(r.first_failure_stress * kMPaPerPa);
     // A figure or file that cannot be written refuses the angle, as a failed test does.
     try {
       const std::string stem = file_stem(fmt::format("{}_{:g}deg", name, angle_deg));
@@ -447,9 +444,10 @@ ExperimentOutput report_strength(const StrengthExperimentSettings& settings,
   md += fmt::format(
       "Coupon {:g} × {:g} mm, ply thickness {:g} mm, particle diameter {:g} mm; strategy {}; "
       "lamina strengths XT {:g}, XC {:g}, YT {:g}, YC {:g}, S12 {:g} MPa; {}.\n\n",
-      base.coupon.length / kMm, base.coupon.width / kMm, base.coupon.thickness / kMm,
-      base.coupon.particle_diameter / kMm, base.strategy, ls.XT * kMPa, ls.XC * kMPa, ls.YT * kMPa,
-      ls.YC * kMPa, ls.S12 * kMPa,
+      base.coupon.length / kMetresPerMm, base.coupon.width / kMetresPerMm,
+      base.coupon.thickness / kMetresPerMm, base.coupon.particle_diameter / kMetresPerMm,
+      base.strategy, ls.XT * kMPaPerPa, ls.XC * kMPaPerPa, ls.YT * kMPaPerPa, ls.YC * kMPaPerPa,
+      ls.S12 * kMPaPerPa,
       base.effective_weibull_modulus() > 0
           ? fmt::format("Weibull strength scatter m = {:g}, seed {}",
                         base.effective_weibull_modulus(), base.seed)
