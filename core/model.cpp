@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 
 namespace plydem {
 
@@ -308,6 +309,12 @@ bool Bonds::breakable() const {
     if (std::isfinite(tensile_strength(k)) || std::isfinite(cohesion(k))) return true;
   }
   return false;
+}
+
+std::string describe_particle(const Particles& particles, int i) {
+  const auto& x = particles.reference_position;
+  return fmt::format("particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i, kMmPerMetre * x(i, 0),
+                     kMmPerMetre * x(i, 1), kMmPerMetre * x(i, 2));
 }
 
 }  // namespace plydem

@@ -259,4 +259,7 @@ Model select_particles(const Model& model, const std::vector<int>& kept);
 /// the contact point sits midway in the gap between the two surfaces.
 void set_bond_geometry(const Particles& particles, Bonds& bonds, int b);
 
+/// "particle i at (x, y, z) mm", its reference position, for messages that name a particle.
+std::string describe_particle(const Particles& particles, int i);
+
 }  // namespace plydem

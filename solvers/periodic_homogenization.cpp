@@ -21,12 +21,6 @@ namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
-std::string where(const Particles& p, int i) {
-  return fmt::format(
-      "particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i, kMmPerMetre * p.reference_position(i, 0),
-      kMmPerMetre * p.reference_position(i, 1), kMmPerMetre * p.reference_position(i, 2));
-}
-
 // A dof whose own stiffness is below this fraction of the stiffness its bonds could give it has
 // none: its diagonal is round-off (e.g. a spin in a network of normal springs, where the bond
 // stiffness is k_n n n^T and the lever arm n x theta is normal to n). Such a dof cannot be
@@ -309,7 +303,7 @@ Eigen::VectorXd reference_stiffness(const Model& model) {
       throw Error(fmt::format(
           "periodic homogenization: {} has no bonds (or only bonds without stiffness): it floats "
           "freely in the period; remove it or bond it",
-          where(p, i)));
+          describe_particle(p, i)));
   return reference;
 }
 

@@ -27,14 +27,9 @@ Eigen::Vector3d reference_of(const Particles& p, int i) {
   return {p.reference_position(i, 0), p.reference_position(i, 1), p.reference_position(i, 2)};
 }
 
-std::string where(const Particles& p, int i) {
-  const Eigen::Vector3d x = kMmPerMetre * reference_of(p, i);
-  return fmt::format("particle {} at ({:.4g}, {:.4g}, {:.4g}) mm", i, x.x(), x.y(), x.z());
-}
-
 std::string dof_at(const Particles& p, int dof) {
   return fmt::format("{} of {}", dof_name(static_cast<Dof>(dof % kDofsPerParticle)),
-                     where(p, dof / kDofsPerParticle));
+                     describe_particle(p, dof / kDofsPerParticle));
 }
 
 // Input checks that the linear algebra cannot explain well afterwards.
@@ -103,7 +98,7 @@ void check_input(const Model& model, const DofConstraints& constraints) {
       throw Error(
           fmt::format("static solve: {} has no bonds: it floats freely (prescribe all six "
                       "of its dofs or remove it)",
-                      where(p, i)));
+                      describe_particle(p, i)));
     }
   }
 }
@@ -264,7 +259,8 @@ std::string join(const std::vector<std::string>& items) {
   for (const ClusterModes& c : free) {
     std::vector<std::string> pins;
     for (const PinnedDof& pin : c.pins)
-      pins.push_back(fmt::format("{} of {}", dof_name(pin.dof), where(p, pin.particle)));
+      pins.push_back(
+          fmt::format("{} of {}", dof_name(pin.dof), describe_particle(p, pin.particle)));
     clusters.push_back(fmt::format(
         "the cluster of {} bonded particles containing particle {} has {} free rigid-body "
         "mode{} ({}); fixing {} would remove them",
