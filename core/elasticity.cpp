@@ -11,10 +11,6 @@
 namespace plydem {
 namespace {
 
-std::string format_number(double value) {
-  return fmt::format("{:.6g}", value);
-}
-
 // Stress transformation from global (x, y) to ply axes (1, 2) for a fibre at `angle`
 // counter-clockwise from +x, Voigt (xx, yy, xy) with tensor shear stress: sigma_12 = T sigma_xy.
 // Engineering shear strain makes the strain transform with T^-T (Reuter's matrix folded in), so
@@ -102,7 +98,7 @@ Eigen::Matrix3d laminate_extensional_stiffness(const std::vector<Ply>& plies) {
     const Ply& ply = plies[k];
     require(std::isfinite(ply.thickness) && ply.thickness > 0,
             "laminate ply " + std::to_string(k) + ": thickness must be finite and positive, got " +
-                format_number(ply.thickness) + " m");
+                fmt::format("{:.6g}", ply.thickness) + " m");
     require(std::isfinite(ply.angle),
             "laminate ply " + std::to_string(k) + ": angle must be finite");
     A += rotate_reduced_stiffness(reduced_stiffness(ply.material), ply.angle) * ply.thickness;

@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/machine_memory.hpp"
 #include "core/model.hpp"
+#include "solvers/static_solver.hpp"
 
 namespace plydem {
 
@@ -26,8 +27,6 @@ double row_bytes() {
   });
   return bytes;
 }
-
-constexpr double kDofsPerParticle = 6;
 
 std::string bytes_text(double bytes) {
   if (!std::isfinite(bytes)) return "more than can be counted";
@@ -70,7 +69,7 @@ ResourceEstimate estimate_resources(const Strategy& strategy, const CouponSpec& 
   const double build = e.particles * 3 * sizeof(double) + e.bonds * 3 * sizeof(int);
   e.model_bytes = e.models_held * model + build;
 
-  const double unknowns = kDofsPerParticle * e.particles;
+  const double unknowns = double{kDofsPerParticle} * e.particles;
   // The assembly's 6 x 6 blocks (one per particle and per bond, solvers/stiffness_assembly.hpp)
   // and their lower triangle in compressed columns (value and row index).
   const double blocks = (e.particles + e.bonds) * (36 * sizeof(double) + sizeof(int));
