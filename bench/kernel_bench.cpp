@@ -37,6 +37,7 @@
 #include "core/stopwatch.hpp"
 #include "core/units.hpp"
 #include "experiments/protocols/tension.hpp"
+#include "solvers/device_backend.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/hex2d.hpp"
 

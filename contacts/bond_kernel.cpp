@@ -85,11 +85,12 @@ BondDeformation bond_deformation(const Particles& p, const Bonds& bonds, int b, 
   double dtheta[3], a[3], du[3];
   for (int c = 0; c < 3; ++c) {
     dtheta[c] = p.rotation(j, c) - p.rotation(i, c);
-    a[c] = sigma * (p.rotation(i, c) + p.rotation(j, c)) + delta * dtheta[c];
+    a[c] = fmadd(delta, dtheta[c], sigma * (p.rotation(i, c) + p.rotation(j, c)));
   }
-  du[0] = (p.displacement(j, 0) - p.displacement(i, 0)) - (a[1] * n[2] - a[2] * n[1]);
-  du[1] = (p.displacement(j, 1) - p.displacement(i, 1)) - (a[2] * n[0] - a[0] * n[2]);
-  du[2] = (p.displacement(j, 2) - p.displacement(i, 2)) - (a[0] * n[1] - a[1] * n[0]);
+  // As half_bond_response computes it (contacts/half_bond.hpp).
+  du[0] = (p.displacement(j, 0) - p.displacement(i, 0)) - fmadd(a[1], n[2], -(a[2] * n[1]));
+  du[1] = (p.displacement(j, 1) - p.displacement(i, 1)) - fmadd(a[2], n[0], -(a[0] * n[2]));
+  du[2] = (p.displacement(j, 2) - p.displacement(i, 2)) - fmadd(a[0], n[1], -(a[1] * n[0]));
   for (int c = 0; c < 3 && du_out; ++c) du_out[c] = du[c];
   for (int c = 0; c < 3 && dtheta_out; ++c) dtheta_out[c] = dtheta[c];
   return deformation_of(du, dtheta, n);
@@ -405,7 +406,7 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
 
 // Half-bond types, created in mirror pairs: the type of a bond's second end is the exact mirror
 // image of its first end's (normal negated, levers swapped, the same stiffnesses and strength),
-// so that both ends compute the same numbers (gather_breaking_block). Returns each type's lattice
+// so that both ends compute the same numbers (gather_half_bonds). Returns each type's lattice
 // direction (or -1).
 std::vector<int> GatherBonds::assign_types(const Bonds& bonds, const std::vector<int>& kernel_index,
                                            const std::vector<Eigen::Vector3d>& directions,

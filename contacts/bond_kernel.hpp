@@ -18,11 +18,11 @@
 /// see how the kernel is laid out.
 ///
 /// Breaking (core/bond_failure.hpp). A GatherBonds built with breaking on also keeps, per half-bond
-/// type, what the failure law needs (HalfBondFailure), and gather_breaking_block decides, at every
+/// type, what the failure law needs (HalfBondFailure), and gather_half_bonds decides, at every
 /// cycle, whether each bond breaks or softens, from the deformation it has just computed for the
 /// force. Both ends of a bond decide alike because they compute the same numbers (see "Both ends
-/// alike" at gather_breaking_block), so each particle clears its own slot and no thread writes
-/// another's memory. The reference loop decides through the same scalar functions
+/// alike" at gather_half_bonds in contacts/half_bond.hpp), so each particle clears its own slot and
+/// no thread writes another's memory. The reference loop decides through the same scalar functions
 /// (bond_deformation, update_bond_damage).
 
 #include <algorithm>
@@ -38,6 +38,7 @@
 
 #include "contacts/half_bond.hpp"
 #include "core/bond_failure.hpp"
+#include "core/lane_ops.hpp"
 #include "core/model.hpp"
 #include "core/parallel_bond.hpp"
 
@@ -64,8 +65,8 @@ double bond_strain_energy(const Particles& particles, const Bonds& bonds);
 
 /// Bond b's deformation at the particles' current state, for the reference loop. The lever term
 /// (s_i theta_i + s_j theta_j) x n is written as (sigma (theta_i + theta_j) + delta (theta_j -
-/// theta_i)) x n with sigma = (s_i + s_j) / 2 and delta = (s_j - s_i) / 2, the form the fused kernel
-/// computes from either end alike (gather_breaking_block). With `du_out` and `dtheta_out`, also
+/// theta_i)) x n with sigma = (s_i + s_j) / 2 and delta = (s_j - s_i) / 2, the form the fused
+/// kernel computes from either end alike (gather_half_bonds). With `du_out` and `dtheta_out`, also
 /// writes du and dtheta there.
 BondDeformation bond_deformation(const Particles& particles, const Bonds& bonds, int b,
                                  double* du_out = nullptr, double* dtheta_out = nullptr);
@@ -149,6 +150,56 @@ class Array {
 
 }  // namespace lanes
 
+/// Eight particles in the lanes of a vector (core/lane_ops.hpp). fmadd is written lane by lane
+/// with the scalar builtin, which GCC turns into one vfmadd per vector in the kernel's AVX2 and
+/// AVX-512 clones and into calls of libm's fma in baseline x86-64 code; every other operation is
+/// the vector's own, lane by lane. The functions take and return vectors by value, which would
+/// change the ABI of a call between instruction sets (GCC's -Wpsabi, off in the build), but they
+/// are always inlined: no call remains.
+template <>
+struct LaneOps<lanes::Doubles> {
+  using Doubles = lanes::Doubles;
+  using Mask = lanes::Mask;
+  [[gnu::always_inline]] static Doubles fmadd(const Doubles& a, const Doubles& b,
+                                              const Doubles& c) {
+    Doubles r;
+    for (int l = 0; l < lanes::kCount; ++l) r[l] = __builtin_fma(a[l], b[l], c[l]);
+    return r;
+  }
+  [[gnu::always_inline]] static Doubles fmadd(double a, const Doubles& b, const Doubles& c) {
+    Doubles r;
+    for (int l = 0; l < lanes::kCount; ++l) r[l] = __builtin_fma(a, b[l], c[l]);
+    return r;
+  }
+  [[gnu::always_inline]] static Doubles select(const Mask& m, const Doubles& a, const Doubles& b) {
+    return (Doubles)(((Mask)a & m) | ((Mask)b & ~m));  // bitwise: no branches
+  }
+  [[gnu::always_inline]] static Doubles keep(const Doubles& x, const Mask& m) {
+    return (Doubles)((Mask)x & m);
+  }
+  [[gnu::always_inline]] static Doubles keep_unless(const Doubles& x, const Mask& m) {
+    return (Doubles)((Mask)x & ~m);
+  }
+  [[gnu::always_inline]] static Doubles abs(const Doubles& x) {
+    Doubles r;
+    lanes::abs(x, r);
+    return r;
+  }
+  [[gnu::always_inline]] static Doubles sqrt(const Doubles& x) {
+    Doubles r;
+    for (int l = 0; l < lanes::kCount; ++l) r[l] = __builtin_sqrt(x[l]);
+    return r;
+  }
+  /// |magnitude| with the sign bit of v, built from bits (exact; no per-lane branch), and +0 where
+  /// v is zero.
+  [[gnu::always_inline]] static Doubles signed_like(const Doubles& magnitude, const Doubles& v) {
+    const Mask sign_bit = Mask{} + std::numeric_limits<std::int64_t>::min();
+    const Doubles with_sign = (Doubles)((Mask)magnitude | ((Mask)v & sign_bit));
+    return v == Doubles{} ? Doubles{} : with_sign;
+  }
+  [[gnu::always_inline]] static bool any(const Mask& m) { return lanes::any(m); }
+};
+
 /// A HalfBondType with every parameter repeated in all lanes: what a block whose eight particles
 /// share the type of a slot loads (plain vector loads; no broadcasts in the loop).
 struct alignas(64) HalfBondLanes {
@@ -205,7 +256,8 @@ class GatherBonds {
   /// compute the same numbers. With `breaking.enabled` the types hold intact stiffnesses
   /// (current / (1 - damage)) and the failure data (HalfBondFailure), and every slot knows its
   /// bond (slot_bond).
-  GatherBonds(const Bonds& bonds, const std::vector<int>& order, const GatherBreaking& breaking = {});
+  GatherBonds(const Bonds& bonds, const std::vector<int>& order,
+              const GatherBreaking& breaking = {});
 
   int particle_count() const { return particles_; }
   /// Particles rounded up to whole lane blocks; the padding particles have no bonds.
@@ -299,10 +351,10 @@ class GatherBonds {
   std::vector<std::int32_t> block_run_;   // [block * width + slot]
   // Breaking.
   bool breaking_ = false, softening_ = false, slot_strengths_ = false;
-  std::vector<HalfBondFailure> failure_;                // [type]
-  std::vector<HalfBondFailureLanes> failure_uniform_;  // [uniform type]
-  std::vector<std::int32_t> slot_bond_;                 // [cell]
-  std::vector<std::array<std::int64_t, 2>> bond_cells_;  // [model bond]
+  std::vector<HalfBondFailure> failure_;                             // [type]
+  std::vector<HalfBondFailureLanes> failure_uniform_;                // [uniform type]
+  std::vector<std::int32_t> slot_bond_;                              // [cell]
+  std::vector<std::array<std::int64_t, 2>> bond_cells_;              // [model bond]
   lanes::Array slot_alpha_, slot_beta_, slot_tension_, slot_shear_;  // [cell], strengths per slot
   std::vector<double> slot_tensile_, slot_cohesion_;                 // [cell], strengths per slot
   lanes::Array slot_damage_, slot_kappa_;                            // [cell], softening
@@ -324,80 +376,6 @@ struct GatherState {
   const double* rotation[3];
 };
 
-/// Force and moment on the block of particles first .. first + lanes::kCount - 1 (first a multiple
-/// of lanes::kCount) from all their bonds, added to `force` and `torque`. With kEnergy, also adds
-/// half of each bond's strain energy and half its force magnitude (each bond is seen from both
-/// ends) to `energy` and `force_norm`. Inlined into the caller, so that it is compiled for the
-/// caller's instruction set (see solvers/explicit_integrator.cpp).
-template <bool kEnergy>
-[[gnu::always_inline]] inline void gather_bond_block(
-    const GatherBonds& g, int first, const GatherState& s, lanes::Doubles (&force)[3],
-    lanes::Doubles (&torque)[3], lanes::Doubles& energy, lanes::Doubles& force_norm) {
-  using lanes::Doubles;
-  constexpr int kLanes = lanes::kCount;
-  Doubles u_i[3], t_i[3];
-  for (int c = 0; c < 3; ++c) {
-    lanes::load(s.displacement[c] + first, u_i[c]);
-    lanes::load(s.rotation[c] + first, t_i[c]);
-  }
-  const int block = first / kLanes;
-  const std::int32_t* block_type = g.block_types(block);
-  const std::int32_t* block_run = g.block_runs(block);
-  for (int slot = 0; slot < g.width(); ++slot) {
-    const std::int32_t uniform_type = block_type[slot];
-    if (uniform_type == 0) continue;  // no particle of the block has a bond in this slot
-
-    Doubles u_j[3], t_j[3];
-    const std::int32_t run = block_run[slot];
-    if (run >= 0) {  // the other ends are consecutive particles: plain loads
-      for (int c = 0; c < 3; ++c) {
-        lanes::load_unaligned(s.displacement[c] + run, u_j[c]);
-        lanes::load_unaligned(s.rotation[c] + run, t_j[c]);
-      }
-    } else {
-      const std::int32_t* other = g.neighbours(slot) + first;
-      for (int c = 0; c < 3; ++c) {
-        lanes::gather(s.displacement[c], other, u_j[c]);
-        lanes::gather(s.rotation[c], other, t_j[c]);
-      }
-    }
-    Doubles n[3] = {}, s_own{}, s_other{}, k_s{}, s_k_s{}, k_n_excess{}, k_b{}, k_t_excess{};
-    if (uniform_type > 0) {
-      const HalfBondLanes& h = g.uniform_lanes(uniform_type);
-      for (int c = 0; c < 3; ++c) n[c] = h.normal[c];
-      s_own = h.lever_own;
-      s_other = h.lever_other;
-      k_s = h.shear_stiffness;
-      s_k_s = h.lever_shear;
-      k_n_excess = h.normal_excess;
-      k_b = h.bending_stiffness;
-      k_t_excess = h.twisting_excess;
-    } else {
-      const std::int32_t* type = g.types(slot) + first;
-      for (int l = 0; l < kLanes; ++l) {
-        const HalfBondType& h = g.type(type[l]);
-        for (int c = 0; c < 3; ++c) n[c][l] = h.normal[c];
-        s_own[l] = h.lever_own;
-        s_other[l] = h.lever_other;
-        k_s[l] = h.shear_stiffness;
-        s_k_s[l] = h.lever_shear;
-        k_n_excess[l] = h.normal_excess;
-        k_b[l] = h.bending_stiffness;
-        k_t_excess[l] = h.twisting_excess;
-      }
-    }
-    // du = (u_j - u_i) - (s_i theta_i + s_j theta_j) x n  (core/parallel_bond.hpp)
-    Doubles dt[3], a[3], f2{};
-    lever_term(s_own, s_other, t_i, t_j, dt, a);
-    HalfBondMotion<Doubles> m;
-    half_bond_response<kEnergy>(n, u_i, u_j, a, dt, k_s, s_k_s, k_n_excess, k_b, k_t_excess, force,
-                                torque, energy, f2, m);
-    if constexpr (kEnergy) {
-      for (int l = 0; l < kLanes; ++l) force_norm[l] += 0.5 * __builtin_sqrt(f2[l]);
-    }
-  }
-}
-
 /// What one thread's breaking pass writes besides forces.
 struct BreakingPass {
   std::vector<SlotEvent>* events = nullptr;  ///< this thread's damage steps (first ends only)
@@ -406,24 +384,23 @@ struct BreakingPass {
 };
 
 /// The exact failure law (update_bond_damage) for slot `slot` of kernel particle `k`, at the
-/// deformation the kernel computed (du, dtheta and n of that end, as gather_breaking_block has
-/// them): updates the slot's damage and kappa (softening), clears the slot if the bond breaks
+/// deformation the kernel computed (du, dtheta and n of that end, as gather_half_bonds has them):
+/// updates the slot's damage and kappa (softening), clears the slot if the bond breaks
 /// (GatherBonds::clear_slot), and, at the bond's first end, logs the step in `pass`. `u_own` is
 /// k's displacement.
 void assess_slot(GatherBonds& g, int k, int slot, const double du[3], const double dtheta[3],
                  const double n[3], const double u_own[3], BreakingPass& pass);
 
-/// The second screen of gather_breaking_block (see HalfBondFailure), for the lanes `near` of one
-/// slot, and the exact law where it holds.
+/// The second screen of the host's breaking kernel (see HalfBondFailure), for the lanes `near` of
+/// one slot, and the exact law where it holds.
 template <bool kSoften, bool kSlotStrength>
 [[gnu::always_inline]] inline void screen_slot(
     GatherBonds& g, int first, int slot, std::int32_t uniform_type, const lanes::Doubles (&n)[3],
-    const lanes::Doubles (&du)[3], const lanes::Doubles (&dt)[3], const lanes::Doubles& du_n,
-    const lanes::Doubles& dt_n, const lanes::Doubles (&n_cross_du)[3], const lanes::Doubles& du2,
-    const lanes::Doubles& dt2, const lanes::Mask& near, const lanes::Doubles (&u_i)[3],
-    BreakingPass& pass) {
+    const HalfBondMotion<lanes::Doubles>& m, const lanes::Doubles (&dt)[3], const lanes::Mask& near,
+    const lanes::Doubles (&u_i)[3], BreakingPass& pass) {
   using lanes::Doubles;
   using lanes::Mask;
+  using Ops = LaneOps<Doubles>;
   constexpr int kLanes = lanes::kCount;
   Doubles k_n{}, tension{}, shear{}, friction{}, bending{}, twisting{}, shear_stiffness2{};
   if (uniform_type > 0) {
@@ -459,23 +436,24 @@ template <bool kSoften, bool kSlotStrength>
   // 1e-12 |.|^2 that covers the rounding of the scalar law's own du - du_n n.
   constexpr double kSlack = 1e-12;
   const Doubles zero{};
-  const Doubles f_n = k_n * du_n;
-  const Doubles shear2 = n_cross_du[0] * n_cross_du[0] + n_cross_du[1] * n_cross_du[1] +
-                         n_cross_du[2] * n_cross_du[2] + kSlack * du2;
-  const Doubles bend2 = (1.0 + kSlack) * dt2 - dt_n * dt_n;
+  const Doubles f_n = k_n * m.du_n;
+  const Doubles shear2 = Ops::fmadd(
+      kSlack, m.du2,
+      Ops::fmadd(m.n_cross_du[2], m.n_cross_du[2],
+                 Ops::fmadd(m.n_cross_du[1], m.n_cross_du[1], m.n_cross_du[0] * m.n_cross_du[0])));
+  const Doubles bend2 = Ops::fmadd(1.0 + kSlack, m.dt2, -(m.dt_n * m.dt_n));
   // Tension: F_n + (4/R) |M_b| >= kappa T_t. Shear: |F_s| + (2/R) |M_t| >= kappa (T_c - tan(phi)
   // F_n).
-  const Doubles x = kappa * tension - f_n;
+  const Doubles x = Ops::fmadd(kappa, tension, -f_n);
   const Mask tension_near = (x <= zero) | (bending * bend2 >= x * x);
-  Doubles twist;
-  lanes::abs(dt_n, twist);
-  const Doubles y = kappa * (shear - friction * f_n) - twisting * twist;
+  const Doubles y =
+      Ops::fmadd(kappa, Ops::fmadd(-friction, f_n, shear), -(twisting * Ops::abs(m.dt_n)));
   const Mask shear_near = (y <= zero) | (shear_stiffness2 * shear2 >= y * y);
   const Mask check = near & (tension_near | shear_near);
   if (!lanes::any(check)) return;
   for (int l = 0; l < kLanes; ++l) {
     if (!check[l]) continue;
-    const double du_l[3] = {du[0][l], du[1][l], du[2][l]};
+    const double du_l[3] = {m.du[0][l], m.du[1][l], m.du[2][l]};
     const double dt_l[3] = {dt[0][l], dt[1][l], dt[2][l]};
     const double n_l[3] = {n[0][l], n[1][l], n[2][l]};
     const double u_l[3] = {u_i[0][l], u_i[1][l], u_i[2][l]};
@@ -483,127 +461,142 @@ template <bool kSoften, bool kSlotStrength>
   }
 }
 
-/// gather_bond_block with breaking: the same forces (from 1 - damage times the intact stiffnesses
-/// where bonds soften, kSoften), then the screens of HalfBondFailure and, where they hold, the
-/// exact law (assess_slot), which may clear a slot of this block: the break acts from the next
-/// cycle. kSlotStrength: strengths per slot (StrengthStorage::kSlots).
-///
-/// Both ends alike. Seen from the other end, a bond's type is the exact mirror image (n -> -n,
-/// s_own <-> s_other; GatherBonds) and its state arrives swapped (u_i <-> u_j, theta_i <->
-/// theta_j). The kernel computes dtheta = theta_j - theta_i (negated exactly: RN(b - a) =
-/// -RN(a - b)), a = sigma (theta_i + theta_j) + delta dtheta with sigma = (s_own + s_other) / 2
-/// (unchanged: addition commutes) and delta = (s_other - s_own) / 2 (negated), so both products
-/// keep their values and a is the same number from either end, however the compiler fuses the
-/// multiply-adds (the written form s_own theta_i + s_other theta_j would not be: a fused
-/// multiply-add rounds one product and not the other). Then a x n and u_j - u_i are negated
-/// exactly, so du is, and du_n = n.du, dtheta_n, |du|^2, |dtheta|^2 are sums of the same products
-/// in the same order: the screens see the same numbers and deformation_of() returns the same
-/// deformation at both ends. The exact law then gets the same inputs (the mirror types hold the
-/// same stiffnesses and strength, both slots the same damage and kappa, updated alike every
-/// cycle), so both ends decide alike, cycle by cycle, with no communication between them; the
-/// integrator checks it when it writes the table back (and tests compare the ends bit for bit).
-template <bool kEnergy, bool kSoften, bool kSlotStrength>
-[[gnu::always_inline]] inline void gather_breaking_block(
-    GatherBonds& g, int first, const GatherState& s, lanes::Doubles (&force)[3],
-    lanes::Doubles (&torque)[3], lanes::Doubles& energy, lanes::Doubles& force_norm,
-    BreakingPass& pass) {
-  using lanes::Doubles;
-  using lanes::Mask;
-  constexpr int kLanes = lanes::kCount;
-  Doubles u_i[3], t_i[3];
+/// The host's bond table seen from one block of lanes::kCount particles (first .. first + 7): the
+/// `Slots` of gather_half_bonds (contacts/half_bond.hpp). A slot that no particle of the block
+/// uses is skipped; a slot whose eight particles share a type loads its parameters as whole
+/// vectors (GatherBonds::uniform_lanes), and one whose other ends are consecutive loads their
+/// state as vectors; the rest is gathered lane by lane. An empty lane (type 0) computes a zero
+/// force, which adds +0 to sums that are never -0. Breaking: the two screens of HalfBondFailure
+/// (screen_measure, then screen_slot) and, where both hold, the exact law (assess_slot).
+class BlockSlots {
+ public:
+  using Lane = lanes::Doubles;
+  BlockSlots(GatherBonds& g, int first, const GatherState& s, BreakingPass* pass)
+      : g_(g),
+        first_(first),
+        state_(s),
+        pass_(pass),
+        block_type_(g.block_types(first / lanes::kCount)),
+        block_run_(g.block_runs(first / lanes::kCount)) {}
+
+  [[gnu::always_inline]] int width() const { return g_.width(); }
+  [[gnu::always_inline]] bool empty(int slot) const { return block_type_[slot] == 0; }
+
+  [[gnu::always_inline]] void other_state(int slot, Lane (&u_j)[3], Lane (&t_j)[3]) const {
+    const std::int32_t run = block_run_[slot];
+    if (run >= 0) {  // the other ends are consecutive particles: plain loads
+      for (int c = 0; c < 3; ++c) {
+        lanes::load_unaligned(state_.displacement[c] + run, u_j[c]);
+        lanes::load_unaligned(state_.rotation[c] + run, t_j[c]);
+      }
+    } else {
+      const std::int32_t* other = g_.neighbours(slot) + first_;
+      for (int c = 0; c < 3; ++c) {
+        lanes::gather(state_.displacement[c], other, u_j[c]);
+        lanes::gather(state_.rotation[c], other, t_j[c]);
+      }
+    }
+  }
+
+  template <int kMode>
+  [[gnu::always_inline]] void load(int slot, HalfBondLoad<Lane>& h) const {
+    constexpr bool kBreaking = breaks_bonds(kMode);
+    const std::int32_t uniform_type = block_type_[slot];
+    if (uniform_type > 0) {
+      const HalfBondLanes& t = g_.uniform_lanes(uniform_type);
+      for (int c = 0; c < 3; ++c) h.normal[c] = t.normal[c];
+      h.shear_stiffness = t.shear_stiffness;
+      h.lever_shear = t.lever_shear;
+      h.normal_excess = t.normal_excess;
+      h.bending_stiffness = t.bending_stiffness;
+      h.twisting_excess = t.twisting_excess;
+      if constexpr (kBreaking) {
+        const HalfBondFailureLanes& f = g_.failure_lanes(uniform_type);
+        h.lever_a = f.lever_mean;
+        h.lever_b = f.lever_half_difference;
+        if constexpr (!has_slot_strengths(kMode)) {
+          h.screen_displacement = f.screen_displacement;
+          h.screen_rotation = f.screen_rotation;
+        }
+      } else {
+        h.lever_a = t.lever_own;
+        h.lever_b = t.lever_other;
+      }
+    } else {
+      const std::int32_t* type = g_.types(slot) + first_;
+      for (int l = 0; l < lanes::kCount; ++l) load_lane<kMode>(g_.type(type[l]), type[l], l, h);
+    }
+    if constexpr (has_slot_strengths(kMode)) {
+      lanes::load(g_.slot_screen_displacement() + g_.cell(slot, first_), h.screen_displacement);
+      lanes::load(g_.slot_screen_rotation() + g_.cell(slot, first_), h.screen_rotation);
+    }
+  }
+
+  [[gnu::always_inline]] void damage(int slot, Lane& d) const {
+    lanes::load(g_.slot_damage() + g_.cell(slot, first_), d);
+  }
+
+  template <int kMode>
+  [[gnu::always_inline]] void assess(int slot, const Lane& measure, const Lane (&n)[3],
+                                     const HalfBondMotion<Lane>& m, const Lane (&dt)[3],
+                                     const Lane (&u_i)[3]) {
+    const lanes::Mask near = measure >= Lane{} + (1.0 - kScreenBound);
+    if (__builtin_expect(lanes::any(near), 0)) {
+      screen_slot<softens_bonds(kMode), has_slot_strengths(kMode)>(
+          g_, first_, slot, block_type_[slot], n, m, dt, near, u_i, *pass_);
+    }
+  }
+
+ private:
+  template <int kMode>
+  [[gnu::always_inline]] void load_lane(const HalfBondType& t, std::int32_t type, int l,
+                                        HalfBondLoad<Lane>& h) const {
+    for (int c = 0; c < 3; ++c) h.normal[c][l] = t.normal[c];
+    h.shear_stiffness[l] = t.shear_stiffness;
+    h.lever_shear[l] = t.lever_shear;
+    h.normal_excess[l] = t.normal_excess;
+    h.bending_stiffness[l] = t.bending_stiffness;
+    h.twisting_excess[l] = t.twisting_excess;
+    if constexpr (breaks_bonds(kMode)) {
+      const HalfBondFailure& f = g_.failure(type);
+      h.lever_a[l] = f.lever_mean;
+      h.lever_b[l] = f.lever_half_difference;
+      if constexpr (!has_slot_strengths(kMode)) {
+        h.screen_displacement[l] = f.screen_displacement;
+        h.screen_rotation[l] = f.screen_rotation;
+      }
+    } else {
+      h.lever_a[l] = t.lever_own;
+      h.lever_b[l] = t.lever_other;
+    }
+  }
+
+  GatherBonds& g_;
+  int first_;
+  const GatherState& state_;
+  BreakingPass* pass_;
+  const std::int32_t* block_type_;
+  const std::int32_t* block_run_;
+};
+
+/// Force and moment on the block of particles first .. first + lanes::kCount - 1 (first a multiple
+/// of lanes::kCount) from all their bonds (gather_half_bonds over BlockSlots), added to `force`
+/// and `torque`. With kEnergy, also adds half of each bond's strain energy and half its force
+/// magnitude (each bond is seen from both ends) to `energy` and `force_norm`. Inlined into the
+/// caller, so that it is compiled for the caller's instruction set (the explicit integrator's
+/// steps run the same loop through solvers/particle_step.hpp, solvers/cpu_backend.cpp).
+template <bool kEnergy>
+[[gnu::always_inline]] inline void gather_bond_block(
+    const GatherBonds& g, int first, const GatherState& s, lanes::Doubles (&force)[3],
+    lanes::Doubles (&torque)[3], lanes::Doubles& energy, lanes::Doubles& force_norm) {
+  lanes::Doubles u_i[3], t_i[3];
   for (int c = 0; c < 3; ++c) {
     lanes::load(s.displacement[c] + first, u_i[c]);
     lanes::load(s.rotation[c] + first, t_i[c]);
   }
-  const int block = first / kLanes;
-  const std::int32_t* block_type = g.block_types(block);
-  const std::int32_t* block_run = g.block_runs(block);
-  const Doubles screen_bound = Doubles{} + (1.0 - kScreenBound);
-  for (int slot = 0; slot < g.width(); ++slot) {
-    const std::int32_t uniform_type = block_type[slot];
-    if (uniform_type == 0) continue;
-
-    Doubles u_j[3], t_j[3];
-    const std::int32_t run = block_run[slot];
-    if (run >= 0) {
-      for (int c = 0; c < 3; ++c) {
-        lanes::load_unaligned(s.displacement[c] + run, u_j[c]);
-        lanes::load_unaligned(s.rotation[c] + run, t_j[c]);
-      }
-    } else {
-      const std::int32_t* other = g.neighbours(slot) + first;
-      for (int c = 0; c < 3; ++c) {
-        lanes::gather(s.displacement[c], other, u_j[c]);
-        lanes::gather(s.rotation[c], other, t_j[c]);
-      }
-    }
-    Doubles n[3] = {}, sigma{}, delta{}, k_s{}, s_k_s{}, k_n_excess{}, k_b{}, k_t_excess{},
-            alpha{}, beta{};
-    if (uniform_type > 0) {
-      const HalfBondLanes& h = g.uniform_lanes(uniform_type);
-      const HalfBondFailureLanes& f = g.failure_lanes(uniform_type);
-      for (int c = 0; c < 3; ++c) n[c] = h.normal[c];
-      sigma = f.lever_mean;
-      delta = f.lever_half_difference;
-      k_s = h.shear_stiffness;
-      s_k_s = h.lever_shear;
-      k_n_excess = h.normal_excess;
-      k_b = h.bending_stiffness;
-      k_t_excess = h.twisting_excess;
-      if constexpr (!kSlotStrength) {
-        alpha = f.screen_displacement;
-        beta = f.screen_rotation;
-      }
-    } else {
-      const std::int32_t* type = g.types(slot) + first;
-      for (int l = 0; l < kLanes; ++l) {
-        const HalfBondType& h = g.type(type[l]);
-        const HalfBondFailure& f = g.failure(type[l]);
-        for (int c = 0; c < 3; ++c) n[c][l] = h.normal[c];
-        sigma[l] = f.lever_mean;
-        delta[l] = f.lever_half_difference;
-        k_s[l] = h.shear_stiffness;
-        s_k_s[l] = h.lever_shear;
-        k_n_excess[l] = h.normal_excess;
-        k_b[l] = h.bending_stiffness;
-        k_t_excess[l] = h.twisting_excess;
-        if constexpr (!kSlotStrength) {
-          alpha[l] = f.screen_displacement;
-          beta[l] = f.screen_rotation;
-        }
-      }
-    }
-    if constexpr (kSlotStrength) {
-      lanes::load(g.slot_screen_displacement() + g.cell(slot, first), alpha);
-      lanes::load(g.slot_screen_rotation() + g.cell(slot, first), beta);
-    }
-    if constexpr (kSoften) {
-      Doubles damage;
-      lanes::load(g.slot_damage() + g.cell(slot, first), damage);
-      const Doubles remaining = 1.0 - damage;
-      k_s = remaining * k_s;
-      s_k_s = remaining * s_k_s;
-      k_n_excess = remaining * k_n_excess;
-      k_b = remaining * k_b;
-      k_t_excess = remaining * k_t_excess;
-    }
-    // du = (u_j - u_i) - a x n with a = sigma (theta_i + theta_j) + delta dtheta (see above).
-    Doubles dt[3], a[3], f2{};
-    symmetric_lever_term(sigma, delta, t_i, t_j, dt, a);
-    HalfBondMotion<Doubles> m;
-    half_bond_response<kEnergy>(n, u_i, u_j, a, dt, k_s, s_k_s, k_n_excess, k_b, k_t_excess, force,
-                                torque, energy, f2, m);
-    if constexpr (kEnergy) {
-      for (int l = 0; l < kLanes; ++l) force_norm[l] += 0.5 * __builtin_sqrt(f2[l]);
-    }
-    Doubles measure;
-    screen_measure(alpha, beta, m, measure);
-    const Mask near = measure >= screen_bound;
-    if (__builtin_expect(lanes::any(near), 0)) {
-      screen_slot<kSoften, kSlotStrength>(g, first, slot, uniform_type, n, m.du, dt, m.du_n, m.dt_n,
-                                          m.n_cross_du, m.du2, m.dt2, near, u_i, pass);
-    }
-  }
+  // The elastic loop reads the table only (it writes it when bonds break).
+  BlockSlots slots(const_cast<GatherBonds&>(g), first, s, nullptr);
+  gather_half_bonds<kEnergy, kElasticMode>(slots, u_i, t_i, force, torque, energy, force_norm);
 }
 
 #pragma GCC diagnostic pop

@@ -1,13 +1,13 @@
 #pragma once
 /// \file
-/// One bond seen from one of its particles: the half-bond math of the gather kernels and the
-/// failure law's decision on it, written once for every backend (core/host_device.hpp). The host's
-/// fused kernel (contacts/bond_kernel.hpp) instantiates the templates below with T =
-/// lanes::Doubles, eight particles in the lanes of GCC vector extensions; the CUDA kernel
-/// (solvers/cuda_backend.cu) with T = double, one particle per thread and a warp of 32 particles
-/// side by side. Both evaluate every expression in the same order, so that without fused
-/// multiply-adds (GCC's ISO C++ mode contracts none; nvcc is told -fmad=false) they compute the
-/// same numbers to the bit.
+/// One bond seen from one of its particles: the half-bond math of the gather kernels, the loop over
+/// a particle's bonds (gather_half_bonds) and the failure law's decision on a bond, written once
+/// for every backend (core/host_device.hpp). The host's SIMD kernel instantiates the templates
+/// below with T = lanes::Doubles, eight particles in the lanes of GCC vector extensions
+/// (contacts/bond_kernel.hpp: BlockSlots); the CUDA kernel and its host emulation with T = double,
+/// one particle (solvers/particle_step.hpp: ParticleSlots). Both evaluate every expression in the
+/// same order with the exactly rounded operations of core/lane_ops.hpp (every multiply-add an
+/// explicit fused one), so they compute the same numbers to the bit.
 ///
 /// No Eigen and no vector extension here: nvcc compiles this header.
 
@@ -16,6 +16,7 @@
 
 #include "core/bond_failure_law.hpp"
 #include "core/host_device.hpp"
+#include "core/lane_ops.hpp"
 
 namespace plydem {
 
@@ -39,20 +40,20 @@ struct BondStiffness {
 /// The deformation from the contact point's relative displacement `du`, the relative rotation
 /// `dtheta` and the unit normal `n`, as seen from one end. Seen from the other end all three are
 /// negated exactly, and the result is the same to the bit: every product keeps its value
-/// ((-a)(-b) = ab), every difference is negated (RN(-x) = -RN(x)), and du_n, the norms and the
-/// sums are computed in the same order, with or without fused multiply-adds.
+/// ((-a)(-b) = ab), every fused difference is negated (RN(-x) = -RN(x)), and du_n, the norms and
+/// the sums are computed in the same order.
 PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE BondDeformation deformation_of(const double du[3],
                                                                       const double dtheta[3],
                                                                       const double n[3]) {
   BondDeformation d;
-  d.normal = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
-  d.twist = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
+  d.normal = fmadd(n[2], du[2], fmadd(n[1], du[1], n[0] * du[0]));
+  d.twist = fmadd(n[2], dtheta[2], fmadd(n[1], dtheta[1], n[0] * dtheta[0]));
   double shear2 = 0, bend2 = 0;
   for (int c = 0; c < 3; ++c) {
-    const double s = du[c] - d.normal * n[c];
-    const double b = dtheta[c] - d.twist * n[c];
-    shear2 += s * s;
-    bend2 += b * b;
+    const double s = fmadd(-d.normal, n[c], du[c]);
+    const double b = fmadd(-d.twist, n[c], dtheta[c]);
+    shear2 = fmadd(s, s, shear2);
+    bend2 = fmadd(b, b, bend2);
   }
   d.shear = std::sqrt(shear2);
   d.bend = std::sqrt(bend2);
@@ -143,7 +144,7 @@ struct HalfBondType {
 
 /// What breaking adds to a half-bond type (a GatherBonds built with breaking on). The lever term
 /// of du is computed as (sigma (theta_own + theta_other) + delta (theta_other - theta_own)) x n,
-/// which both ends of a bond evaluate to the same number (gather_breaking_block). The screen
+/// which both ends of a bond evaluate to the same number (gather_half_bonds). The screen
 /// constants let the kernel skip the failure law for bonds far from their strength:
 ///  - alpha |du|^2 + beta |dtheta|^2 >= 1 whenever U >= 1 (a bound: |du_n|, |du_s| <= |du|,
 ///    (x + y)^2 <= 2 (x^2 + y^2)), with alpha = 2 max(k_n^2 / T_t^2, (k_s + tan(phi) k_n)^2 /
@@ -209,11 +210,11 @@ PLYDEM_HOST_DEVICE inline SlotEvent damage_event(int bond, long cycle,
   e.mode = update.mode;
   e.damage_before = damage_before;
   e.damage_after = update.damage;
-  const double du_n = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
-  const double dt_n = n[0] * dtheta[0] + n[1] * dtheta[1] + n[2] * dtheta[2];
+  const double du_n = fmadd(n[2], du[2], fmadd(n[1], du[1], n[0] * du[0]));
+  const double dt_n = fmadd(n[2], dtheta[2], fmadd(n[1], dtheta[1], n[0] * dtheta[0]));
   for (int c = 0; c < 3; ++c) {
-    e.force[c] = k.normal * du_n * n[c] + k.shear * (du[c] - du_n * n[c]);
-    e.moment[c] = k.twisting * dt_n * n[c] + k.bending * (dtheta[c] - dt_n * n[c]);
+    e.force[c] = fmadd(k.normal * du_n, n[c], k.shear * fmadd(-du_n, n[c], du[c]));
+    e.moment[c] = fmadd(k.twisting * dt_n, n[c], k.bending * fmadd(-dt_n, n[c], dtheta[c]));
     e.displacement[c] = displacement[c];
   }
   return e;
@@ -227,19 +228,20 @@ PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void lever_term(const T& s_own, const T& 
                                                        const T (&t_i)[3], const T (&t_j)[3],
                                                        T (&dt)[3], T (&a)[3]) {
   for (int c = 0; c < 3; ++c) dt[c] = t_j[c] - t_i[c];
-  for (int c = 0; c < 3; ++c) a[c] = s_own * t_i[c] + s_other * t_j[c];
+  for (int c = 0; c < 3; ++c) a[c] = LaneOps<T>::fmadd(s_other, t_j[c], s_own * t_i[c]);
 }
 
 /// The same in the form the breaking kernels compute, the same number from either end of a bond
-/// (gather_breaking_block, "Both ends alike"): a = sigma (theta_i + theta_j) + delta dtheta with
-/// sigma = (s_own + s_other) / 2 and delta = (s_other - s_own) / 2.
+/// (gather_half_bonds, "Both ends alike"): a = sigma (theta_i + theta_j) + delta dtheta with
+/// sigma = (s_own + s_other) / 2 and delta = (s_other - s_own) / 2. From the other end delta and
+/// dtheta are both negated, so the fused product keeps its value and a is the same number.
 template <class T>
 PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void symmetric_lever_term(const T& sigma, const T& delta,
                                                                  const T (&t_i)[3],
                                                                  const T (&t_j)[3], T (&dt)[3],
                                                                  T (&a)[3]) {
   for (int c = 0; c < 3; ++c) dt[c] = t_j[c] - t_i[c];
-  for (int c = 0; c < 3; ++c) a[c] = sigma * (t_i[c] + t_j[c]) + delta * dt[c];
+  for (int c = 0; c < 3; ++c) a[c] = LaneOps<T>::fmadd(delta, dt[c], sigma * (t_i[c] + t_j[c]));
 }
 
 /// What one half-bond computes besides its force and moment: the deformation the failure law and
@@ -269,32 +271,38 @@ PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void half_bond_response(
     const T (&n)[3], const T (&u_i)[3], const T (&u_j)[3], const T (&a)[3], const T (&dt)[3],
     const T& k_s, const T& s_k_s, const T& k_n_excess, const T& k_b, const T& k_t_excess,
     T (&force)[3], T (&torque)[3], T& energy, T& force2, HalfBondMotion<T>& m) {
-  m.du[0] = (u_j[0] - u_i[0]) - (a[1] * n[2] - a[2] * n[1]);
-  m.du[1] = (u_j[1] - u_i[1]) - (a[2] * n[0] - a[0] * n[2]);
-  m.du[2] = (u_j[2] - u_i[2]) - (a[0] * n[1] - a[1] * n[0]);
-  m.du_n = n[0] * m.du[0] + n[1] * m.du[1] + n[2] * m.du[2];
+  using Ops = LaneOps<T>;
+  // a x n, each component one rounded product and one fused: from the other end of a bond (a the
+  // same, n negated) it is negated exactly, as u_j - u_i is.
+  m.du[0] = (u_j[0] - u_i[0]) - Ops::fmadd(a[1], n[2], -(a[2] * n[1]));
+  m.du[1] = (u_j[1] - u_i[1]) - Ops::fmadd(a[2], n[0], -(a[0] * n[2]));
+  m.du[2] = (u_j[2] - u_i[2]) - Ops::fmadd(a[0], n[1], -(a[1] * n[0]));
+  m.du_n = Ops::fmadd(n[2], m.du[2], Ops::fmadd(n[1], m.du[1], n[0] * m.du[0]));
   const T normal_part = k_n_excess * m.du_n;
   for (int c = 0; c < 3; ++c) {
-    force[c] += k_s * m.du[c];
-    force[c] += normal_part * n[c];
+    force[c] = Ops::fmadd(k_s, m.du[c], force[c]);
+    force[c] = Ops::fmadd(normal_part, n[c], force[c]);
   }
-  m.n_cross_du[0] = n[1] * m.du[2] - n[2] * m.du[1];
-  m.n_cross_du[1] = n[2] * m.du[0] - n[0] * m.du[2];
-  m.n_cross_du[2] = n[0] * m.du[1] - n[1] * m.du[0];
-  m.dt_n = n[0] * dt[0] + n[1] * dt[1] + n[2] * dt[2];
+  m.n_cross_du[0] = Ops::fmadd(n[1], m.du[2], -(n[2] * m.du[1]));
+  m.n_cross_du[1] = Ops::fmadd(n[2], m.du[0], -(n[0] * m.du[2]));
+  m.n_cross_du[2] = Ops::fmadd(n[0], m.du[1], -(n[1] * m.du[0]));
+  m.dt_n = Ops::fmadd(n[2], dt[2], Ops::fmadd(n[1], dt[1], n[0] * dt[0]));
   const T twist_part = k_t_excess * m.dt_n;
   for (int c = 0; c < 3; ++c) {
-    torque[c] += s_k_s * m.n_cross_du[c];
-    torque[c] += k_b * dt[c];
-    torque[c] += twist_part * n[c];
+    torque[c] = Ops::fmadd(s_k_s, m.n_cross_du[c], torque[c]);
+    torque[c] = Ops::fmadd(k_b, dt[c], torque[c]);
+    torque[c] = Ops::fmadd(twist_part, n[c], torque[c]);
   }
-  m.du2 = m.du[0] * m.du[0] + m.du[1] * m.du[1] + m.du[2] * m.du[2];
-  m.dt2 = dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2];
+  m.du2 = Ops::fmadd(m.du[2], m.du[2], Ops::fmadd(m.du[1], m.du[1], m.du[0] * m.du[0]));
+  m.dt2 = Ops::fmadd(dt[2], dt[2], Ops::fmadd(dt[1], dt[1], dt[0] * dt[0]));
   if constexpr (kEnergy) {
     // E = 1/2 (k_s |du|^2 + (k_n - k_s) du_n^2 + k_b |dtheta|^2 + (k_t - k_b) dtheta_n^2), half
     // of it per end; |F|^2 = k_s^2 |du|^2 + (k_n^2 - k_s^2) du_n^2.
-    energy += 0.25 * (k_s * m.du2 + normal_part * m.du_n + k_b * m.dt2 + twist_part * m.dt_n);
-    force2 = k_s * k_s * m.du2 + normal_part * (2.0 * k_s * m.du_n + normal_part);
+    const T twice = Ops::fmadd(
+        twist_part, m.dt_n, Ops::fmadd(k_b, m.dt2, Ops::fmadd(normal_part, m.du_n, k_s * m.du2)));
+    energy = Ops::fmadd(0.25, twice, energy);
+    force2 =
+        Ops::fmadd(normal_part, Ops::fmadd(2.0 * k_s, m.du_n, normal_part), (k_s * k_s) * m.du2);
   }
 }
 
@@ -304,7 +312,106 @@ PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void half_bond_response(
 template <class T>
 PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void screen_measure(const T& alpha, const T& beta,
                                                            const HalfBondMotion<T>& m, T& out) {
-  out = alpha * m.du2 + beta * m.dt2;
+  out = LaneOps<T>::fmadd(alpha, m.du2, beta * m.dt2);
+}
+
+/// The bond loop's variants: elastic, or breaking with strengths per type or per slot, brittle or
+/// softening (contacts/bond_kernel.hpp StrengthStorage, GatherBreaking).
+enum KernelMode : int {
+  kElasticMode = 0,
+  kBrittleTypes = 1,
+  kBrittleSlots = 2,
+  kSofteningTypes = 3,
+  kSofteningSlots = 4
+};
+
+/// What a mode computes.
+constexpr bool breaks_bonds(int mode) {
+  return mode != kElasticMode;
+}
+constexpr bool softens_bonds(int mode) {
+  return mode == kSofteningTypes || mode == kSofteningSlots;
+}
+constexpr bool has_slot_strengths(int mode) {
+  return mode == kBrittleSlots || mode == kSofteningSlots;
+}
+
+/// One slot's half-bond, as gather_half_bonds loads it (HalfBondType; breaking: the lever terms
+/// and screen constants of HalfBondFailure).
+template <class T>
+struct HalfBondLoad {
+  T normal[3];
+  /// Elastic: s_own and s_other (lever_term); breaking: sigma and delta (symmetric_lever_term).
+  T lever_a, lever_b;
+  T shear_stiffness, lever_shear, normal_excess, bending_stiffness, twisting_excess;
+  T screen_displacement, screen_rotation;  ///< breaking: alpha and beta
+};
+
+/// The force and moment on one particle (T = double) or on one block of particles (T a vector of
+/// lanes) from all its bonds, added to `force` and `torque`, written once for every backend. With
+/// kEnergy, also half of each bond's strain energy and half its force magnitude (each bond is seen
+/// from both ends), added to `energy` and `force_norm`. Breaking modes (kMode) use the intact
+/// stiffnesses times 1 - damage where bonds soften, and hand each bond's deformation to the
+/// slots' failure screen and law (Slots::assess), which may empty a slot: the break acts from the
+/// next cycle.
+///
+/// `Slots` is how a backend keeps the bond table (the host's block tables, BlockSlots in
+/// contacts/bond_kernel.hpp; the device's per-particle table, ParticleSlots in
+/// solvers/particle_step.hpp): width(); empty(slot) (no particle of the lanes has a bond in it);
+/// other_state(slot, u_j, theta_j); load<kMode>(slot, HalfBondLoad&); damage(slot, d) (softening);
+/// assess<kMode>(slot, measure, n, motion, dtheta, u_i) (breaking).
+///
+/// Both ends alike (breaking). Seen from the other end, a bond's type is the exact mirror image
+/// (n -> -n, s_own <-> s_other; GatherBonds) and its state arrives swapped (u_i <-> u_j, theta_i
+/// <-> theta_j). The kernel computes dtheta = theta_j - theta_i (negated exactly: RN(b - a) = -RN(a
+/// - b)), a = sigma (theta_i + theta_j) + delta dtheta with sigma = (s_own + s_other) / 2
+/// (unchanged: addition commutes) and delta = (s_other - s_own) / 2 (negated), so both products
+/// keep their values and a is the same number from either end. Then a x n and u_j - u_i are
+/// negated exactly, so du is, and du_n = n.du, dtheta_n, |du|^2, |dtheta|^2 are sums of the same
+/// products in the same order: the screens see the same numbers and deformation_of() returns the
+/// same deformation at both ends. The exact law then gets the same inputs (the mirror types hold
+/// the same stiffnesses and strength, both slots the same damage and kappa, updated alike every
+/// cycle), so both ends decide alike, cycle by cycle, with no communication between them; the
+/// integrator checks it when it writes the table back (and tests compare the ends bit for bit).
+template <bool kEnergy, int kMode, class Slots, class T>
+PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void gather_half_bonds(Slots& slots, const T (&u_i)[3],
+                                                              const T (&t_i)[3], T (&force)[3],
+                                                              T (&torque)[3], T& energy,
+                                                              T& force_norm) {
+  using Ops = LaneOps<T>;
+  for (int slot = 0; slot < slots.width(); ++slot) {
+    if (slots.empty(slot)) continue;
+    T u_j[3], t_j[3];
+    slots.other_state(slot, u_j, t_j);
+    HalfBondLoad<T> h;
+    slots.template load<kMode>(slot, h);
+    if constexpr (softens_bonds(kMode)) {
+      T damage;
+      slots.damage(slot, damage);
+      const T remaining = 1.0 - damage;
+      h.shear_stiffness = remaining * h.shear_stiffness;
+      h.lever_shear = remaining * h.lever_shear;
+      h.normal_excess = remaining * h.normal_excess;
+      h.bending_stiffness = remaining * h.bending_stiffness;
+      h.twisting_excess = remaining * h.twisting_excess;
+    }
+    T dt[3], a[3], f2{};
+    if constexpr (breaks_bonds(kMode)) {
+      symmetric_lever_term(h.lever_a, h.lever_b, t_i, t_j, dt, a);
+    } else {
+      lever_term(h.lever_a, h.lever_b, t_i, t_j, dt, a);
+    }
+    HalfBondMotion<T> m;
+    half_bond_response<kEnergy>(h.normal, u_i, u_j, a, dt, h.shear_stiffness, h.lever_shear,
+                                h.normal_excess, h.bending_stiffness, h.twisting_excess, force,
+                                torque, energy, f2, m);
+    if constexpr (kEnergy) force_norm = Ops::fmadd(0.5, Ops::sqrt(f2), force_norm);
+    if constexpr (breaks_bonds(kMode)) {
+      T measure;
+      screen_measure(h.screen_displacement, h.screen_rotation, m, measure);
+      slots.template assess<kMode>(slot, measure, h.normal, m, dt, u_i);
+    }
+  }
 }
 
 }  // namespace plydem

@@ -44,4 +44,9 @@ inline double seconds_since(Stopwatch::Clock::time_point start) {
   return std::chrono::duration<double>(Stopwatch::Clock::now() - start).count();
 }
 
+/// Seconds from `from` to `to`.
+inline double seconds_between(Stopwatch::Clock::time_point from, Stopwatch::Clock::time_point to) {
+  return std::chrono::duration<double>(to - from).count();
+}
+
 }  // namespace plydem

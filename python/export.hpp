@@ -23,6 +23,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "solvers/backend_kind.hpp"
 
 namespace plydem::python {
 
@@ -56,11 +57,11 @@ void export_strength_settings(py::module_& m);  // StrengthSettings
 void export_strength_test(py::module_& m);      // strength_test
 void export_output(py::module_& m);             // write_vtu
 
-// What the backends a user chooses from are (solvers/device_backend.hpp, backend_choices()), as
-// the command line's --backend describes them.
-inline constexpr char kBackendHelp[] =
-    "'cpu' (SIMD kernel, OpenMP threads) or 'cuda' (one CUDA device; a build with "
-    "-DPLYDEM_CUDA=ON)";
+// What the backends a user chooses from are (solvers/backend_kind.hpp), as the command line's
+// --backend describes them.
+inline std::string backend_help() {
+  return plydem::backend_help("'");
+}
 
 // A default T with the keyword arguments set as attributes (a TypeError for an unknown one).
 template <class T>

@@ -183,7 +183,7 @@ void export_tension_test(py::module_& m) {
           [](TensionSettings& s, const std::string& v) {
             s.explicit_settings.backend = parse_backend_choice(v);
           },
-          (std::string("explicit: where the dynamics run: ") + kBackendHelp).c_str())
+          (std::string("explicit: where the dynamics run: ") + backend_help()).c_str())
       .def("validate", &TensionSettings::validate, "Raises plydem.Error naming a bad setting.");
 
   m.def(

@@ -241,7 +241,7 @@ void export_explicit_integrator(py::module_& m) {
            (std::string("ExplicitIntegrator(model, damping=0.7, safety=0.8, time_step=0, "
                         "backend='cpu'): time_step 0 = safety times the critical step; backend: "
                         "where the cycles run, ") +
-            kBackendHelp + ". Raises plydem.Error for bad settings or model.")
+            backend_help() + ". Raises plydem.Error for bad settings or model.")
                .c_str())
       .def_property_readonly(
           "time_step", [](const PyIntegrator& x) { return x.integrator.time_step(); }, "[s]")

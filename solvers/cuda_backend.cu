@@ -1,7 +1,9 @@
 // The CUDA backend of the explicit integrator (solvers/device_backend.hpp): one thread per
 // particle runs solvers/particle_step.hpp, the same code the host emulation runs and the same
 // half-bond and failure-law templates the host's SIMD kernel runs (contacts/half_bond.hpp), in
-// fp64, compiled with -fmad=false so that no multiply-add is fused where the host rounds twice.
+// fp64. The kernel's multiply-adds are explicit fused ones (core/lane_ops.hpp); -fmad=false keeps
+// nvcc from fusing the others (the exact failure law of core/bond_failure_law.hpp, which the host
+// evaluates in baseline x86-64 code, where no multiply-add is fused either).
 //
 // Gather form: a thread writes only its own particle's state, velocities, forces and slots, so the
 // forces need no atomics and a run is bitwise reproducible. Every array stays on the device for a
@@ -155,16 +157,6 @@ void launch_step(int mode, const ParticleStepView& v, int grid) {
   }
 }
 
-bool is_breaking(int mode) {
-  return mode != kElasticMode;
-}
-bool has_slot_strengths(int mode) {
-  return mode == kBrittleSlots || mode == kSofteningSlots;
-}
-bool is_softening(int mode) {
-  return mode == kSofteningTypes || mode == kSofteningSlots;
-}
-
 // The event log's capacity: every bond's first end may log one step per cycle, and a batch stops
 // after the first cycle with a step, so one per bond would always do; it is capped (a cycle that
 // breaks more bonds at once than this is reported as an error, not dropped).
@@ -183,25 +175,15 @@ class CudaBackend final : public DeviceBackend {
   std::string describe() const override { return name_; }
 
   std::size_t bytes_needed(const DeviceArrays& a) const override {
-    const std::size_t p = static_cast<std::size_t>(a.padded);
-    const std::size_t cells = p * static_cast<std::size_t>(a.width);
-    // State (2 x 6), velocities (6), inverse masses (2), report forces (6), partials (6), block
-    // partials (6 / 8), motion classes (1 byte); the table's neighbours and types.
-    std::size_t bytes = p * sizeof(double) * (12 + 6 + 2 + 6 + kParticlePartials) +
-                        p * kParticlePartials + p + cells * 2 * sizeof(std::int32_t) +
-                        static_cast<std::size_t>(a.type_count) * sizeof(HalfBondType);
-    if (is_breaking(a.mode)) {
-      bytes += 2 * p * sizeof(double) + cells * sizeof(std::int32_t) +
-               static_cast<std::size_t>(a.type_count) * sizeof(HalfBondFailure) +
-               event_capacity(a) * sizeof(SlotEvent);
-    }
-    if (has_slot_strengths(a.mode)) bytes += 4 * cells * sizeof(double);
-    if (is_softening(a.mode)) bytes += 2 * cells * sizeof(double);
+    // The kernel's arrays, the block partials (6 / 8 per particle) and the event log.
+    std::size_t bytes = kernel_array_bytes(a.sizes) +
+                        a.sizes.count(ArrayExtent::kPartials) / 8 * sizeof(double);
+    if (breaks_bonds(a.sizes.mode)) bytes += event_capacity(a.sizes) * sizeof(SlotEvent);
     return bytes;
   }
 
   void upload(const DeviceArrays& a) override {
-    require(a.padded % 8 == 0, "CUDA backend: the kernel's particles come in blocks of eight");
+    require(a.sizes.padded % 8 == 0, "CUDA backend: the kernel's particles come in blocks of eight");
     const std::size_t needed = bytes_needed(a);
     std::size_t free = 0, total = 0;
     check(cudaMemGetInfo(&free, &total), "cudaMemGetInfo");
@@ -209,86 +191,28 @@ class CudaBackend final : public DeviceBackend {
     require(needed <= free + held,
             text("CUDA backend: the model needs ", needed * 1e-9, " GB of device memory, ",
                  (free + held) * 1e-9, " GB of the device's ", total * 1e-9, " GB are free"));
-    arrays_ = a;
-    const std::size_t p = static_cast<std::size_t>(a.padded);
-    const std::size_t cells = p * static_cast<std::size_t>(a.width);
-    for (int b = 0; b < 2; ++b)
-      for (int c = 0; c < 3; ++c) {
-        displacement_[b][c].upload(a.displacement[b][c], p, "displacements");
-        rotation_[b][c].upload(a.rotation[b][c], p, "rotations");
-      }
-    for (int c = 0; c < 3; ++c) {
-      velocity_[c].upload(a.velocity[c], p, "velocities");
-      angular_velocity_[c].upload(a.angular_velocity[c], p, "angular velocities");
-      force_[c].zero(p, "forces");
-      torque_[c].zero(p, "torques");
-    }
-    inverse_mass_.upload(a.inverse_mass, p, "inverse masses");
-    inverse_inertia_.upload(a.inverse_inertia, p, "inverse moments of inertia");
-    neighbour_.upload(a.neighbour, cells, "the bond table's neighbours");
-    type_.upload(a.type, cells, "the bond table's types");
-    types_.upload(a.types, static_cast<std::size_t>(a.type_count), "the half-bond types");
-    partial_.zero(p * kParticlePartials, "report partials");
-    block_sums_.zero(p / 8 * kParticlePartials, "report block sums");
+    sizes_ = a.sizes;
+    upload_kernel_arrays(own_, a);
+    block_sums_.zero(a.sizes.count(ArrayExtent::kPartials) / 8, "report block sums");
     sums_.zero(kParticlePartials, "report sums");
     stop_.zero(1, "the stop flag");
     event_count_.zero(1, "the event counter");
-    if (is_breaking(a.mode)) {
-      failure_.upload(a.failure, static_cast<std::size_t>(a.type_count), "the failure data");
-      slot_bond_.upload(a.slot_bond, cells, "the slots' bonds");
-      work_sum_.upload(a.work_sum, p, "the boundary work sums");
-      damping_sum_.upload(a.damping_sum, p, "the damping sums");
-      events_.resize(event_capacity(a), "the event log");
-    }
-    if (has_slot_strengths(a.mode)) {
-      slot_alpha_.upload(a.slot_alpha, cells, "the slots' screen constants");
-      slot_beta_.upload(a.slot_beta, cells, "the slots' screen constants");
-      slot_tensile_.upload(a.slot_tensile, cells, "the slots' tensile strengths");
-      slot_cohesion_.upload(a.slot_cohesion, cells, "the slots' cohesions");
-    }
-    if (is_softening(a.mode)) {
-      slot_damage_.upload(a.slot_damage, cells, "the slots' damage");
-      slot_kappa_.upload(a.slot_kappa, cells, "the slots' kappa");
-    }
-    upload_motions(a);
+    if (breaks_bonds(a.sizes.mode)) events_.resize(event_capacity(a.sizes), "the event log");
   }
 
   void upload_motions(const DeviceArrays& a) override {
-    motion_.upload(a.motion, static_cast<std::size_t>(a.padded), "the motion classes");
-    classes_.upload(a.classes, static_cast<std::size_t>(a.class_count), "the prescribed motions");
+    sizes_.class_count = a.sizes.class_count;
+    upload_motion_arrays(own_, a);
   }
 
   DeviceBatch run_cycles(long cycles, int parity, bool report_last, long first_cycle, double dt,
                          double alpha) override {
     ParticleStepView v;
-    v.padded = arrays_.padded;
-    v.width = arrays_.width;
-    for (int c = 0; c < 3; ++c) {
-      v.velocity[c] = velocity_[c].data();
-      v.angular_velocity[c] = angular_velocity_[c].data();
-      v.force_out[c] = force_[c].data();
-      v.torque_out[c] = torque_[c].data();
-    }
-    v.inverse_mass = inverse_mass_.data();
-    v.inverse_inertia = inverse_inertia_.data();
-    v.motion = motion_.data();
-    v.classes = classes_.data();
-    v.neighbour = neighbour_.data();
-    v.type = type_.data();
-    v.types = types_.data();
+    v.a = kernel_view(own_);
+    v.padded = sizes_.padded;
+    v.width = sizes_.width;
     v.dt = dt;
     v.alpha = alpha;
-    v.failure = failure_.data();
-    v.slot_bond = slot_bond_.data();
-    v.slot_alpha = slot_alpha_.data();
-    v.slot_beta = slot_beta_.data();
-    v.slot_tensile = slot_tensile_.data();
-    v.slot_cohesion = slot_cohesion_.data();
-    v.slot_damage = slot_damage_.data();
-    v.slot_kappa = slot_kappa_.data();
-    v.work_sum = work_sum_.data();
-    v.damping_sum = damping_sum_.data();
-    v.partial = partial_.data();
     v.stop = stop_.data();
     v.events = events_.data();
     v.event_count = event_count_.data();
@@ -298,6 +222,7 @@ class CudaBackend final : public DeviceBackend {
     const long grid_blocks = (static_cast<long>(v.padded) + kThreads - 1) / kThreads;
     require(grid_blocks <= 2147483647L, "CUDA backend: too many particles for one grid");
     const int grid = static_cast<int>(grid_blocks);
+    const bool breaking = breaks_bonds(sizes_.mode);
     // Launches are queued; the stop flag makes the cycles after a damage step return at once. A
     // batch is cut into pieces so that a break found early does not leave many empty launches.
     constexpr long kPiece = 1024;
@@ -307,24 +232,18 @@ class CudaBackend final : public DeviceBackend {
     while (launched < cycles && stop == 0) {
       const long piece = std::min(kPiece, cycles - launched);
       for (long s = launched; s < launched + piece; ++s) {
-        const int in = static_cast<int>((parity + s) & 1), out = 1 - in;
-        for (int c = 0; c < 3; ++c) {
-          v.displacement_in[c] = displacement_[in][c].data();
-          v.rotation_in[c] = rotation_[in][c].data();
-          v.displacement_out[c] = displacement_[out][c].data();
-          v.rotation_out[c] = rotation_[out][c].data();
-        }
+        v.parity = static_cast<int>((parity + s) & 1);
         v.cycle = first_cycle + s;
         v.batch_cycle = static_cast<int>(s);
         if (report_last && s + 1 == cycles) {
-          launch_step<true>(arrays_.mode, v, grid);
+          launch_step<true>(sizes_.mode, v, grid);
         } else {
-          launch_step<false>(arrays_.mode, v, grid);
+          launch_step<false>(sizes_.mode, v, grid);
         }
         check(cudaGetLastError(), "the step kernel's launch");
       }
       launched += piece;
-      if (is_breaking(arrays_.mode)) {
+      if (breaking) {
         check(cudaMemcpy(&stop, stop_.data(), sizeof(int), cudaMemcpyDeviceToHost),
               "reading the stop flag");
       }
@@ -332,77 +251,50 @@ class CudaBackend final : public DeviceBackend {
     check(cudaDeviceSynchronize(), "the step kernels");
     batch.cycles = stop != 0 ? stop : cycles;
     batch.reported = report_last && batch.cycles == cycles;
-    if (is_breaking(arrays_.mode)) {
-      unsigned count = 0;
-      check(cudaMemcpy(&count, event_count_.data(), sizeof(unsigned), cudaMemcpyDeviceToHost),
-            "reading the event counter");
-      require(count <= events_.size(), text("CUDA backend: ", count,
-                                            " bonds took a damage step in one cycle, more than the "
-                                            "event log's ",
-                                            events_.size()));
-      std::unique_ptr<SlotEvent[]> events(new SlotEvent[count + 1]);
-      events_.download(events.get(), count, "reading the event log");
-      assign_events(batch.events, events.get(), count);
-    }
-    if (batch.reported) {
-      const int blocks = v.padded / 8;
-      block_partials_kernel<<<(blocks + kThreads - 1) / kThreads, kThreads>>>(
-          partial_.data(), v.padded, block_sums_.data());
-      check(cudaGetLastError(), "the block partials' launch");
-      reduce_kernel<<<kParticlePartials, kReduceThreads>>>(block_sums_.data(), blocks,
-                                                           sums_.data());
-      check(cudaGetLastError(), "the reduction's launch");
-      sums_.download(batch.sums, kParticlePartials, "reading the report sums");
-    }
+    if (breaking) read_events(batch);
+    if (batch.reported) reduce_report(v, batch);
     return batch;
   }
 
-  void download_state(const DeviceArrays& a) override {
-    const std::size_t p = static_cast<std::size_t>(a.padded);
-    for (int b = 0; b < 2; ++b)
-      for (int c = 0; c < 3; ++c) {
-        displacement_[b][c].download(a.displacement[b][c], p, "reading displacements");
-        rotation_[b][c].download(a.rotation[b][c], p, "reading rotations");
-      }
-    for (int c = 0; c < 3; ++c) {
-      velocity_[c].download(a.velocity[c], p, "reading velocities");
-      angular_velocity_[c].download(a.angular_velocity[c], p, "reading angular velocities");
-      force_[c].download(a.force[c], p, "reading forces");
-      torque_[c].download(a.torque[c], p, "reading torques");
-    }
-    if (is_breaking(a.mode)) {
-      work_sum_.download(a.work_sum, p, "reading the boundary work sums");
-      damping_sum_.download(a.damping_sum, p, "reading the damping sums");
-    }
-  }
+  void download_state(const DeviceArrays& a) override { download_kernel_state(own_, a); }
 
   void download_table(const DeviceArrays& a, std::vector<std::int32_t>& type) override {
-    type.resize(type_.size());
-    type_.download(type.data(), type.size(), "reading the bond table");
-    if (is_softening(a.mode)) {
-      slot_damage_.download(a.slot_damage, slot_damage_.size(), "reading the slots' damage");
-      slot_kappa_.download(a.slot_kappa, slot_kappa_.size(), "reading the slots' kappa");
-    }
+    download_kernel_table(own_, a, type);
   }
 
  private:
-  static std::size_t event_capacity(const DeviceArrays& a) {
-    const std::size_t bonds = static_cast<std::size_t>(a.padded) * a.width / 2 + 1;
-    return std::min(bonds, kMaxEvents);
+  static std::size_t event_capacity(const KernelSizes& sizes) {
+    return std::min(sizes.count(ArrayExtent::kCells) / 2 + 1, kMaxEvents);
+  }
+
+  void read_events(DeviceBatch& batch) const {
+    unsigned count = 0;
+    check(cudaMemcpy(&count, event_count_.data(), sizeof(unsigned), cudaMemcpyDeviceToHost),
+          "reading the event counter");
+    require(count <= events_.size(), text("CUDA backend: ", count,
+                                          " bonds took a damage step in one cycle, more than the "
+                                          "event log's ",
+                                          events_.size()));
+    std::unique_ptr<SlotEvent[]> events(new SlotEvent[count + 1]);
+    events_.download(events.get(), count, "reading the event log");
+    assign_events(batch.events, events.get(), count);
+  }
+
+  // The report sums in the host kernel's order: block partials in lane order, then a fixed tree.
+  void reduce_report(const ParticleStepView& v, DeviceBatch& batch) {
+    const int blocks = v.padded / 8;
+    block_partials_kernel<<<(blocks + kThreads - 1) / kThreads, kThreads>>>(
+        v.a.partial, v.padded, block_sums_.data());
+    check(cudaGetLastError(), "the block partials' launch");
+    reduce_kernel<<<kParticlePartials, kReduceThreads>>>(block_sums_.data(), blocks, sums_.data());
+    check(cudaGetLastError(), "the reduction's launch");
+    sums_.download(batch.sums, kParticlePartials, "reading the report sums");
   }
 
   std::string name_;
-  DeviceArrays arrays_;
-  DeviceArray<double> displacement_[2][3], rotation_[2][3], velocity_[3], angular_velocity_[3];
-  DeviceArray<double> force_[3], torque_[3], inverse_mass_, inverse_inertia_, partial_, block_sums_,
-      sums_;
-  DeviceArray<std::uint8_t> motion_;
-  DeviceArray<MotionClass> classes_;
-  DeviceArray<std::int32_t> neighbour_, type_, slot_bond_;
-  DeviceArray<HalfBondType> types_;
-  DeviceArray<HalfBondFailure> failure_;
-  DeviceArray<double> slot_alpha_, slot_beta_, slot_tensile_, slot_cohesion_, slot_damage_,
-      slot_kappa_, work_sum_, damping_sum_;
+  KernelSizes sizes_;
+  KernelArrays<DeviceArray> own_;
+  DeviceArray<double> block_sums_, sums_;
   DeviceArray<SlotEvent> events_;
   DeviceArray<int> stop_;
   DeviceArray<unsigned> event_count_;

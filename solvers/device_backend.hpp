@@ -1,80 +1,35 @@
 #pragma once
 /// \file
-/// The explicit integrator's backend interface: where its fused kernel's cycles run. The host
-/// backend (ExplicitBackend::kCpu) is the integrator's own SIMD kernel. A device backend keeps a
-/// copy of the kernel's arrays in its own memory for a whole run() and runs
-/// solvers/particle_step.hpp once per particle and cycle: on a CUDA device
-/// (solvers/cuda_backend.cu, built with -DPLYDEM_CUDA=ON), or on the host, one particle after
-/// another (kDeviceEmulation: the device's code path, so that a machine without a GPU tests it
-/// against the host kernel).
+/// A device that runs the explicit kernel's cycles in its own memory: the CUDA backend
+/// (solvers/cuda_backend.cu, built with -DPLYDEM_CUDA=ON) and its host emulation (one particle
+/// after another, the device's code path on a machine without a GPU, so that tests hold it to the
+/// host's SIMD kernel). Each keeps a copy of the kernel's arrays (solvers/kernel_arrays.hpp) for a
+/// whole run and runs solvers/particle_step.hpp once per particle and cycle.
 ///
-/// The integrator keeps the host arrays authoritative between runs: it uploads them at the start of
-/// every run() and downloads them after every batch of cycles (ExplicitIntegrator::run checks and
-/// hooks read the host copy), the bond table included when bonds can break.
+/// The integrator's mirrored backend (solvers/gather_backend.cpp) keeps the host arrays
+/// authoritative between runs: it uploads them at the start of every run and downloads the state
+/// after every batch of cycles (checks and hooks read the host copy), the bond table included when
+/// bonds can break. The copies are written once for every store, over for_each_kernel_array
+/// (upload_kernel_arrays and the others below): a store is any array type with upload(from, n,
+/// what), download(to, n, what), zero(n, what), data() and size().
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
+#include "solvers/backend_kind.hpp"
+#include "solvers/kernel_arrays.hpp"
 #include "solvers/particle_step.hpp"
 
 namespace plydem {
 
-/// Where the explicit integrator's fused kernel runs (ExplicitSettings::backend).
-enum class ExplicitBackend {
-  kCpu,   ///< the host's SIMD kernel, OpenMP threads
-  kCuda,  ///< a CUDA device (a build with -DPLYDEM_CUDA=ON and a device present)
-  /// solvers/particle_step.hpp run on the host, one particle at a time: the CUDA kernel's code
-  /// path without a device (for tests; slow)
-  kDeviceEmulation,
-};
-
-/// "cpu", "cuda", "emulation".
-const char* to_string(ExplicitBackend backend);
-/// Parses "cpu", "cuda" or "emulation"; throws plydem::Error naming the accepted values.
-ExplicitBackend parse_backend(const std::string& name);
-/// The backends a user chooses from, as the command line's `--backend` and Python's `backend`
-/// offer them: "cpu", "cuda". The emulation is the device's code path for tests and
-/// plydem_kernel_bench, not offered there.
-const std::vector<std::string>& backend_choices();
-/// parse_backend for one of backend_choices(); throws plydem::Error naming them for anything else.
-ExplicitBackend parse_backend_choice(const std::string& name);
-
-/// The host arrays a device backend mirrors, in kernel order (see ParticleStepView).
+/// The host arrays a device mirrors, in kernel order, and their sizes.
 struct DeviceArrays {
-  int particles = 0;
-  int padded = 0;
-  int width = 0;
-  int type_count = 0;
-  int mode = kElasticMode;  ///< KernelMode
-  double* displacement[2][3] = {};
-  double* rotation[2][3] = {};
-  double* velocity[3] = {};
-  double* angular_velocity[3] = {};
-  const double* inverse_mass = nullptr;
-  const double* inverse_inertia = nullptr;
-  const std::uint8_t* motion = nullptr;
-  const MotionClass* classes = nullptr;
-  int class_count = 0;
-  const std::int32_t* neighbour = nullptr;
-  const std::int32_t* type = nullptr;
-  const HalfBondType* types = nullptr;
-  // Breaking (mode != kElasticMode).
-  const HalfBondFailure* failure = nullptr;
-  const std::int32_t* slot_bond = nullptr;
-  const double* slot_alpha = nullptr;  // strengths per slot
-  const double* slot_beta = nullptr;
-  const double* slot_tensile = nullptr;
-  const double* slot_cohesion = nullptr;
-  double* slot_damage = nullptr;  // softening
-  double* slot_kappa = nullptr;
-  double* work_sum = nullptr;
-  double* damping_sum = nullptr;
-  /// The last report cycle's forces and moments, kernel order (downloaded by download_state).
-  double* force[3] = {};
-  double* torque[3] = {};
+  KernelView view;
+  KernelSizes sizes;
 };
 
 /// What one batch of cycles did (DeviceBackend::run_cycles).
@@ -108,6 +63,88 @@ class DeviceBackend {
   /// width x padded types as the device holds them.
   virtual void download_table(const DeviceArrays& arrays, std::vector<std::int32_t>& type) = 0;
 };
+
+/// Copies every array a run of arrays.sizes.mode uses from the host into `own` (a
+/// KernelArrays<Store> of the device's), (re)allocating as needed; the scratch arrays are zeroed.
+template <class Own>
+void upload_kernel_arrays(Own& own, const DeviceArrays& host) {
+  for_each_kernel_array(
+      [&](const ArrayInfo& info, auto& mine, auto* const& from) {
+        if (!uses(info.use, host.sizes.mode)) return;
+        const std::size_t n = host.sizes.count(info.extent);
+        if (info.flow == ArrayFlow::kScratch || info.flow == ArrayFlow::kReport) {
+          mine.zero(n, info.name);
+        } else {
+          mine.upload(from, n, info.name);
+        }
+      },
+      own, host.view);
+}
+
+/// Copies the prescribed motions (ArrayFlow::kMotion) in again.
+template <class Own>
+void upload_motion_arrays(Own& own, const DeviceArrays& host) {
+  for_each_kernel_array(
+      [&](const ArrayInfo& info, auto& mine, auto* const& from) {
+        if (info.flow == ArrayFlow::kMotion)
+          mine.upload(from, host.sizes.count(info.extent), info.name);
+      },
+      own, host.view);
+}
+
+/// Copies the state, the report's forces and the account's sums back (ArrayFlow::kState,
+/// kReport) into the host's arrays.
+template <class Own>
+void download_kernel_state(const Own& own, const DeviceArrays& host) {
+  for_each_kernel_array(
+      [&](const ArrayInfo& info, const auto& mine, auto* const& to) {
+        if (!uses(info.use, host.sizes.mode)) return;
+        if (info.flow == ArrayFlow::kState || info.flow == ArrayFlow::kReport)
+          mine.download(to, host.sizes.count(info.extent), info.name);
+      },
+      own, host.view);
+}
+
+/// Copies the softening state (ArrayFlow::kSlotState) back into the host's arrays and the table's
+/// types (ArrayFlow::kSlotTypes) into `types`.
+template <class Own>
+void download_kernel_table(const Own& own, const DeviceArrays& host,
+                           std::vector<std::int32_t>& types) {
+  for_each_kernel_array(
+      [&](const ArrayInfo& info, const auto& mine, auto* const& to) {
+        if (!uses(info.use, host.sizes.mode)) return;
+        const std::size_t n = host.sizes.count(info.extent);
+        if (info.flow == ArrayFlow::kSlotState) mine.download(to, n, info.name);
+        if constexpr (std::is_same_v<std::remove_cvref_t<decltype(*to)>, std::int32_t>) {
+          if (info.flow == ArrayFlow::kSlotTypes) {
+            types.resize(n);
+            mine.download(types.data(), n, info.name);
+          }
+        }
+      },
+      own, host.view);
+}
+
+/// Pointers into `own`: the view the device's step reads.
+template <class Own>
+KernelView kernel_view(Own& own) {
+  KernelView view{};
+  for_each_kernel_array([](const ArrayInfo&, auto& mine, auto*& to) { to = mine.data(); }, own,
+                        view);
+  return view;
+}
+
+/// The bytes of the arrays a run of sizes.mode uses.
+inline std::size_t kernel_array_bytes(const KernelSizes& sizes) {
+  std::size_t bytes = 0;
+  KernelView view{};
+  for_each_kernel_array(
+      [&](const ArrayInfo& info, auto* const& pointer) {
+        if (uses(info.use, sizes.mode)) bytes += sizes.count(info.extent) * sizeof(*pointer);
+      },
+      view);
+  return bytes;
+}
 
 /// to = from[0 .. count) (compiled by the host compiler: nvcc's front end cannot instantiate a
 /// vector of SlotEvent's reallocation).

@@ -5,38 +5,36 @@
 /// Each cycle: bond forces at the current displacements, then velocities and displacements of
 /// every free degree of freedom.
 ///
-/// Two kernels run the same cycle. The fused kernel (default) renumbers the particles for locality
-/// (contacts/particle_ordering.hpp: lattice lines for a regular packing, else a Hilbert curve),
-/// keeps its own copy of the state in that order, and in one pass per cycle lets each particle sum
-/// its own bonds (contacts/bond_kernel.hpp, gather form) and advance, eight particles at a time in
-/// SIMD lanes, split between OpenMP threads (OMP_NUM_THREADS). Each particle's result is
-/// independent of the thread count, and a run is bitwise reproducible. The reference kernel is the
-/// plain loop: compute_bond_forces, then one update per degree of freedom; tests hold the fused
-/// kernel to it.
+/// The integrator is a run loop over one backend interface (solvers/explicit_backend.hpp), the
+/// backend chosen at run time (ExplicitSettings::backend, like OpenMM's platforms): reference (the
+/// model's own arrays, plain loops), cpu (the default: the particles renumbered for locality, each
+/// block of eight summing its own bonds and advancing in SIMD lanes, OpenMP threads), emulation
+/// and cuda (the same kernel-order state mirrored on a device, one particle per thread). One
+/// particle's step (the half-bond law, the update, the energy account) is written once
+/// (solvers/particle_step.hpp) and every backend instantiates it; each particle's result is
+/// independent of the thread count, and a run is bitwise reproducible. The cpu, emulation and cuda
+/// backends compute the same bits (tests hold emulation to cpu); the reference sums its forces in
+/// another order and agrees within rounding.
 ///
-/// run() is the run loop (the PFC "cycle N / solve ratio" of the paper's Sec. 2.1): it takes the
-/// state into the kernel's order once, cycles in chunks of `check_interval`, and at each check
-/// (the last cycle of a chunk computes the unbalanced-force ratio and the energies) tests the stop
-/// conditions and calls the hooks; a hook reads the state it needs through gather(). At the end
-/// the whole state goes back into the model. cycle() and advance() are one-chunk runs.
+/// run() is the run loop (the PFC "cycle N / solve ratio" of the paper's Sec. 2.1): it hands the
+/// state to the backend once, cycles in chunks that end at checks (every `check_interval` cycles,
+/// and wherever a hook falls due; the last cycle of a chunk computes the unbalanced-force ratio
+/// and the energies), tests the stop conditions and calls the periodic hooks due (RunHook:
+/// checkpointing, sampling, progress, a user's callback); a hook reads the state it needs through
+/// gather(). At the end the whole state goes back into the model. cycle() and advance() are
+/// one-chunk runs.
 ///
-/// Breaking. When the model's bonds can break (Bonds::breakable) or some are broken, both kernels
-/// decide every bond at every cycle through the one failure law (core/bond_failure.hpp, applied by
-/// update_bond_damage in contacts/bond_kernel.hpp) from the deformation they computed its force
+/// Breaking. When the model's bonds can break (Bonds::breakable) or some are broken, every backend
+/// decides every bond at every cycle through the one failure law (core/bond_failure.hpp, applied
+/// by update_bond_damage in contacts/half_bond.hpp) from the deformation it computed its force
 /// from: a brittle bond breaks at utilisation 1, a softening one loses stiffness along its
 /// softening line and breaks when its damage reaches 1. A break or a damage step decided at cycle
-/// n acts from cycle n + 1 on. The fused kernel decides at both ends of a bond alike, each
-/// particle clearing its own slot (no rebuild of the table, no atomics), and logs at the first
-/// end. Particles no intact bond joins interact by contacts (contacts/unbonded_contacts.hpp), and
-/// the run keeps an energy account (energy()). The model's bonds get their new state, damage and
-/// stiffness as breaks happen and at the end of each run; the broken bonds keep their rows.
-///
-/// Backends (ExplicitSettings::backend). The fused kernel's cycles run on the host or on a device
-/// (solvers/device_backend.hpp: CUDA, or its code emulated on the host), which holds the kernel's
-/// arrays for the whole run and runs solvers/particle_step.hpp, the same half-bond math and failure
-/// law, once per particle: same motions, damping, breaks in the same order, and reports reduced on
-/// the device in a fixed order. The host copy is brought up to date after every batch of cycles,
-/// so checks, hooks, gather() and the break log read it as they read the host kernel's.
+/// n acts from cycle n + 1 on. The kernel-order backends decide at both ends of a bond alike, each
+/// particle clearing its own slot (no rebuild of the table, no atomics), and log at the first end.
+/// Particles no intact bond joins interact by contacts (contacts/unbonded_contacts.hpp; cpu and
+/// reference backends), and the run keeps an energy account (energy()). The model's bonds get
+/// their new state, damage and stiffness as breaks happen and at the end of each run; the broken
+/// bonds keep their rows.
 
 #include <Eigen/Dense>
 #include <array>
@@ -53,12 +51,10 @@
 #include "core/bond_failure.hpp"
 #include "core/checkpoint.hpp"
 #include "core/model.hpp"
-#include "solvers/device_backend.hpp"
+#include "solvers/backend_kind.hpp"
+#include "solvers/explicit_backend.hpp"
 
 namespace plydem {
-
-/// Which implementation advances the model (see the file comment).
-enum class ExplicitKernel { kFused, kReference };
 
 struct ExplicitSettings {
   /// PFC local damping coefficient alpha: the force on each degree of freedom is reduced by
@@ -68,8 +64,7 @@ struct ExplicitSettings {
   double safety_factor = 0.8;
   /// A fixed time step [s]; 0 = automatic.
   double time_step = 0;
-  ExplicitKernel kernel = ExplicitKernel::kFused;
-  /// How the fused kernel numbers the particles internally (results do not depend on it).
+  /// How the kernel-order backends number the particles internally (results do not depend on it).
   ParticleOrder particle_order = ParticleOrder::kAutomatic;
   /// Keep the energy account (energy()) in a model that cannot break too (a model that can, or has
   /// broken bonds, always keeps it). Off, an elastic model runs the elastic kernel unchanged.
@@ -77,26 +72,16 @@ struct ExplicitSettings {
   /// Contacts between particles that no intact bond joins, in runs that keep the account.
   bool contacts = true;
   ContactSettings contact;
-  /// Where the fused kernel keeps breakable bonds' strengths (contacts/bond_kernel.hpp).
+  /// Where the kernel-order backends keep breakable bonds' strengths (contacts/bond_kernel.hpp).
   StrengthStorage strength_storage = StrengthStorage::kAutomatic;
-  /// Where the fused kernel runs (solvers/device_backend.hpp): the host, a CUDA device, or the
-  /// device's code emulated on the host. A device backend runs the fused kernel only, and no
-  /// contacts between unbonded particles yet (a breaking run needs `contacts` off).
+  /// Which backend runs the cycles (solvers/backend_kind.hpp): cpu, cuda, emulation (the device's
+  /// code on the host) or reference. The device backends have no contacts between unbonded
+  /// particles yet (a breaking run there needs `contacts` off).
   ExplicitBackend backend = ExplicitBackend::kCpu;
 };
 
 /// Throws plydem::Error naming the first setting out of range.
 void validate(const ExplicitSettings& settings);
-
-/// Velocities imposed on every particle of a boundary group. A component whose `fix_*` flag is
-/// false stays free.
-struct PrescribedMotion {
-  BoundaryGroup group = BoundaryGroup::kFree;
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
-  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
-  std::array<bool, 3> fix_velocity{false, false, false};
-  std::array<bool, 3> fix_angular_velocity{false, false, false};
-};
 
 /// What one cycle measured, at the displacements the forces were computed from.
 struct CycleReport {
@@ -138,13 +123,6 @@ struct EnergyAccount {
   }
 };
 
-/// One end of a bond as the active kernel holds it (ExplicitIntegrator::bond_ends).
-struct BondEnd {
-  bool holds = false;  ///< the bond is intact at this end
-  double damage = 0;
-  double kappa = 1;  ///< largest utilisation so far (softening; 1 otherwise)
-};
-
 /// Why run() stopped.
 enum class RunStop {
   kQuasiStatic,  ///< the unbalanced-force ratio fell to the tolerance
@@ -170,6 +148,19 @@ struct RunCheck {
   double seconds_left = -1;
 };
 
+/// A periodic hook of run(): checkpointing, sampling, progress, a user's callback. It is called at
+/// the checks where it falls due, in the order of RunControl::hooks; returning false stops the run
+/// (RunStop::kHook) after the hooks of that check.
+struct RunHook {
+  /// Every this many cycles of the run (> 0: the run's chunks end there, so the hook sees cycle
+  /// counts that are multiples of it), or 0: at every check.
+  long every_cycles = 0;
+  /// At checks at least this many seconds of wall time after its last call (or the run's start);
+  /// 0 = no time condition.
+  double every_seconds = 0;
+  std::function<bool(const RunCheck&)> call;
+};
+
 /// How run() runs and when it stops. At least one stop condition must be set; conditions are
 /// tested at checks only, in the order ratio, cycles, time, and a run does at least one cycle.
 struct RunControl {
@@ -182,12 +173,14 @@ struct RunControl {
   double tolerance = 0;
   /// Stop at the first check at or past this many seconds of wall time (> 0); 0 = off.
   double time_limit_seconds = 0;
-  /// Progress: called at checks, at most once per `progress_seconds` (the first after that long).
-  std::function<void(const RunCheck&)> on_progress;
-  double progress_seconds = 2.0;
-  /// Sampling: called at every check; may read the state (gather()) and set prescribed motions.
+  /// The periodic hooks (RunHook), called after on_check and before on_progress.
+  std::vector<RunHook> hooks;
+  /// A hook at every check (sampling): may read the state (gather()) and set prescribed motions.
   /// Returning false stops the run (RunStop::kHook).
   std::function<bool(const RunCheck&)> on_check;
+  /// Progress: a hook every `progress_seconds` of wall time (the first after that long).
+  std::function<void(const RunCheck&)> on_progress;
+  double progress_seconds = 2.0;
 
   /// Throws plydem::Error naming the first bad field.
   void validate() const;
@@ -203,14 +196,6 @@ struct RunReport {
   double check_seconds = 0;     ///< stop conditions and hooks
   double transfer_seconds = 0;  ///< the state into kernel order and back into the model
   double wall_seconds = 0;      ///< the whole run
-};
-
-/// Where gather() reads the displacements and rotations from.
-enum class StateAt {
-  kCurrent,  ///< after the last cycle's update
-  /// the state the last cycle's forces were computed from (before its update); velocities are
-  /// the updated ones either way
-  kForces,
 };
 
 /// The critical time step of the model's bonds: 2 / sqrt(lambda_max) with lambda_max bounded by
@@ -249,16 +234,16 @@ class ExplicitIntegrator {
   /// `cycles` cycles (>= 1): run() with one check, at the end; the report is the last cycle's.
   CycleReport advance(long cycles);
 
-  /// During a run (from a hook): copies the state of the listed model particles from the kernel
+  /// During a run (from a hook): copies the state of the listed model particles from the backend
   /// into `into` (displacement, rotation, velocity, angular velocity, force, torque rows; `into`
   /// has the model's particle count, and the other rows are left alone). Outside a run the model
   /// holds the state and this copies from it. `into` may be the model's own particles except
-  /// with StateAt::kForces (the model is the live state of the reference kernel).
+  /// with StateAt::kForces (the model is the live state of the reference backend).
   void gather(std::span<const int> particles, Particles& into,
               StateAt at = StateAt::kCurrent) const;
 
   /// Breaks bond `bond` (an index into the model's bonds) by hand, from the next cycle on: its row
-  /// stays (state `mode`, damage 1, zero stiffness), the fused kernel empties its two slots
+  /// stays (state `mode`, damage 1, zero stiffness), the backend empties its two slots
   /// without rebuilding its table, and its particles interact by contact (if settings.contacts).
   /// The first break of an integrator that ran the elastic kernel switches it to the breaking one
   /// (its table is built once more, and the energy account starts at the next cycle). The time
@@ -280,8 +265,8 @@ class ExplicitIntegrator {
   /// Whether the integrator runs the breaking kernel (and keeps the account and the contacts).
   bool breaking() const { return breaking_; }
 
-  /// Bond `bond` as each of its two ends holds it in the active kernel: the fused kernel keeps
-  /// both ends apart and they must agree to the bit (the reference kernel keeps one bond).
+  /// Bond `bond` as each of its two ends holds it in the backend: the kernel-order backends keep
+  /// both ends apart and they must agree to the bit (the reference keeps one bond).
   std::array<BondEnd, 2> bond_ends(int bond) const;
 
   /// The contacts (null unless the run has them).
@@ -299,36 +284,28 @@ class ExplicitIntegrator {
   /// checkpoint of another model or other settings (naming the field or setting that differs).
   void restore(CheckpointReader& in);
 
-  /// Bytes the fused kernel holds for the run (its state, the gather lists, the bond types, the
-  /// renumbering), or 0 for the reference kernel. The model's own arrays are not counted.
+  /// Bytes the backend holds for the run (its state, the gather lists, the bond types, the
+  /// renumbering), or 0 for the reference backend. The model's own arrays are not counted.
   std::size_t kernel_bytes() const;
+  /// Which backend runs the cycles.
+  ExplicitBackend backend() const { return settings_.backend; }
 
  private:
-  struct Fused;
-  CycleReport reference_cycle(bool last);
-  // `cycles` cycles of the active kernel on its own state; the last one computes the report.
+  // The chunks of a run: `cycles` cycles of the backend, stopping at breaks to resolve them; the
+  // last one computes the report.
   CycleReport step(long cycles);
-  void load_kernel();
-  void store_kernel();
+  // The account starts from the energy the state holds before its first cycle.
+  void start_account();
   // Breaking: set up the breaking kernel, its account and its contacts.
   void start_breaking();
   void make_contacts();
-  long fused_cycles(long cycles, bool report_last);
-  // fused_cycles on a device backend; the host copy brought up to date after the batch.
-  long device_cycles(long cycles, bool report_last);
-  // The fused step's KernelMode (solvers/particle_step.hpp) for the bonds as they are.
-  int kernel_mode() const;
   // Resolves damage steps against the state after their cycle: the energy each released
   // (SlotEvent), breaks logged; the steps of `report_cycle` are counted at the next step.
   void resolve_events(std::vector<SlotEvent>& events, long report_cycle);
-  // The current state as the contacts read it (the kernel's or the model's arrays).
-  ContactState contact_state() const;
-  // Writes the fused kernel's bond damage back to the model; throws if two ends disagree.
+  // Writes the backend's bond damage back to the model; throws if two ends disagree.
   void store_bonds();
-  // restore()'s parts: the breaking run's energy account of n particles, and the fused kernel's
-  // slots (broken bonds cleared, softening histories) from the checkpoint's bonds and kappa.
+  // restore()'s part: the breaking run's energy account of n particles.
   void restore_account(CheckpointReader& in, int n);
-  void restore_slots(const Bonds& bonds, const Eigen::ArrayXd& kappa);
   void log_break(int bond, BondState mode, long cycle, const double* first_displacement);
 
   Model& model_;
@@ -336,22 +313,17 @@ class ExplicitIntegrator {
   double time_step_ = 0;
   double time_ = 0;
   long cycles_ = 0;
-  // Per particle and component: 1 where prescribed (translation, rotation).
-  Eigen::Array<bool, Eigen::Dynamic, 3> fixed_velocity_;
-  Eigen::Array<bool, Eigen::Dynamic, 3> fixed_angular_velocity_;
-  Vector3Array prescribed_velocity_;
-  Vector3Array prescribed_angular_velocity_;
+  // Per particle and component: true where prescribed (translation, rotation), and the motions.
+  MotionTable motions_;
   int free_particles_ = 0;
   bool running_ = false;
-  // Reference kernel: displacements and rotations before the last cycle of a chunk.
-  Vector3Array previous_displacement_, previous_rotation_;
-  std::unique_ptr<Fused> fused_;
+  // The bonds' intact stiffnesses and softening histories, which the backend reads (on the heap:
+  // the backend keeps a reference, and the integrator may move).
+  std::unique_ptr<BondHistory> history_;
+  std::unique_ptr<KernelBackend> backend_;
 
   // Breaking, account and contacts.
   bool breaking_ = false, softening_ = false;
-  // The bonds' intact stiffnesses (0 for a bond that came broken), their softening history.
-  Eigen::ArrayXd intact_[4];  // normal, shear, bending, twisting
-  Eigen::ArrayXd kappa_;      // reference kernel
   std::vector<BondBreak> breaks_;
   std::unique_ptr<UnbondedContacts> contacts_;
   long contact_countdown_ = 0;
@@ -359,9 +331,6 @@ class ExplicitIntegrator {
   double initial_energy_ = 0;
   CycleReport last_report_;
   double pending_work_ = 0, pending_damping_ = 0;  // the last cycle's second halves (x dt / 2)
-  // Reference kernel: per-particle sums of F (v_old + v_new), released energy.
-  Eigen::ArrayXd work_sum_, damping_sum_;
-  Vector3Array contact_force_, contact_torque_;
   double released_ = 0, released_pending_ = 0;
 };
 

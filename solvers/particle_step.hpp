@@ -1,106 +1,193 @@
 #pragma once
 /// \file
-/// One cycle of the fused explicit kernel for one particle: what a CUDA thread does
-/// (solvers/cuda_backend.cu), written once over plain arrays so that the host can run the very same
-/// code (ExplicitBackend::kDeviceEmulation, one particle after another) and tests can hold it to
-/// the host's fused kernel bit for bit on a machine without a GPU.
+/// One cycle of the explicit kernel for one particle, or for one block of eight particles side by
+/// side in SIMD lanes, written once (step_particle) and instantiated by every backend
+/// (solvers/explicit_backend.hpp): the host's SIMD kernel with T = lanes::Doubles (solvers/
+/// gather_backend.cpp, BlockLayout), the CUDA kernel (solvers/cuda_backend.cu) and its host
+/// emulation (solvers/device_backend.cpp) with T = double, one particle per thread
+/// (particle_step below, ParticleLayout); the reference backend runs its update (advance_particle)
+/// after its own scatter pass over the bonds.
 ///
-/// Particle k sums its own bonds (gather form: no two threads write the same memory, no atomics on
-/// the forces), with the half-bond math and the failure law of contacts/half_bond.hpp, the same
-/// templates the host's SIMD kernel instantiates with eight lanes; then it advances its degrees of
-/// freedom exactly as one lane of the host's step_range does (damped central difference or imposed
-/// velocity, the energy account's sums). Every expression is evaluated in the host kernel's order;
-/// with no contraction into fused multiply-adds on either side (the host compiles ISO C++, where
-/// GCC contracts none; nvcc gets -fmad=false) both compute the same numbers.
+/// A particle sums its own bonds (gather form: no two threads write the same memory, no atomics on
+/// the forces) with the half-bond math and the failure law of contacts/half_bond.hpp
+/// (gather_half_bonds), then advances its degrees of freedom (damped central difference or
+/// imposed velocity) and adds its shares of the energy account. Every operation is exactly rounded
+/// and every multiply-add an explicit fused one (core/lane_ops.hpp), so that all backends compute
+/// the same numbers to the bit whatever the compiler contracts: tests hold the host emulation to
+/// the host's SIMD kernel on every machine.
 ///
-/// Differences from the host kernel, none of which changes a result:
-///  - a slot of type 0 (no bond, or a broken one) is skipped, where the host's eight lanes compute
-///    it with zero stiffness: it adds +0 to sums that start at +0 and so are never -0;
-///  - the breaking kernels ask the exact law wherever the first screen holds, without the host's
-///    second screen, which is a conservative filter of the same decision (HalfBondFailure);
-///  - a broken slot is cleared in the type and neighbour tables only: there are no block tables;
-///  - report sums are written per particle (ParticleStepView::partial) for the caller to reduce.
+/// What a Layout gives the step (T = Layout::Lane): load_state(u, theta) (the buffer the cycle
+/// reads), slots() (the bond table, contacts/half_bond.hpp), add_contacts(force, torque)
+/// (breaking runs' contact forces), load_motion(LaneMotion&) (returns whether any of its particles
+/// has a prescribed motion), load_dynamics(inverse mass, inverse inertia, v, omega),
+/// store_state(u, theta, v, omega) (the other buffer), add_account(StepSums, prescribed) and
+/// report(ParticleReport) (report cycles), dt() and alpha().
 ///
-/// Breaking: a slot whose damage changes sets `*stop` to the cycle's number + 1 (a plain store of
-/// the same value by every writer), and the caller runs no further cycle of the batch, as the host
-/// kernel stops after such a cycle; the bond's first end appends its SlotEvent to `events`.
+/// Breaking (device): a slot whose damage changes sets `*stop` to the cycle's number + 1 (a plain
+/// store of the same value by every writer), and the caller runs no further cycle of the batch,
+/// as the host kernel stops after such a cycle; the bond's first end appends its SlotEvent to
+/// `events`.
+///
+/// No Eigen and no vector extension here: nvcc compiles this header.
 
 #include <cmath>
 #include <cstdint>
-#include <limits>
 
 #include "contacts/half_bond.hpp"
 #include "core/host_device.hpp"
+#include "core/lane_ops.hpp"
+#include "solvers/kernel_arrays.hpp"
 
 namespace plydem {
 
-/// What a prescribed motion does to a particle of its group: per component, a mask (-1 fixed,
-/// 0 free) and the imposed value.
-struct MotionClass {
-  std::int64_t fix_velocity[3] = {0, 0, 0};
-  std::int64_t fix_angular_velocity[3] = {0, 0, 0};
-  double velocity[3] = {0, 0, 0};
-  double angular_velocity[3] = {0, 0, 0};
-  std::int64_t free = -1;  // no translation fixed: counts in the unbalanced force
+/// The prescribed motions of the particles in the lanes: which components are fixed, the imposed
+/// velocities, and which particles count as free (no translation fixed).
+template <class T>
+struct LaneMotion {
+  using Mask = typename LaneOps<T>::Mask;
+  Mask fix_velocity[3] = {}, fix_angular_velocity[3] = {};
+  T velocity[3] = {}, angular_velocity[3] = {};
+  Mask counts_free = {};
 };
 
-/// The fused step's variants: elastic, or breaking with strengths per type or per slot, brittle or
-/// softening.
-enum KernelMode : int {
-  kElasticMode = 0,
-  kBrittleTypes = 1,
-  kBrittleSlots = 2,
-  kSofteningTypes = 3,
-  kSofteningSlots = 4
+/// What the update adds to the energy account and the report (the account's sums: breaking runs).
+template <class T>
+struct StepSums {
+  T kinetic{};       ///< 2 x leapfrog kinetic energy, free components (report)
+  T damping_sum{};   ///< damping (v_old + v_new), free components
+  T work_sum{};      ///< - F (v_old + v_new), prescribed components
+  T damping_half{};  ///< damping v_new (report)
+  T work_half{};     ///< - F v_new (report)
 };
 
-/// The per-particle report sums of one cycle, in the order the host kernel's block partials keep
-/// them: strain energy, bond force magnitude, 2 x kinetic energy, unbalanced force, - F . v(n+1/2)
-/// (prescribed), damping . v(n+1/2) (free).
-inline constexpr int kParticlePartials = 6;
+/// What a report cycle writes: the forces and the report sums (kParticlePartials' order).
+template <class T>
+struct ParticleReport {
+  const T (&force)[3];
+  const T (&torque)[3];
+  T partial[kParticlePartials];
+};
 
-/// The arrays one cycle reads and writes, in kernel order, padded to whole blocks of eight (the
-/// padding particles have no bonds, unit inverse masses and never move). Per-slot arrays are
-/// [slot * padded + k] (GatherBonds::cell).
+/// One degree of freedom: the damped central difference, or the imposed velocity. The local
+/// damping force alpha |F| sign(v) is zero where v is zero.
+template <class T>
+PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void advance_dof(const T& force, const T& dt_over_inertia,
+                                                        const typename LaneOps<T>::Mask& fixed,
+                                                        const T& imposed, double dt, double alpha,
+                                                        T& u, T& v, T& v_old, T& damping) {
+  using Ops = LaneOps<T>;
+  damping = Ops::signed_like(alpha * Ops::abs(force), v);
+  v_old = v;
+  const T free = Ops::fmadd(dt_over_inertia, force - damping, v);
+  v = Ops::select(fixed, imposed, free);
+  u = Ops::fmadd(dt, v, u);
+}
+
+/// One component's share of the energy account: damping (v_old + v_new) where it is free, and
+/// - F (v_old + v_new) where it is prescribed, and the second halves (v_new alone) on a report
+/// cycle. Products are masked before they are summed. (Branch-free: GCC 12's AVX-512 clone of the
+/// host kernel lost the prescribed sums of plain cycles when they were summed under a test of
+/// whether any particle of the block is prescribed.)
+template <bool kReport, class T>
+PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void account_dof(const T& f, const T& damping,
+                                                        const T& v_old, const T& v,
+                                                        const typename LaneOps<T>::Mask& fixed,
+                                                        StepSums<T>& s) {
+  using Ops = LaneOps<T>;
+  const T both = v_old + v;
+  s.damping_sum += Ops::keep_unless(damping * both, fixed);
+  s.work_sum -= Ops::keep(f * both, fixed);
+  if constexpr (kReport) {
+    s.damping_half += Ops::keep_unless(damping * v, fixed);
+    s.work_half -= Ops::keep(f * v, fixed);
+  }
+}
+
+/// The update of the particles in the lanes from their forces and moments: every degree of
+/// freedom (advance_dof), with the kinetic energy (report) and the account's shares (kAccount).
+template <bool kReport, bool kAccount, class T>
+PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void advance_particle(
+    const T (&force)[3], const T (&torque)[3], const LaneMotion<T>& motion, const T& inverse_mass,
+    const T& inverse_inertia, double dt, double alpha, T (&u)[3], T (&theta)[3], T (&v)[3],
+    T (&omega)[3], StepSums<T>& s) {
+  using Ops = LaneOps<T>;
+  const T dt_over_mass = dt * inverse_mass;
+  const T dt_over_inertia = dt * inverse_inertia;
+  for (int c = 0; c < 3; ++c) {
+    T v_old, damping;
+    advance_dof(force[c], dt_over_mass, motion.fix_velocity[c], motion.velocity[c], dt, alpha, u[c],
+                v[c], v_old, damping);
+    if constexpr (kReport)
+      s.kinetic += Ops::keep_unless(v_old / inverse_mass * v[c], motion.fix_velocity[c]);
+    if constexpr (kAccount)
+      account_dof<kReport>(force[c], damping, v_old, v[c], motion.fix_velocity[c], s);
+
+    advance_dof(torque[c], dt_over_inertia, motion.fix_angular_velocity[c],
+                motion.angular_velocity[c], dt, alpha, theta[c], omega[c], v_old, damping);
+    if constexpr (kReport)
+      s.kinetic +=
+          Ops::keep_unless(v_old / inverse_inertia * omega[c], motion.fix_angular_velocity[c]);
+    if constexpr (kAccount)
+      account_dof<kReport>(torque[c], damping, v_old, omega[c], motion.fix_angular_velocity[c], s);
+  }
+}
+
+/// One cycle of the particles of `p` (see the file comment). kReport: the cycle also writes the
+/// forces and the report sums (the last cycle of a chunk).
+template <bool kReport, int kMode, class Layout>
+PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void step_particle(Layout& p) {
+  using T = typename Layout::Lane;
+  using Ops = LaneOps<T>;
+  constexpr bool kBreaking = breaks_bonds(kMode);
+  T u[3], theta[3];
+  p.load_state(u, theta);
+  T force[3] = {}, torque[3] = {};
+  T energy{}, bond_force{};
+  {
+    auto slots = p.slots();
+    gather_half_bonds<kReport, kMode>(slots, u, theta, force, torque, energy, bond_force);
+  }
+  if constexpr (kBreaking) p.add_contacts(force, torque);
+  LaneMotion<T> motion;
+  const bool prescribed = p.load_motion(motion);
+  T inverse_mass, inverse_inertia, v[3], omega[3];
+  p.load_dynamics(inverse_mass, inverse_inertia, v, omega);
+  StepSums<T> sums;
+  advance_particle<kReport, kBreaking>(force, torque, motion, inverse_mass, inverse_inertia, p.dt(),
+                                       p.alpha(), u, theta, v, omega, sums);
+  p.store_state(u, theta, v, omega);
+  if constexpr (kBreaking) p.add_account(sums, prescribed);
+  if constexpr (kReport) {
+    const T f2 =
+        Ops::fmadd(force[2], force[2], Ops::fmadd(force[1], force[1], force[0] * force[0]));
+    ParticleReport<T> r{force, torque, {}};
+    r.partial[0] = energy;
+    r.partial[1] = bond_force;
+    r.partial[2] = sums.kinetic;
+    r.partial[3] = Ops::keep(Ops::sqrt(f2), motion.counts_free);
+    r.partial[4] = sums.work_half;
+    r.partial[5] = sums.damping_half;
+    p.report(r);
+  }
+}
+
+/// What one cycle of the device's kernel reads and writes: the arrays (KernelView, in kernel order,
+/// padded to whole blocks of eight: the padding particles have no bonds, unit inverse masses and
+/// never move) and the cycle's numbers.
 struct ParticleStepView {
+  KernelView a;
   int padded = 0;
   int width = 0;
-  const double* displacement_in[3] = {};
-  const double* rotation_in[3] = {};
-  double* displacement_out[3] = {};
-  double* rotation_out[3] = {};
-  double* velocity[3] = {};
-  double* angular_velocity[3] = {};
-  const double* inverse_mass = nullptr;
-  const double* inverse_inertia = nullptr;
-  const std::uint8_t* motion = nullptr;  ///< class per particle; 0 = free
-  const MotionClass* classes = nullptr;
-  std::int32_t* neighbour = nullptr;  ///< per slot; a broken slot points at its own particle
-  std::int32_t* type = nullptr;       ///< per slot; 0 = empty
-  const HalfBondType* types = nullptr;
+  int parity = 0;  ///< the state buffer the cycle reads; it writes the other
   double dt = 0;
   double alpha = 0;  ///< local damping
   // Breaking.
-  const HalfBondFailure* failure = nullptr;  ///< per type
-  const std::int32_t* slot_bond = nullptr;   ///< per slot: 2 b (first end) or 2 b + 1
-  const double* slot_alpha = nullptr;        ///< per slot: strengths per slot only
-  const double* slot_beta = nullptr;
-  const double* slot_tensile = nullptr;
-  const double* slot_cohesion = nullptr;
-  double* slot_damage = nullptr;  ///< per slot: softening only
-  double* slot_kappa = nullptr;
-  double* work_sum = nullptr;     ///< per particle: - F (v_old + v_new) over prescribed components
-  double* damping_sum = nullptr;  ///< per particle: damping (v_old + v_new) over free ones
-  long cycle = 0;                 ///< the integrator's cycle number of this pass
-  int* stop = nullptr;            ///< 0, or the batch's first cycle with a damage step + 1
-  int batch_cycle = 0;            ///< this cycle's index in its batch
-  SlotEvent* events = nullptr;    ///< damage steps logged by first ends
+  long cycle = 0;               ///< the integrator's cycle number of this pass
+  int* stop = nullptr;          ///< 0, or the batch's first cycle with a damage step + 1
+  int batch_cycle = 0;          ///< this cycle's index in its batch
+  SlotEvent* events = nullptr;  ///< damage steps logged by first ends
   unsigned* event_count = nullptr;
   unsigned event_capacity = 0;
-  // Report cycles.
-  double* force_out[3] = {};   ///< kernel order
-  double* torque_out[3] = {};  ///< kernel order
-  double* partial = nullptr;   ///< [q * padded + k], q < kParticlePartials
 };
 
 /// Appends a damage step to the event log: an atomic counter on the device (the only atomic of
@@ -121,165 +208,180 @@ PLYDEM_HOST_DEVICE inline void assess_particle_slot(const ParticleStepView& v, i
                                                     const double (&du)[3], const double (&dt)[3],
                                                     const double (&n)[3],
                                                     const double (&u_own)[3]) {
+  const KernelView& a = v.a;
   const std::size_t cell = static_cast<std::size_t>(slot) * v.padded + k;
-  const std::int32_t type = v.type[cell];
+  const std::int32_t type = a.type[cell];
   if (type == 0) return;
-  const HalfBondFailure& f = v.failure[type];
+  const HalfBondFailure& f = a.failure[type];
   BondStrength strength = f.strength;
   if constexpr (kSlotStrength) {
-    strength.tensile = v.slot_tensile[cell];
-    strength.cohesion = v.slot_cohesion[cell];
+    strength.tensile = a.slot_tensile[cell];
+    strength.cohesion = a.slot_cohesion[cell];
   }
-  const double damage = kSoften ? v.slot_damage[cell] : 0.0;
-  const double kappa = kSoften ? v.slot_kappa[cell] : 1.0;
+  const double damage = kSoften ? a.slot_damage[cell] : 0.0;
+  const double kappa = kSoften ? a.slot_kappa[cell] : 1.0;
   const BondStiffness intact{f.normal_stiffness, f.shear_stiffness, f.bending_stiffness,
                              f.twisting_stiffness};
   const BondDamageUpdate u =
       update_bond_damage(deformation_of(du, dt, n), intact, strength, damage, kappa);
   if (!u.changed) return;
   if constexpr (kSoften) {
-    v.slot_damage[cell] = u.damage;
-    v.slot_kappa[cell] = u.kappa;
+    a.slot_damage[cell] = u.damage;
+    a.slot_kappa[cell] = u.kappa;
   }
   if (u.broken) {  // GatherBonds::clear_slot
-    v.type[cell] = 0;
-    v.neighbour[cell] = k;
-    if constexpr (kSoften) v.slot_damage[cell] = 1.0;
+    a.type[cell] = 0;
+    a.neighbour[cell] = k;
+    if constexpr (kSoften) a.slot_damage[cell] = 1.0;
   }
   *v.stop = v.batch_cycle + 1;
-  const std::int32_t bond = v.slot_bond[cell];
+  const std::int32_t bond = a.slot_bond[cell];
   if ((bond & 1) == 0)
     log_event(v, damage_event(bond >> 1, v.cycle, u, damage, intact, du, dt, n, u_own));
 }
 
-/// One degree of freedom (the host's advance_lanes, one lane): the damped central difference, or
-/// the imposed velocity. The damping force alpha |F| sign(v) is zero where v is zero.
-PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void advance_dof(double force, double dt_over_inertia,
-                                                        bool fixed, double imposed, double dt,
-                                                        double alpha, double& u, double& v,
-                                                        double& v_old, double& damping) {
-  const double push = alpha * std::fabs(force);
-  damping = v == 0.0 ? 0.0 : std::copysign(push, v);
-  v_old = v;
-  const double free = v + dt_over_inertia * (force - damping);
-  v = fixed ? imposed : free;
-  u += dt * v;
-}
+/// The device's bond table seen from particle k: the `Slots` of gather_half_bonds. A slot of type
+/// 0 (no bond, or a broken one) is skipped, where the host's eight lanes compute it with zero
+/// stiffness: that adds +0 to sums that start at +0 and so are never -0. Breaking: the exact law
+/// wherever the first screen holds, without the host's second screen, which is a conservative
+/// filter of the same decision (HalfBondFailure).
+class ParticleSlots {
+ public:
+  using Lane = double;
+  PLYDEM_HOST_DEVICE ParticleSlots(const ParticleStepView& v, int k) : v_(v), k_(k) {}
 
-/// One cycle of particle k (k < padded). kReport: the cycle also writes the forces and the report
-/// sums (the last cycle of a chunk).
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE int width() const { return v_.width; }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE bool empty(int slot) const {
+    return v_.a.type[cell(slot)] == 0;
+  }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void other_state(int slot, double (&u_j)[3],
+                                                          double (&t_j)[3]) const {
+    const std::int32_t j = v_.a.neighbour[cell(slot)];
+    for (int c = 0; c < 3; ++c) {
+      u_j[c] = v_.a.displacement[v_.parity][c][j];
+      t_j[c] = v_.a.rotation[v_.parity][c][j];
+    }
+  }
+  template <int kMode>
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void load(int slot, HalfBondLoad<double>& h) const {
+    const std::size_t c = cell(slot);
+    const std::int32_t type = v_.a.type[c];
+    const HalfBondType& t = v_.a.types[type];
+    for (int q = 0; q < 3; ++q) h.normal[q] = t.normal[q];
+    h.shear_stiffness = t.shear_stiffness;
+    h.lever_shear = t.lever_shear;
+    h.normal_excess = t.normal_excess;
+    h.bending_stiffness = t.bending_stiffness;
+    h.twisting_excess = t.twisting_excess;
+    if constexpr (breaks_bonds(kMode)) {
+      const HalfBondFailure& f = v_.a.failure[type];
+      h.lever_a = f.lever_mean;
+      h.lever_b = f.lever_half_difference;
+      constexpr bool kSlots = has_slot_strengths(kMode);
+      h.screen_displacement = kSlots ? v_.a.slot_alpha[c] : f.screen_displacement;
+      h.screen_rotation = kSlots ? v_.a.slot_beta[c] : f.screen_rotation;
+    } else {
+      h.lever_a = t.lever_own;
+      h.lever_b = t.lever_other;
+    }
+  }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void damage(int slot, double& d) const {
+    d = v_.a.slot_damage[cell(slot)];
+  }
+  template <int kMode>
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void assess(int slot, double measure, const double (&n)[3],
+                                                     const HalfBondMotion<double>& m,
+                                                     const double (&dt)[3],
+                                                     const double (&u_i)[3]) const {
+    if (measure >= 1.0 - kScreenBound)
+      assess_particle_slot<softens_bonds(kMode), has_slot_strengths(kMode)>(v_, k_, slot, m.du, dt,
+                                                                            n, u_i);
+  }
+
+ private:
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE std::size_t cell(int slot) const {
+    return static_cast<std::size_t>(slot) * v_.padded + k_;
+  }
+  const ParticleStepView& v_;
+  int k_;
+};
+
+/// Particle k of the device's arrays: the Layout of step_particle for one particle. The device has
+/// no contacts between unbonded particles (a breaking run there needs them off).
+class ParticleLayout {
+ public:
+  using Lane = double;
+  PLYDEM_HOST_DEVICE ParticleLayout(const ParticleStepView& v, int k) : v_(v), k_(k) {}
+
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE double dt() const { return v_.dt; }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE double alpha() const { return v_.alpha; }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void load_state(double (&u)[3], double (&t)[3]) const {
+    for (int c = 0; c < 3; ++c) {
+      u[c] = v_.a.displacement[v_.parity][c][k_];
+      t[c] = v_.a.rotation[v_.parity][c][k_];
+    }
+  }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE ParticleSlots slots() const {
+    return ParticleSlots(v_, k_);
+  }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void add_contacts(double (&)[3], double (&)[3]) const {}
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE bool load_motion(LaneMotion<double>& m) const {
+    const MotionClass& motion = v_.a.classes[v_.a.motion[k_]];
+    for (int c = 0; c < 3; ++c) {
+      m.fix_velocity[c] = motion.fix_velocity[c] != 0;
+      m.fix_angular_velocity[c] = motion.fix_angular_velocity[c] != 0;
+      m.velocity[c] = motion.velocity[c];
+      m.angular_velocity[c] = motion.angular_velocity[c];
+    }
+    m.counts_free = motion.free != 0;
+    return v_.a.motion[k_] != 0;
+  }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void load_dynamics(double& inverse_mass,
+                                                            double& inverse_inertia, double (&v)[3],
+                                                            double (&omega)[3]) const {
+    inverse_mass = v_.a.inverse_mass[k_];
+    inverse_inertia = v_.a.inverse_inertia[k_];
+    for (int c = 0; c < 3; ++c) {
+      v[c] = v_.a.velocity[c][k_];
+      omega[c] = v_.a.angular_velocity[c][k_];
+    }
+  }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void store_state(const double (&u)[3],
+                                                          const double (&t)[3],
+                                                          const double (&v)[3],
+                                                          const double (&omega)[3]) const {
+    const int out = 1 - v_.parity;
+    for (int c = 0; c < 3; ++c) {
+      v_.a.displacement[out][c][k_] = u[c];
+      v_.a.rotation[out][c][k_] = t[c];
+      v_.a.velocity[c][k_] = v[c];
+      v_.a.angular_velocity[c][k_] = omega[c];
+    }
+  }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void add_account(const StepSums<double>& s,
+                                                          bool prescribed) const {
+    v_.a.damping_sum[k_] += s.damping_sum;
+    if (prescribed) v_.a.work_sum[k_] += s.work_sum;
+  }
+  PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void report(const ParticleReport<double>& r) const {
+    for (int c = 0; c < 3; ++c) {
+      v_.a.force[c][k_] = r.force[c];
+      v_.a.torque[c][k_] = r.torque[c];
+    }
+    const std::size_t p = static_cast<std::size_t>(v_.padded);
+    for (int q = 0; q < kParticlePartials; ++q) v_.a.partial[q * p + k_] = r.partial[q];
+  }
+
+ private:
+  const ParticleStepView& v_;
+  int k_;
+};
+
+/// One cycle of particle k (k < padded) of the device's arrays.
 template <bool kReport, int kMode>
 PLYDEM_HOST_DEVICE inline void particle_step(const ParticleStepView& v, int k) {
-  constexpr bool kBreaking = kMode != kElasticMode;
-  constexpr bool kSoften = kMode == kSofteningTypes || kMode == kSofteningSlots;
-  constexpr bool kSlotStrength = kMode == kBrittleSlots || kMode == kSofteningSlots;
-  double u_i[3], t_i[3];
-  for (int c = 0; c < 3; ++c) {
-    u_i[c] = v.displacement_in[c][k];
-    t_i[c] = v.rotation_in[c][k];
-  }
-  double force[3] = {0, 0, 0}, torque[3] = {0, 0, 0};
-  double energy = 0, bond_force = 0;
-  for (int slot = 0; slot < v.width; ++slot) {
-    const std::size_t cell = static_cast<std::size_t>(slot) * v.padded + k;
-    const std::int32_t type = v.type[cell];
-    if (type == 0) continue;
-    const std::int32_t j = v.neighbour[cell];
-    const HalfBondType& h = v.types[type];
-    double u_j[3], t_j[3], n[3];
-    for (int c = 0; c < 3; ++c) {
-      u_j[c] = v.displacement_in[c][j];
-      t_j[c] = v.rotation_in[c][j];
-      n[c] = h.normal[c];
-    }
-    double k_s = h.shear_stiffness, s_k_s = h.lever_shear, k_n_excess = h.normal_excess,
-           k_b = h.bending_stiffness, k_t_excess = h.twisting_excess;
-    double dt[3], a[3], force2 = 0;
-    HalfBondMotion<double> m;
-    if constexpr (kBreaking) {
-      const HalfBondFailure& f = v.failure[type];
-      if constexpr (kSoften) {
-        const double remaining = 1.0 - v.slot_damage[cell];
-        k_s = remaining * k_s;
-        s_k_s = remaining * s_k_s;
-        k_n_excess = remaining * k_n_excess;
-        k_b = remaining * k_b;
-        k_t_excess = remaining * k_t_excess;
-      }
-      symmetric_lever_term(f.lever_mean, f.lever_half_difference, t_i, t_j, dt, a);
-      half_bond_response<kReport>(n, u_i, u_j, a, dt, k_s, s_k_s, k_n_excess, k_b, k_t_excess,
-                                  force, torque, energy, force2, m);
-      if constexpr (kReport) bond_force += 0.5 * std::sqrt(force2);
-      const double alpha = kSlotStrength ? v.slot_alpha[cell] : f.screen_displacement;
-      const double beta = kSlotStrength ? v.slot_beta[cell] : f.screen_rotation;
-      double measure;
-      screen_measure(alpha, beta, m, measure);
-      if (measure >= 1.0 - kScreenBound)
-        assess_particle_slot<kSoften, kSlotStrength>(v, k, slot, m.du, dt, n, u_i);
-    } else {
-      lever_term(h.lever_own, h.lever_other, t_i, t_j, dt, a);
-      half_bond_response<kReport>(n, u_i, u_j, a, dt, k_s, s_k_s, k_n_excess, k_b, k_t_excess,
-                                  force, torque, energy, force2, m);
-      if constexpr (kReport) bond_force += 0.5 * std::sqrt(force2);
-    }
-  }
-
-  const MotionClass& motion = v.classes[v.motion[k]];
-  const bool prescribed = v.motion[k] != 0;
-  const double dt_over_mass = v.dt * v.inverse_mass[k];
-  const double dt_over_inertia = v.dt * v.inverse_inertia[k];
-  double kinetic = 0, damping_sum = 0, work_sum = 0, damping_half = 0, work_half = 0;
-  // The account's shares of one component (the host's account_lanes).
-  auto account = [&](double f, double damping, double v_old, double v_new, bool fixed) {
-    const double both = v_old + v_new;
-    if (!fixed) damping_sum += damping * both;
-    if (prescribed && fixed) work_sum -= f * both;
-    if constexpr (kReport) {
-      if (!fixed) damping_half += damping * v_new;
-      if (prescribed && fixed) work_half -= f * v_new;
-    }
-  };
-  for (int c = 0; c < 3; ++c) {
-    const bool fix_v = motion.fix_velocity[c] != 0, fix_w = motion.fix_angular_velocity[c] != 0;
-    double u = v.displacement_in[c][k], vel = v.velocity[c][k], v_old, damping;
-    advance_dof(force[c], dt_over_mass, fix_v, motion.velocity[c], v.dt, v.alpha, u, vel, v_old,
-                damping);
-    v.displacement_out[c][k] = u;
-    v.velocity[c][k] = vel;
-    if constexpr (kReport) {
-      if (!fix_v) kinetic += v_old / v.inverse_mass[k] * vel;
-    }
-    if constexpr (kBreaking) account(force[c], damping, v_old, vel, fix_v);
-
-    u = v.rotation_in[c][k];
-    vel = v.angular_velocity[c][k];
-    advance_dof(torque[c], dt_over_inertia, fix_w, motion.angular_velocity[c], v.dt, v.alpha, u,
-                vel, v_old, damping);
-    v.rotation_out[c][k] = u;
-    v.angular_velocity[c][k] = vel;
-    if constexpr (kReport) {
-      if (!fix_w) kinetic += v_old / v.inverse_inertia[k] * vel;
-    }
-    if constexpr (kBreaking) account(torque[c], damping, v_old, vel, fix_w);
-  }
-  if constexpr (kBreaking) {
-    v.damping_sum[k] += damping_sum;
-    if (prescribed) v.work_sum[k] += work_sum;
-  }
-  if constexpr (kReport) {
-    const double f2 = force[0] * force[0] + force[1] * force[1] + force[2] * force[2];
-    for (int c = 0; c < 3; ++c) {
-      v.force_out[c][k] = force[c];
-      v.torque_out[c][k] = torque[c];
-    }
-    const std::size_t p = static_cast<std::size_t>(v.padded);
-    v.partial[0 * p + k] = energy;
-    v.partial[1 * p + k] = bond_force;
-    v.partial[2 * p + k] = kinetic;
-    v.partial[3 * p + k] = motion.free != 0 ? std::sqrt(f2) : 0.0;
-    v.partial[4 * p + k] = work_half;
-    v.partial[5 * p + k] = damping_half;
-  }
+  ParticleLayout layout(v, k);
+  step_particle<kReport, kMode>(layout);
 }
 
 /// The host kernel's block partial of report sum q: the eight particles' sums in lane order.

@@ -377,9 +377,9 @@ TEST_CASE("the integrator breaks bonds by hand in both kernels alike") {
   settings.time_step = 0.5 * critical_time_step(base);
   settings.local_damping = 0;
   Model fused_model = base, reference_model = base, reduced = base;
-  settings.kernel = ExplicitKernel::kFused;
+  settings.backend = ExplicitBackend::kCpu;
   ExplicitIntegrator fused(fused_model, settings);
-  settings.kernel = ExplicitKernel::kReference;
+  settings.backend = ExplicitBackend::kReference;
   ExplicitIntegrator reference(reference_model, settings);
   CHECK(!fused.breaking());
   fused.advance(20);
@@ -413,7 +413,7 @@ TEST_CASE("the integrator breaks bonds by hand in both kernels alike") {
   CHECK(relative_difference(a.force, b.force) < 1e-12);
   // Broken before the first cycle: the run of a model built with the bonds broken.
   Model breaking = base;
-  settings.kernel = ExplicitKernel::kFused;
+  settings.backend = ExplicitBackend::kCpu;
   ExplicitIntegrator early(breaking, settings);
   for (int k : broken) early.break_bond(k);
   for (int k : broken) {
@@ -422,7 +422,7 @@ TEST_CASE("the integrator breaks bonds by hand in both kernels alike") {
     reduced.bonds.normal_stiffness(k) = reduced.bonds.shear_stiffness(k) = 0;
     reduced.bonds.bending_stiffness(k) = reduced.bonds.twisting_stiffness(k) = 0;
   }
-  settings.kernel = ExplicitKernel::kReference;
+  settings.backend = ExplicitBackend::kReference;
   settings.time_step = early.time_step();  // the built-broken model's own bound is the intact one
   ExplicitIntegrator never(reduced, settings);
   early.advance(30);

@@ -60,7 +60,7 @@ void set_strengths(Model& m, const ExplicitSettings& settings, double speed, dou
                    double ductility, bool mixed = false) {
   Model elastic = m;
   ExplicitSettings s = settings;
-  s.kernel = ExplicitKernel::kReference;
+  s.backend = ExplicitBackend::kReference;
   ExplicitIntegrator integrator(elastic, s);
   integrator.set_prescribed_motions(pull(speed));
   integrator.advance(1000);
@@ -195,7 +195,7 @@ namespace {
 // Runs `initial` with strengths reached after about 2000 cycles for 6000 cycles, uninterrupted
 // and restarted at 3000, for each ductility, kernel and way of saving given.
 void check_explicit_restart(const std::vector<double>& ductilities,
-                            const std::vector<ExplicitKernel>& kernels,
+                            const std::vector<ExplicitBackend>& kernels,
                             const std::vector<bool>& from_hooks, bool mixed = false) {
   const Model built = small_coupon();
   ExplicitSettings settings;
@@ -206,12 +206,12 @@ void check_explicit_restart(const std::vector<double>& ductilities,
   for (const double ductility : ductilities) {
     Model initial = built;
     set_strengths(initial, settings, speed, 2000.37, ductility, mixed);
-    for (const ExplicitKernel kernel : kernels) {
+    for (const ExplicitBackend kernel : kernels) {
       for (const bool from_hook : from_hooks) {
         CAPTURE(ductility);
         CAPTURE(static_cast<int>(kernel));
         CAPTURE(from_hook);
-        settings.kernel = kernel;
+        settings.backend = kernel;
         const ExplicitOutcome whole = explicit_run(initial, settings, speed, cycles);
         const ExplicitOutcome resumed =
             explicit_run(initial, settings, speed, cycles, &file.path, half, from_hook);
@@ -239,18 +239,18 @@ void check_explicit_restart(const std::vector<double>& ductilities,
 
 TEST_CASE("an explicit run with softening bonds restarted from a hook's checkpoint is the same") {
   // The path the tension test takes (fused kernel, saved from a check), in every build.
-  check_explicit_restart({4.0}, {ExplicitKernel::kFused}, {true});
+  check_explicit_restart({4.0}, {ExplicitBackend::kCpu}, {true});
 }
 
 TEST_CASE("every kernel: explicit runs with breaking bonds restarted are bitwise the same") {
   // Brittle and softening, fused and reference kernels, saved between runs and from a hook.
-  check_explicit_restart({1.0, 4.0}, {ExplicitKernel::kFused, ExplicitKernel::kReference},
+  check_explicit_restart({1.0, 4.0}, {ExplicitBackend::kCpu, ExplicitBackend::kReference},
                          {false, true});
 }
 
 TEST_CASE("explicit runs with mixed-mode bonds restarted are bitwise the same") {
   // The interface bonds' law (its fields travel in the checkpoint's bonds), both kernels.
-  check_explicit_restart({4.0}, {ExplicitKernel::kFused, ExplicitKernel::kReference}, {false},
+  check_explicit_restart({4.0}, {ExplicitBackend::kCpu, ExplicitBackend::kReference}, {false},
                          true);
 }
 
@@ -285,9 +285,10 @@ TEST_CASE("an explicit checkpoint of another model or other settings is refused"
   CHECK(contains(error_message([&] { restore_into(initial, other); }),
                  "is for another run: time step is"));
   other = settings;
-  other.kernel = ExplicitKernel::kReference;
-  CHECK(contains(error_message([&] { restore_into(initial, other); }),
-                 "is for another run: kernel is fused there, reference here"));
+  other.backend = ExplicitBackend::kReference;
+  CHECK(contains(
+      error_message([&] { restore_into(initial, other); }),
+      "is for another run: backend is kernel order (cpu, emulation, cuda) there, reference here"));
   CHECK(contains(error_message([&] { restore_into(small_coupon(2e-3, 0.6e-3), settings); }),
                  "is for another"));
 }

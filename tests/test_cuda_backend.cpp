@@ -228,8 +228,6 @@ TEST_CASE("a device backend without contacts refuses a breaking run that has the
   const std::string message = backend_error(c.settings, c.model);
   CHECK(contains(message, "emulation backend has no contacts"));
   CHECK(contains(message, "contacts off"));
-  c.settings.kernel = ExplicitKernel::kReference;
-  CHECK(contains(backend_error(c.settings, c.model), "runs the fused kernel only"));
   CHECK(contains(error_message([] { parse_backend("gpu"); }), "unknown backend 'gpu'"));
 }
 

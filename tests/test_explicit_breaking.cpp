@@ -89,9 +89,9 @@ std::vector<PrescribedMotion> drive(const Eigen::Vector3d& v0, const Eigen::Vect
   return {a, b};
 }
 
-ExplicitSettings kernel_settings(ExplicitKernel kernel, ParticleOrder order, double dt) {
+ExplicitSettings kernel_settings(ExplicitBackend kernel, ParticleOrder order, double dt) {
   ExplicitSettings s;
-  s.kernel = kernel;
+  s.backend = kernel;
   s.particle_order = order;
   s.time_step = dt;
   return s;
@@ -150,7 +150,7 @@ void set_strengths(Model& m, double tensile, double cohesion, double friction,
 double tensile_stress_per_cycle(Model m, double speed, double dt) {
   ExplicitSettings s;
   s.time_step = dt;
-  s.kernel = ExplicitKernel::kReference;
+  s.backend = ExplicitBackend::kReference;
   ExplicitIntegrator integrator(m, s);
   integrator.set_prescribed_motions(pull(speed));
   const long cycles = 2000;
@@ -272,7 +272,7 @@ TEST_CASE("one bond breaks at the cycle its hand-computed utilisation reaches 1"
   }
   for (const Case& c : cases) {
     for (int first : {0, 1}) {
-      for (ExplicitKernel kernel : {ExplicitKernel::kReference, ExplicitKernel::kFused}) {
+      for (ExplicitBackend kernel : {ExplicitBackend::kReference, ExplicitBackend::kCpu}) {
         for (ParticleOrder order : {ParticleOrder::kAsBuilt, ParticleOrder::kHilbert}) {
           CAPTURE(std::string(c.name));
           CAPTURE(first);
@@ -316,7 +316,7 @@ TEST_CASE("a softening bond follows its line and breaks when its kappa reaches t
   s.cohesion = 1e3 * s.tensile;
   s.ductility = ku;
   const Eigen::Vector3d n = s.direction.normalized(), zero = Eigen::Vector3d::Zero();
-  for (ExplicitKernel kernel : {ExplicitKernel::kReference, ExplicitKernel::kFused}) {
+  for (ExplicitBackend kernel : {ExplicitBackend::kReference, ExplicitBackend::kCpu}) {
     CAPTURE(static_cast<int>(kernel));
     Model m = pair_model(s);
     ExplicitIntegrator integrator(m, kernel_settings(kernel, ParticleOrder::kAutomatic, dt));
@@ -426,9 +426,9 @@ TEST_CASE("the fused kernel breaks the bonds the reference loop breaks, at the s
   const double speed = 0.02;
   const double rate = tensile_stress_per_cycle(m, speed, settings.time_step);
   set_strengths(m, 3000.37 * rate, 5000.37 * rate, 0.3);
-  settings.kernel = ExplicitKernel::kReference;
+  settings.backend = ExplicitBackend::kReference;
   const CouponRun slow = run_coupon(m, settings, speed, 12000);
-  settings.kernel = ExplicitKernel::kFused;
+  settings.backend = ExplicitBackend::kCpu;
   const CouponRun fast = run_coupon(m, settings, speed, 12000);
   REQUIRE(slow.breaks.size() > 5);
   CHECK(same_breaks(fast.breaks, slow.breaks));
@@ -494,12 +494,12 @@ TEST_CASE("the energy account closes within 1% on a coupon pulled to failure") {
   const double speed = 0.02;
   const double rate = tensile_stress_per_cycle(m, speed, settings.time_step);
   for (double ductility : {1.0, 4.0}) {
-    for (ExplicitKernel kernel : {ExplicitKernel::kFused, ExplicitKernel::kReference}) {
+    for (ExplicitBackend kernel : {ExplicitBackend::kCpu, ExplicitBackend::kReference}) {
       CAPTURE(ductility);
       CAPTURE(static_cast<int>(kernel));
       Model coupon = m;
       set_strengths(coupon, 3000 * rate, 5000 * rate, 0.3, ductility);
-      settings.kernel = kernel;
+      settings.backend = kernel;
       const CouponRun r = run_coupon(coupon, settings, speed, 20000);
       const EnergyAccount& e = r.energy;
       // Failed: many bonds broke, the grips did work, breaking released a good share of it.
@@ -518,8 +518,8 @@ TEST_CASE("an elastic run's account closes to rounding") {
   Model m = small_coupon();
   ExplicitSettings settings;
   settings.energy_account = true;
-  for (ExplicitKernel kernel : {ExplicitKernel::kFused, ExplicitKernel::kReference}) {
-    settings.kernel = kernel;
+  for (ExplicitBackend kernel : {ExplicitBackend::kCpu, ExplicitBackend::kReference}) {
+    settings.backend = kernel;
     const CouponRun r = run_coupon(m, settings, 0.02, 3000, 250);
     CHECK(r.breaks.empty());
     CHECK(r.energy.boundary_work > 0);
@@ -541,7 +541,7 @@ TEST_CASE("a closed crack carries compression, an open one nothing") {
   s.tensile = 1e3;  // breakable; the bond is broken by hand below
   const Eigen::Vector3d n = s.direction.normalized(), zero = Eigen::Vector3d::Zero();
   const Eigen::Vector3d t = Eigen::Vector3d::UnitZ().cross(n);
-  for (ExplicitKernel kernel : {ExplicitKernel::kReference, ExplicitKernel::kFused}) {
+  for (ExplicitBackend kernel : {ExplicitBackend::kReference, ExplicitBackend::kCpu}) {
     CAPTURE(static_cast<int>(kernel));
     // Pulled apart: nothing.
     {
@@ -613,7 +613,7 @@ TEST_CASE("a bond broken by the law becomes a contact: the closed crack carries 
   s.tensile = X * s.k_n * v * dt / area;
   s.cohesion = 1e3 * s.tensile;
   const Eigen::Vector3d n = s.direction.normalized(), zero = Eigen::Vector3d::Zero();
-  for (ExplicitKernel kernel : {ExplicitKernel::kReference, ExplicitKernel::kFused}) {
+  for (ExplicitBackend kernel : {ExplicitBackend::kReference, ExplicitBackend::kCpu}) {
     Model m = pair_model(s);
     ExplicitIntegrator integrator(m, kernel_settings(kernel, ParticleOrder::kAutomatic, dt));
     integrator.set_prescribed_motions(drive(zero, zero, v * n, zero));

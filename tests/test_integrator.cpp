@@ -162,16 +162,16 @@ bool same_state(const Particles& a, const Particles& b) {
          bitwise_equal(a.torque, b.torque);
 }
 
-ExplicitSettings kernel(ExplicitKernel k) {
+ExplicitSettings kernel(ExplicitBackend k) {
   ExplicitSettings s;
-  s.kernel = k;
+  s.backend = k;
   return s;
 }
 
 }  // namespace
 
 TEST_CASE("run() equals cycle-by-cycle advance bit for bit, whatever the check interval") {
-  for (const ExplicitKernel k : {ExplicitKernel::kFused, ExplicitKernel::kReference}) {
+  for (const ExplicitBackend k : {ExplicitBackend::kCpu, ExplicitBackend::kReference}) {
     CAPTURE(static_cast<int>(k));
     Model by_cycle = gripped_coupon();
     kick(by_cycle, 4);
@@ -282,7 +282,7 @@ TEST_CASE("run() stops at its cycle limit, at its wall-time limit and when a hoo
 }
 
 TEST_CASE("run()'s hooks come at the check interval and see the state of that cycle") {
-  for (const ExplicitKernel k : {ExplicitKernel::kFused, ExplicitKernel::kReference}) {
+  for (const ExplicitBackend k : {ExplicitBackend::kCpu, ExplicitBackend::kReference}) {
     CAPTURE(static_cast<int>(k));
     Model reference = gripped_coupon();
     kick(reference, 6);

@@ -112,9 +112,9 @@ bool bitwise_equal(const Particles& a, const Particles& b) {
          (a.force == b.force).all() && (a.torque == b.torque).all();
 }
 
-ExplicitSettings settings_for(ExplicitKernel kernel, double damping = 0.7) {
+ExplicitSettings settings_for(ExplicitBackend kernel, double damping = 0.7) {
   ExplicitSettings s;
-  s.kernel = kernel;
+  s.backend = kernel;
   s.local_damping = damping;
   return s;
 }
@@ -125,7 +125,7 @@ struct Run {
 };
 
 // `cycles` cycles of `model` (grips moving) with the given kernel, in chunks of `chunk`.
-Run run(Model model, ExplicitKernel kernel, long cycles, long chunk, double damping = 0.7) {
+Run run(Model model, ExplicitBackend kernel, long cycles, long chunk, double damping = 0.7) {
   ExplicitIntegrator integrator(model, settings_for(kernel, damping));
   integrator.set_prescribed_motions(grips());
   Run r;
@@ -150,7 +150,7 @@ TEST_CASE("the fused kernel's forces equal the reference loop's on random models
     disturb(fast, 10 + seed, 1e-3);
     Model slow = fast;
     const BondPass pass = compute_bond_forces(slow.particles, slow.bonds);
-    ExplicitIntegrator integrator(fast, settings_for(ExplicitKernel::kFused));
+    ExplicitIntegrator integrator(fast, settings_for(ExplicitBackend::kCpu));
     const CycleReport report = integrator.cycle();
     // After one cycle the model holds the forces the cycle used: those of the initial state.
     CHECK(relative_difference(fast.particles.force, slow.particles.force) < 1e-12);
@@ -165,8 +165,8 @@ TEST_CASE("advance(n) on the fused kernel equals n reference cycles") {
     for (unsigned seed : {4u, 5u}) {
       Model m = random_model(seed, 90);
       disturb(m, 20 + seed, 1e-3);
-      const Run slow = run(m, ExplicitKernel::kReference, 60, 1);
-      const Run fast = run(m, ExplicitKernel::kFused, 60, 20);
+      const Run slow = run(m, ExplicitBackend::kReference, 60, 1);
+      const Run fast = run(m, ExplicitBackend::kCpu, 60, 20);
       CHECK(state_difference(fast.model.particles, slow.model.particles) < 1e-12);
       check_reports_close(fast.report, slow.report, 1e-12);
       CHECK(slow.report.kinetic_energy > 0);
@@ -177,8 +177,8 @@ TEST_CASE("advance(n) on the fused kernel equals n reference cycles") {
     // them to within 1e-12 (contacts/bond_kernel.cpp), hence the looser tolerance here.
     Model m = hex_coupon();
     disturb(m, 7, 1e-9);
-    const Run slow = run(m, ExplicitKernel::kReference, 1000, 1, 0.0);
-    const Run fast = run(m, ExplicitKernel::kFused, 1000, 250, 0.0);
+    const Run slow = run(m, ExplicitBackend::kReference, 1000, 1, 0.0);
+    const Run fast = run(m, ExplicitBackend::kCpu, 1000, 250, 0.0);
     CHECK(state_difference(fast.model.particles, slow.model.particles) < 1e-9);
     check_reports_close(fast.report, slow.report, 1e-9);
   }
@@ -187,8 +187,8 @@ TEST_CASE("advance(n) on the fused kernel equals n reference cycles") {
 TEST_CASE("cycle() reports every cycle as advance(1) does, and advance(n) ends in the same state") {
   Model m = random_model(6, 80);
   disturb(m, 31, 1e-3);
-  const Run by_cycle = run(m, ExplicitKernel::kFused, 30, 1);
-  const Run at_once = run(m, ExplicitKernel::kFused, 30, 30);
+  const Run by_cycle = run(m, ExplicitBackend::kCpu, 30, 1);
+  const Run at_once = run(m, ExplicitBackend::kCpu, 30, 30);
   CHECK(bitwise_equal(by_cycle.model.particles, at_once.model.particles));
   CHECK(by_cycle.report.strain_energy == at_once.report.strain_energy);
   CHECK(by_cycle.report.unbalanced_force_ratio == at_once.report.unbalanced_force_ratio);
@@ -201,8 +201,8 @@ TEST_CASE("a serial run is bitwise reproducible") {
   Threads one(1);
   Model m = hex_coupon();
   disturb(m, 8, 1e-9);
-  const Run a = run(m, ExplicitKernel::kFused, 300, 100);
-  const Run b = run(m, ExplicitKernel::kFused, 300, 100);
+  const Run a = run(m, ExplicitBackend::kCpu, 300, 100);
+  const Run b = run(m, ExplicitBackend::kCpu, 300, 100);
   CHECK(bitwise_equal(a.model.particles, b.model.particles));
   CHECK(a.report.strain_energy == b.report.strain_energy);
   CHECK(a.report.kinetic_energy == b.report.kinetic_energy);
@@ -216,11 +216,11 @@ TEST_CASE("one and two threads give the same result") {
   Run one, two;
   {
     Threads t(1);
-    one = run(m, ExplicitKernel::kFused, 200, 50);
+    one = run(m, ExplicitBackend::kCpu, 200, 50);
   }
   {
     Threads t(2);
-    two = run(m, ExplicitKernel::kFused, 200, 50);
+    two = run(m, ExplicitBackend::kCpu, 200, 50);
   }
   // Each particle sums its own bonds in a fixed order and the report sums blocks in block order,
   // so the split cannot change a bit; the tolerance is what the kernel promises.
@@ -251,7 +251,7 @@ TEST_CASE("renumbering the particles permutes the results and changes nothing el
       CHECK(renumbered.particles.group(k) == m.particles.group(order[k]));
       CHECK(renumbered.particles.mass(k) == m.particles.mass(order[k]));
     }
-    for (ExplicitKernel kernel : {ExplicitKernel::kFused, ExplicitKernel::kReference}) {
+    for (ExplicitBackend kernel : {ExplicitBackend::kCpu, ExplicitBackend::kReference}) {
       const Run original = run(m, kernel, 40, 10);
       const Run permuted = run(renumbered, kernel, 40, 10);
       // The original run's state in the new numbering.

@@ -152,11 +152,11 @@ struct ExplicitPull {
   long cycles = 0;
 };
 
-ExplicitPull pull_explicit(const Interface& f, double angle, ExplicitKernel kernel, double step,
+ExplicitPull pull_explicit(const Interface& f, double angle, ExplicitBackend kernel, double step,
                            StrengthStorage storage = StrengthStorage::kAutomatic) {
   Model m = interface_pair(f, angle);
   ExplicitSettings settings;
-  settings.kernel = kernel;
+  settings.backend = kernel;
   settings.strength_storage = storage;
   settings.time_step = 1e-9;
   ExplicitIntegrator integrator(m, settings);
@@ -216,10 +216,10 @@ TEST_CASE("the mixed-mode law's onset and energy follow the quadratic criterion 
     // Both explicit kernels (the fused one with strengths per type and per slot), about 200
     // cycles to the onset.
     for (const auto& [kernel, storage] :
-         {std::pair{ExplicitKernel::kReference, StrengthStorage::kAutomatic},
-          std::pair{ExplicitKernel::kFused, StrengthStorage::kTypes},
-          std::pair{ExplicitKernel::kFused, StrengthStorage::kSlots}}) {
-      const bool fused = kernel == ExplicitKernel::kFused;
+         {std::pair{ExplicitBackend::kReference, StrengthStorage::kAutomatic},
+          std::pair{ExplicitBackend::kCpu, StrengthStorage::kTypes},
+          std::pair{ExplicitBackend::kCpu, StrengthStorage::kSlots}}) {
+      const bool fused = kernel == ExplicitBackend::kCpu;
       const bool slots = storage == StrengthStorage::kSlots;
       CAPTURE(fused);
       CAPTURE(slots);

@@ -280,9 +280,7 @@ void refuse_inapplicable(const CLI::App& app, const StrengthCommandOptions& o) {
 // --backend cpu|cuda: where the explicit integrator's kernel runs (solvers/device_backend.hpp).
 void add_backend_option(CLI::App& app, std::string& backend, const std::string& needs) {
   app.add_option("--backend", backend,
-                 "where explicit dynamics run (" + needs +
-                     "): cpu (SIMD kernel, OpenMP threads) or cuda (one CUDA device; a build "
-                     "with -DPLYDEM_CUDA=ON)")
+                 "where explicit dynamics run (" + needs + "): " + plydem::backend_help())
       ->check(CLI::IsMember(plydem::backend_choices()))
       ->capture_default_str();
 }

@@ -279,7 +279,7 @@ def test_linear_solvers_are_the_cli_ones():
 def test_backends_are_the_cli_ones():
     """backend takes and names the values `plydem tension --backend` offers, nothing else."""
     offered = re.search(r"--backend TEXT:\{([^}]*)\}", cli_run("tension", "--help").stdout)
-    assert offered and offered.group(1).split(",") == ["cpu", "cuda"]
+    assert offered and offered.group(1).split(",") == ["cpu", "cuda", "emulation", "reference"]
     model = grip_coupon()
     for name in offered.group(1).split(","):
         assert f"'{name}'" in plydem.TensionSettings.backend.__doc__
@@ -287,11 +287,12 @@ def test_backends_are_the_cli_ones():
         assert plydem.TensionSettings(backend=name).backend == name
     assert plydem.TensionSettings().backend == "cpu"
     assert plydem.ExplicitIntegrator(model, backend="cpu").time_step > 0
-    for name in ("emulation", "gpu"):
+    for name in ("gpu", "fused"):
         assert cli_run("tension", "--solver", "explicit", "--backend", name).returncode != 0
-        with pytest.raises(plydem.Error, match=f"unknown backend '{name}': cpu or cuda"):
+        choices = "cpu, cuda, emulation, reference"
+        with pytest.raises(plydem.Error, match=f"unknown backend '{name}': {choices}"):
             plydem.TensionSettings(backend=name)
-        with pytest.raises(plydem.Error, match=f"unknown backend '{name}': cpu or cuda"):
+        with pytest.raises(plydem.Error, match=f"unknown backend '{name}': {choices}"):
             plydem.ExplicitIntegrator(model, backend=name)
 
 def test_interface_mixed_mode_settings_and_bond_fields():
