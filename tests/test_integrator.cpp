@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "core/error.hpp"
@@ -363,4 +364,71 @@ TEST_CASE("a run without a stop condition or with a bad interval is refused") {
   bad.time_limit_seconds = std::nan("");
   CHECK_THROWS_AS(integrator.run(bad), Error);
   CHECK(integrator.cycles() == 0);
+}
+
+TEST_CASE("periodic hooks fall due at their own periods, in order, and any can stop the run") {
+  // Checkpointing every 40 cycles and sampling every 15 beside checks every 25: the chunks end
+  // wherever one falls due, and the run equals the same cycles without hooks to the bit.
+  for (const ExplicitBackend backend : {ExplicitBackend::kCpu, ExplicitBackend::kReference}) {
+    CAPTURE(to_string(backend));
+    Model m = small_coupon(), plain = m;
+    ExplicitSettings settings;
+    settings.backend = backend;
+    ExplicitIntegrator integrator(m, settings), without(plain, settings);
+    pull(integrator, 0.01);
+    pull(without, 0.01);
+    std::vector<long> checks, sampled, saved;
+    std::vector<char> order;
+    RunControl control;
+    control.check_interval = 25;
+    control.max_cycles = 100;
+    control.on_check = [&](const RunCheck& check) {
+      checks.push_back(check.run_cycles);
+      order.push_back('c');
+      return true;
+    };
+    control.hooks.push_back({15, 0, [&](const RunCheck& check) {
+                               sampled.push_back(check.run_cycles);
+                               order.push_back('s');
+                               return true;
+                             }});
+    control.hooks.push_back({40, 0, [&](const RunCheck& check) {
+                               saved.push_back(check.run_cycles);
+                               order.push_back('k');
+                               return true;
+                             }});
+    integrator.run(control);
+    CHECK(sampled == std::vector<long>{15, 30, 45, 60, 75, 90});
+    CHECK(saved == std::vector<long>{40, 80});
+    // At most check_interval cycles between checks.
+    CHECK(checks == std::vector<long>{15, 30, 40, 45, 60, 75, 80, 90, 100});
+    CHECK(std::string(order.begin(), order.begin() + 4) == "cscs");  // on_check first
+    without.advance(100);
+    CHECK(same_state(m.particles, plain.particles));
+    // A hook that says stop ends the run at its check, after the other hooks of that check.
+    RunControl stopping;
+    stopping.max_cycles = 1000;
+    stopping.check_interval = 10;
+    int later = 0;
+    stopping.hooks.push_back({30, 0, [](const RunCheck&) { return false; }});
+    stopping.hooks.push_back({0, 0, [&](const RunCheck&) { return ++later > 0; }});
+    const RunReport r = integrator.run(stopping);
+    CHECK(r.stop == RunStop::kHook);
+    CHECK(r.cycles == 30);
+    CHECK(later == 3);
+    // A time period: at most once per interval (none within a run shorter than it).
+    RunControl timed;
+    timed.max_cycles = 50;
+    timed.check_interval = 10;
+    int timed_calls = 0;
+    timed.hooks.push_back({0, 3600, [&](const RunCheck&) { return ++timed_calls > 0; }});
+    integrator.run(timed);
+    CHECK(timed_calls == 0);
+    RunControl bad;
+    bad.max_cycles = 10;
+    bad.hooks.push_back({-1, 0, [](const RunCheck&) { return true; }});
+    CHECK_THROWS_AS(integrator.run(bad), Error);
+    bad.hooks.back() = {5, 0, nullptr};
+    CHECK_THROWS_AS(integrator.run(bad), Error);
+  }
 }

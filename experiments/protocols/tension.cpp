@@ -526,16 +526,23 @@ void TensionTest::PullRun::load_fixed_cycles() {
   control.on_progress = [&](const RunCheck& check) {
     report("loading", check.report, s.fixed_cycles - done - check.run_cycles);
   };
-  control.on_check = [&](const RunCheck& check) {
-    const long c = done + check.run_cycles;
-    // The forces belong to the state before the last cycle's update: sample both together.
-    if (c % sample_every == 0 && c > s.fixed_cycles / 2) {
-      integrator->gather(sampled, seen, StateAt::kForces);
-      record(sample(seen));
-    }
-    if (c < s.fixed_cycles) save(c);  // the last check ends the run: nothing to continue
-    return true;
-  };
+  // Sampling, every sample_every cycles: the forces belong to the state before the last cycle's
+  // update, so both are sampled together.
+  control.hooks.push_back({sample_every, 0, [&](const RunCheck& check) {
+                             const long c = done + check.run_cycles;
+                             if (c % sample_every == 0 && c > s.fixed_cycles / 2) {
+                               integrator->gather(sampled, seen, StateAt::kForces);
+                               record(sample(seen));
+                             }
+                             return true;
+                           }});
+  // Checkpointing (save() writes when one is due); the last check ends the run: nothing to
+  // continue.
+  control.hooks.push_back({0, 0, [&](const RunCheck& check) {
+                             const long c = done + check.run_cycles;
+                             if (c < s.fixed_cycles) save(c);
+                             return true;
+                           }});
   require(done < s.fixed_cycles, "the checkpoint's fixed-cycle run is finished already");
   const CycleReport cycle = integrator->run(control).last;
   result.final_ratio = cycle.unbalanced_force_ratio;
@@ -584,10 +591,10 @@ void TensionTest::PullRun::move_grips_through_stage(bool resume_here, long stage
            cycles_per_finished_stage > 0 ? std::max(0L, cycles_per_finished_stage - moved) : -1);
   };
   at.phase = 0;
-  loading.on_check = [&](const RunCheck& check) {
-    if (done + check.run_cycles < ramp) save(done + check.run_cycles);
-    return true;
-  };
+  loading.hooks.push_back({0, 0, [&](const RunCheck& check) {  // checkpointing
+                             if (done + check.run_cycles < ramp) save(done + check.run_cycles);
+                             return true;
+                           }});
   require(done < ramp, "the checkpoint's loading stage is finished already");
   integrator->run(loading);
 }
@@ -606,12 +613,14 @@ void TensionTest::PullRun::relax_stage(bool resume_here, long stage_start) {
   relaxing.max_cycles = at.relax_max - relaxed_before;
   relaxing.progress_seconds = 0;
   relaxing.on_progress = [&](const RunCheck& check) { report("relaxing", check.report, -1); };
-  relaxing.on_check = [&](const RunCheck& check) {
-    // Not at the check that ends the run (quasi-static or out of cycles).
-    const long c = relaxed_before + check.run_cycles;
-    if (check.report.unbalanced_force_ratio > s.tolerance && c < at.relax_max) save(c);
-    return true;
-  };
+  relaxing.hooks.push_back({0, 0, [&](const RunCheck& check) {  // checkpointing
+                              // Not at the check that ends the run (quasi-static or out of cycles).
+                              const long c = relaxed_before + check.run_cycles;
+                              if (check.report.unbalanced_force_ratio > s.tolerance &&
+                                  c < at.relax_max)
+                                save(c);
+                              return true;
+                            }});
   require(relaxing.max_cycles > 0, "the checkpoint's relaxation is finished already");
   const RunReport relaxed = integrator->run(relaxing);
   const CycleReport& cycle = relaxed.last;
