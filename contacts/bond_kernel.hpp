@@ -500,28 +500,11 @@ class BlockSlots {
 
   template <int kMode>
   [[gnu::always_inline]] void load(int slot, HalfBondLoad<Lane>& h) const {
-    constexpr bool kBreaking = breaks_bonds(kMode);
     const std::int32_t uniform_type = block_type_[slot];
     if (uniform_type > 0) {
-      const HalfBondLanes& t = g_.uniform_lanes(uniform_type);
-      for (int c = 0; c < 3; ++c) h.normal[c] = t.normal[c];
-      h.shear_stiffness = t.shear_stiffness;
-      h.lever_shear = t.lever_shear;
-      h.normal_excess = t.normal_excess;
-      h.bending_stiffness = t.bending_stiffness;
-      h.twisting_excess = t.twisting_excess;
-      if constexpr (kBreaking) {
-        const HalfBondFailureLanes& f = g_.failure_lanes(uniform_type);
-        h.lever_a = f.lever_mean;
-        h.lever_b = f.lever_half_difference;
-        if constexpr (!has_slot_strengths(kMode)) {
-          h.screen_displacement = f.screen_displacement;
-          h.screen_rotation = f.screen_rotation;
-        }
-      } else {
-        h.lever_a = t.lever_own;
-        h.lever_b = t.lever_other;
-      }
+      const HalfBondFailureLanes* f =
+          breaks_bonds(kMode) ? &g_.failure_lanes(uniform_type) : nullptr;
+      load_half_bond<kMode>(g_.uniform_lanes(uniform_type), f, h);
     } else {
       const std::int32_t* type = g_.types(slot) + first_;
       for (int l = 0; l < lanes::kCount; ++l) load_lane<kMode>(g_.type(type[l]), type[l], l, h);

@@ -347,6 +347,32 @@ struct HalfBondLoad {
   T screen_displacement, screen_rotation;  ///< breaking: alpha and beta
 };
 
+/// A slot's half-bond from its type `t` and, breaking, its failure data `f` (HalfBondType and
+/// HalfBondFailure for one particle; their lanes, HalfBondLanes and HalfBondFailureLanes, for a
+/// block whose particles share the type). The screen's constants are the type's unless strengths
+/// are kept per slot (the caller loads those).
+template <int kMode, class Type, class Failure, class T>
+PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void load_half_bond(const Type& t, const Failure* f,
+                                                           HalfBondLoad<T>& h) {
+  for (int c = 0; c < 3; ++c) h.normal[c] = t.normal[c];
+  h.shear_stiffness = t.shear_stiffness;
+  h.lever_shear = t.lever_shear;
+  h.normal_excess = t.normal_excess;
+  h.bending_stiffness = t.bending_stiffness;
+  h.twisting_excess = t.twisting_excess;
+  if constexpr (breaks_bonds(kMode)) {
+    h.lever_a = f->lever_mean;
+    h.lever_b = f->lever_half_difference;
+    if constexpr (!has_slot_strengths(kMode)) {
+      h.screen_displacement = f->screen_displacement;
+      h.screen_rotation = f->screen_rotation;
+    }
+  } else {
+    h.lever_a = t.lever_own;
+    h.lever_b = t.lever_other;
+  }
+}
+
 /// The force and moment on one particle (T = double) or on one block of particles (T a vector of
 /// lanes) from all its bonds, added to `force` and `torque`, written once for every backend. With
 /// kEnergy, also half of each bond's strain energy and half its force magnitude (each bond is seen

@@ -210,18 +210,13 @@ class CpuBackend final : public KernelOrderBackend {
 };
 
 void CpuBackend::apply_contacts(UnbondedContacts& contacts, int parity, double dt) {
-  ContactState state;
   ContactForces out;
   for (int c = 0; c < 3; ++c) {
-    state.displacement[c] = arrays_.displacement[parity][c].data();
-    state.rotation[c] = arrays_.rotation[parity][c].data();
-    state.velocity[c] = arrays_.velocity[c].data();
-    state.angular_velocity[c] = arrays_.angular_velocity[c].data();
     out.force[c] = contact_force_[c].data();
     out.torque[c] = contact_torque_[c].data();
   }
   for (int i : contacts.touched()) contact_block_[static_cast<std::size_t>(i / lanes::kCount)] = 0;
-  contacts.apply(state, dt, out);
+  contacts.apply(state_at(parity), dt, out);
   for (int i : contacts.touched()) contact_block_[static_cast<std::size_t>(i / lanes::kCount)] = 1;
 }
 

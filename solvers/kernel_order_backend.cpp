@@ -194,15 +194,19 @@ double KernelOrderBackend::state(int i, int c, bool rotation) const {
                   : arrays_.displacement[parity_][c].data()[j];
 }
 
-ContactState KernelOrderBackend::contact_state() const {
+ContactState KernelOrderBackend::state_at(int parity) const {
   ContactState s;
   for (int c = 0; c < 3; ++c) {
-    s.displacement[c] = arrays_.displacement[parity_][c].data();
-    s.rotation[c] = arrays_.rotation[parity_][c].data();
+    s.displacement[c] = arrays_.displacement[parity][c].data();
+    s.rotation[c] = arrays_.rotation[parity][c].data();
     s.velocity[c] = arrays_.velocity[c].data();
     s.angular_velocity[c] = arrays_.angular_velocity[c].data();
   }
   return s;
+}
+
+ContactState KernelOrderBackend::contact_state() const {
+  return state_at(parity_);
 }
 
 void KernelOrderBackend::touch_contacts(const std::vector<int>& touched) {

@@ -72,6 +72,8 @@ class KernelOrderBackend : public KernelBackend {
   void set_account(const AccountArrays& account) override;
 
  protected:
+  /// The state in buffer `parity` as the contacts read it.
+  ContactState state_at(int parity) const;
   /// The KernelMode of the bonds as they are.
   int mode() const;
   KernelSizes sizes() const;

@@ -266,23 +266,11 @@ class ParticleSlots {
   PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void load(int slot, HalfBondLoad<double>& h) const {
     const std::size_t c = cell(slot);
     const std::int32_t type = v_.a.type[c];
-    const HalfBondType& t = v_.a.types[type];
-    for (int q = 0; q < 3; ++q) h.normal[q] = t.normal[q];
-    h.shear_stiffness = t.shear_stiffness;
-    h.lever_shear = t.lever_shear;
-    h.normal_excess = t.normal_excess;
-    h.bending_stiffness = t.bending_stiffness;
-    h.twisting_excess = t.twisting_excess;
-    if constexpr (breaks_bonds(kMode)) {
-      const HalfBondFailure& f = v_.a.failure[type];
-      h.lever_a = f.lever_mean;
-      h.lever_b = f.lever_half_difference;
-      constexpr bool kSlots = has_slot_strengths(kMode);
-      h.screen_displacement = kSlots ? v_.a.slot_alpha[c] : f.screen_displacement;
-      h.screen_rotation = kSlots ? v_.a.slot_beta[c] : f.screen_rotation;
-    } else {
-      h.lever_a = t.lever_own;
-      h.lever_b = t.lever_other;
+    const HalfBondFailure* f = breaks_bonds(kMode) ? &v_.a.failure[type] : nullptr;
+    load_half_bond<kMode>(v_.a.types[type], f, h);
+    if constexpr (has_slot_strengths(kMode)) {
+      h.screen_displacement = v_.a.slot_alpha[c];
+      h.screen_rotation = v_.a.slot_beta[c];
     }
   }
   PLYDEM_HOST_DEVICE PLYDEM_FORCE_INLINE void damage(int slot, double& d) const {
