@@ -51,16 +51,11 @@ void export_static_solve(py::module_& m);         // solve_static
 void export_prescribed_motion(py::module_& m);    // PrescribedMotion
 void export_explicit_integrator(py::module_& m);  // ExplicitIntegrator
 // python/export_experiments.cpp
-void export_tension_test(py::module_& m);       // TensionSettings, tension_test
-void export_strength_settings(py::module_& m);  // StrengthSettings
-void export_strength_test(py::module_& m);      // strength_test
-void export_output(py::module_& m);             // write_vtu
-
-// What the backends a user chooses from are (solvers/device_backend.hpp, backend_choices()), as
-// the command line's --backend describes them.
-inline constexpr char kBackendHelp[] =
-    "'cpu' (SIMD kernel, OpenMP threads) or 'cuda' (one CUDA device; a build with "
-    "-DPLYDEM_CUDA=ON)";
+void export_tension_test(py::module_& m);        // TensionSettings, tension_test
+void export_strength_settings(py::module_& m);   // StrengthSettings
+void export_strength_test(py::module_& m);       // strength_test
+void export_settings_reference(py::module_& m);  // settings_reference
+void export_output(py::module_& m);              // write_vtu
 
 // A default T with the keyword arguments set as attributes (a TypeError for an unknown one).
 template <class T>
