@@ -752,7 +752,7 @@ void add_strength_coupon(SettingsDescription<StrengthSettings>& d) {
   d.number(
        "progress_seconds", [](auto& s) -> auto& { return s.events.progress_seconds; })
       .without_flag("--progress-interval (every command) sets it")
-      .without_key("`plydem run --progress-interval` sets it")
+      .without_key("a config's runs report at the default interval")
       .with_python("progress_seconds")
       .with_unit(units::same("s"))
       .with_help("seconds between progress reports (strength_test's progress callback)");
