@@ -46,6 +46,7 @@ void define_module(py::module_& m) {
   export_tension_test(m);
   export_strength_settings(m);
   export_strength_test(m);
+  export_settings_reference(m);
   export_output(m);
 }
 

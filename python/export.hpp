@@ -23,7 +23,6 @@
 #include <utility>
 
 #include "core/error.hpp"
-#include "solvers/backend_kind.hpp"
 
 namespace plydem::python {
 
@@ -52,16 +51,11 @@ void export_static_solve(py::module_& m);         // solve_static
 void export_prescribed_motion(py::module_& m);    // PrescribedMotion
 void export_explicit_integrator(py::module_& m);  // ExplicitIntegrator
 // python/export_experiments.cpp
-void export_tension_test(py::module_& m);       // TensionSettings, tension_test
-void export_strength_settings(py::module_& m);  // StrengthSettings
-void export_strength_test(py::module_& m);      // strength_test
-void export_output(py::module_& m);             // write_vtu
-
-// What the backends a user chooses from are (solvers/backend_kind.hpp), as the command line's
-// --backend describes them.
-inline std::string backend_help() {
-  return plydem::backend_help("'");
-}
+void export_tension_test(py::module_& m);        // TensionSettings, tension_test
+void export_strength_settings(py::module_& m);   // StrengthSettings
+void export_strength_test(py::module_& m);       // strength_test
+void export_settings_reference(py::module_& m);  // settings_reference
+void export_output(py::module_& m);              // write_vtu
 
 // A default T with the keyword arguments set as attributes (a TypeError for an unknown one).
 template <class T>

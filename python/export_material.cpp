@@ -6,6 +6,8 @@
 #include <string>
 
 #include "core/material.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
+#include "python/settings_python.hpp"
 #include "strategies/strategy.hpp"
 
 namespace plydem::python {
@@ -66,29 +68,23 @@ void export_material(py::module_& m) {
 }
 
 void export_coupon(py::module_& m) {
-  py::class_<CouponSpec>(
+  py::class_<CouponSpec> coupon(
       m, "CouponSpec",
       "The coupon a strategy builds: one ply, a rectangle in the x-y plane, long "
       "along x. Keywords: material, ply_angle [rad], length, width, thickness, "
-      "particle_diameter [m], complete_boundary_cells.")
+      "particle_diameter [m], complete_boundary_cells.");
+  coupon
       .def(py::init([](py::kwargs kwargs) {
-             CouponSpec coupon;
-             coupon.material = load_material("eglass-my750");
-             coupon = from_kwargs<CouponSpec>(kwargs, coupon);
-             coupon.validate();
-             return coupon;
+             CouponSpec spec =
+                 from_kwargs<CouponSpec>(kwargs, coupon_settings_description().defaults());
+             spec.validate();
+             return spec;
            }),
            "CouponSpec(**keywords); the material defaults to eglass-my750, sizes to the paper's "
            "coupon (10 x 0.83 mm, ply 0.2 mm, particles 0.05 mm).")
       .def_readwrite("material", &CouponSpec::material, "the ply's Material")
-      .def_readwrite("ply_angle", &CouponSpec::ply_angle, "fibre angle from +x [rad]")
-      .def_readwrite("length", &CouponSpec::length, "along x [m]")
-      .def_readwrite("width", &CouponSpec::width, "along y [m]")
-      .def_readwrite("thickness", &CouponSpec::thickness, "ply thickness delta [m]")
-      .def_readwrite("particle_diameter", &CouponSpec::particle_diameter, "[m]")
-      .def_readwrite("complete_boundary_cells", &CouponSpec::complete_boundary_cells,
-                     "let bonds at free edges carry the share of their missing partners")
       .def("validate", &CouponSpec::validate, "Raises plydem.Error naming a bad size.");
+  def_settings(coupon, coupon_settings_description());
 }
 
 }  // namespace plydem::python

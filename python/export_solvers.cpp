@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/model.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 #include "solvers/device_backend.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "solvers/static_solver.hpp"
@@ -241,7 +242,7 @@ void export_explicit_integrator(py::module_& m) {
            (std::string("ExplicitIntegrator(model, damping=0.7, safety=0.8, time_step=0, "
                         "backend='cpu'): time_step 0 = safety times the critical step; backend: "
                         "where the cycles run, ") +
-            backend_help() + ". Raises plydem.Error for bad settings or model.")
+            backend_choices_help(true) + ". Raises plydem.Error for bad settings or model.")
                .c_str())
       .def_property_readonly(
           "time_step", [](const PyIntegrator& x) { return x.integrator.time_step(); }, "[s]")

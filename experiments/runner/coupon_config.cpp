@@ -6,31 +6,33 @@
 
 #include "core/error.hpp"
 #include "core/material.hpp"
+#include "experiments/runner/settings_config.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 
 namespace plydem {
 
+SettingsSelection coupon_config_selection() {
+  return {{"material", "length", "width", "thickness", "diameter", "grips"}, {}};
+}
+
 CouponSpec coupon_from_config(const ExperimentConfig& c, bool quick) {
-  constexpr double mm = 1e-3;
-  CouponSpec spec;
-  spec.material = load_material(c.string("material", "eglass-my750"));
-  auto size = [&](const std::string& key, double fallback_mm) {
-    const double full = c.number(fmt::format("coupon.{}", key), fallback_mm);
-    return (quick ? c.number(fmt::format("quick.{}", key), full) : full) * mm;
-  };
-  spec.length = size("length_mm", 10);
-  spec.width = size("width_mm", 0.83);
-  spec.thickness = size("thickness_mm", 0.2);
-  spec.particle_diameter = size("diameter_mm", 0.05);
+  const SettingsDescription<CouponSpec>& d = coupon_settings_description();
+  CouponSpec spec = d.defaults();
+  read_config_settings(c, d, {{"material", "length", "width", "thickness", "diameter"}, {}}, quick,
+                       spec);
   spec.validate();
   return spec;
 }
 
 GripCondition grips_from_config(const ExperimentConfig& c) {
-  const std::string grips = c.string("coupon.grips", "free");
-  if (grips == "free") return GripCondition::kFree;
-  if (grips == "clamped") return GripCondition::kClamped;
-  throw Error(fmt::format("{}: coupon.grips must be \"free\" or \"clamped\", got \"{}\"",
-                          c.path().string(), grips));
+  const SettingsDescription<TensionSettings>& d = tension_settings_description();
+  TensionSettings s = d.defaults();
+  read_config_settings(c, d, {{"grips"}, {}}, false, s);
+  return s.grips;
+}
+
+std::vector<std::string> coupon_config_keys() {
+  return config_keys(tension_settings_description(), coupon_config_selection());
 }
 
 std::vector<std::pair<std::string, double>> parse_strategy_options(

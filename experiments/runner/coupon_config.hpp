@@ -4,7 +4,9 @@
 ///   material = "eglass-my750"                 (built-in name or a material TOML file)
 ///   [coupon] length_mm, width_mm, thickness_mm, diameter_mm, grips ("free" or "clamped")
 ///   [quick]  the same sizes, replacing those of [coupon] in a quick run (`plydem run --quick`)
-/// Defaults: the paper's coupon (10 x 0.83 x 0.2 mm, 0.05 mm particles), free grips.
+/// Defaults: the paper's coupon (10 x 0.83 x 0.2 mm, 0.05 mm particles), free grips. The keys are
+/// the settings descriptions' (coupon_settings_description(), tension_settings_description()):
+/// the command line's --material, --length-mm, ..., --grips.
 
 #include <string>
 #include <utility>
@@ -22,6 +24,12 @@ CouponSpec coupon_from_config(const ExperimentConfig& config, bool quick);
 
 /// coupon.grips. Throws plydem::Error naming the file for anything but "free" or "clamped".
 GripCondition grips_from_config(const ExperimentConfig& config);
+
+/// The keys coupon_from_config and grips_from_config read (quick keys included).
+std::vector<std::string> coupon_config_keys();
+
+/// The settings (of tension_settings_description()) coupon_from_config and grips_from_config read.
+SettingsSelection coupon_config_selection();
 
 /// Strategy options written "NAME=VALUE" -> (NAME, VALUE). Throws plydem::Error naming the entry,
 /// prefixed by `what` ("--strategy-option", or the config and key), when it is not NAME=VALUE or

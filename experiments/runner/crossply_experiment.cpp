@@ -39,6 +39,8 @@
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/report_text.hpp"
+#include "experiments/runner/settings_config.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 #include "experiments/runner/strength_experiment.hpp"
 #include "solvers/cracks.hpp"
 #include "strategies/laminate.hpp"
@@ -172,79 +174,40 @@ struct CrossplySettings {
   std::vector<std::pair<int, int>> counts;  ///< (m, n) of each [0_m/90_n]s
 };
 
+// The kind's settings: the strength command's (strength_settings_description()) but the ply
+// angle, the layup (each case's, from layups) and the hole; its defaults are the command's but
+// scatter (Weibull modulus 10, per crack site) and the plies carrying the transverse shear.
+SettingsSelection crossply_selection() {
+  return {{}, {"angle", "layup", "hole_diameter"}};
+}
+
+StrengthSettings crossply_defaults(const ExperimentContext& context) {
+  StrengthSettings base = strength_settings_description().defaults();
+  base.force = context.force;
+  base.interface.transverse_shear = true;
+  base.weibull_modulus = 10;
+  base.scatter_per_crack_site = true;
+  return base;
+}
+
+const std::vector<std::pair<std::string, std::string>>& crossply_own_keys() {
+  static const std::vector<std::pair<std::string, std::string>> keys{
+      {"layups",
+       "the [0_m/90_n]s laminates, one case each; default [\"[0/90]s\", "
+       "\"[0/90_2]s\", \"[0/90_4]s\"]"},
+      {"quick.layups", "the laminates of a quick run"},
+      {"scatter", "\"90\" (the strength scatter in the 90° plies only, the default) or \"all\""},
+      {"fem.element_mm", "CalculiX's in-plane element size [mm]; 0 = half a particle diameter"},
+      {"fem.elements_per_ply", "CalculiX's elements through each ply; default 2"},
+      {"fem.threads", "threads CalculiX may use; default 1"}};
+  return keys;
+}
+
 CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentContext& context) {
-  c.require_known_keys({"experiment",
-                        "description",
-                        "material",
-                        "strategy",
-                        "strategy_options",
-                        "layups",
-                        "weibull_modulus",
-                        "seed",
-                        "scatter",
-                        "softening",
-                        "scatter_per",
-                        "coupon.length_mm",
-                        "coupon.width_mm",
-                        "coupon.thickness_mm",
-                        "coupon.diameter_mm",
-                        "coupon.grip_mm",
-                        "quick.length_mm",
-                        "quick.width_mm",
-                        "quick.thickness_mm",
-                        "quick.diameter_mm",
-                        "quick.layups",
-                        "interface.normal",
-                        "interface.shear",
-                        "interface.strength_normal",
-                        "interface.strength_shear",
-                        "interface.transverse_shear",
-                        "fem.element_mm",
-                        "fem.elements_per_ply",
-                        "fem.threads",
-                        "events.max_events",
-                        "events.stop_fraction",
-                        "events.max_update_rank",
-                        "output.vtu_series"});
+  const SettingsDescription<StrengthSettings>& d = strength_settings_description();
+  c.require_known_keys(config_keys(d, crossply_selection(), crossply_own_keys()));
   const std::string name = c.name();
   const std::string origin = c.path().string();
-  StrengthSettings base;
-  base.force = context.force;
-  base.strategy = c.string("strategy", base.strategy);
-  base.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
-                                                 fmt::format("{}: strategy_options", origin));
-  base.coupon = coupon_from_config(c, context.quick);
-  base.grip_length = c.number("coupon.grip_mm", 0) * kMetresPerMm;
-  base.interface.normal = c.number("interface.normal", 0);
-  base.interface.shear = c.number("interface.shear", 0);
-  base.interface.transverse_shear = c.boolean("interface.transverse_shear", true);
-  FemSettings fem;
-  fem.mesh.element_size = c.number("fem.element_mm", 0) * kMetresPerMm;
-  fem.mesh.elements_per_ply = static_cast<int>(c.integer("fem.elements_per_ply", 2));
-  fem.threads = static_cast<int>(c.integer("fem.threads", 1));
-  if (fem.mesh.element_size == 0) fem.mesh.element_size = 0.5 * base.coupon.particle_diameter;
-  fem.validate();
-  base.interface_strength.normal = c.number("interface.strength_normal", 0);
-  base.interface_strength.shear = c.number("interface.strength_shear", 0);
-  base.weibull_modulus = c.number("weibull_modulus", 10);
-  base.seed = static_cast<std::uint64_t>(c.integer("seed", 1));
-  const std::string scatter = c.string("scatter", "90");
-  require(scatter == "90" || scatter == "all",
-          fmt::format("{}: scatter must be \"90\" (the 90° plies only) or \"all\", got \"{}\"",
-                      origin, scatter));
-  const bool scatter_ninety = scatter == "90";
-  base.strength_options.softening = c.boolean("softening", false);
-  const std::string scatter_per = c.string("scatter_per", "site");
-  require(scatter_per == "site" || scatter_per == "bond",
-          fmt::format("{}: scatter_per must be \"site\" (one strength factor per crack site: a "
-                      "band between particle rows along the fibre) or \"bond\", got \"{}\"",
-                      origin, scatter_per));
-  base.scatter_per_crack_site = scatter_per == "site";
-  base.events.max_events = c.integer("events.max_events", base.events.max_events);
-  base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
-  base.events.max_update_rank =
-      static_cast<int>(c.integer("events.max_update_rank", base.events.max_update_rank));
-  base.record_snapshots = c.boolean("output.vtu_series", false);
   std::vector<std::string> layups = c.strings("layups", {"[0/90]s", "[0/90_2]s", "[0/90_4]s"});
   if (context.quick) layups = c.strings("quick.layups", layups);
   require(!layups.empty(), fmt::format("{}: layups is empty", origin));
@@ -256,8 +219,29 @@ CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentConte
       throw Error(fmt::format("{}: {}", origin, e.what()));
     }
   }
+  StrengthSettings base = crossply_defaults(context);
+  // Every case is a laminate: the interface keys apply (the conditions see the first one).
+  base.layup = parse_layup(layups.front());
+  read_config_settings(c, d, crossply_selection(), context.quick, base);
+  base.layup.clear();  // each case sets its own
+  FemSettings fem;
+  fem.mesh.element_size = c.number("fem.element_mm", 0) * kMetresPerMm;
+  fem.mesh.elements_per_ply = static_cast<int>(c.integer("fem.elements_per_ply", 2));
+  fem.threads = static_cast<int>(c.integer("fem.threads", 1));
+  if (fem.mesh.element_size == 0) fem.mesh.element_size = 0.5 * base.coupon.particle_diameter;
+  fem.validate();
+  const std::string scatter = c.string("scatter", "90");
+  require(scatter == "90" || scatter == "all",
+          fmt::format("{}: scatter must be \"90\" (the 90° plies only) or \"all\", got \"{}\"",
+                      origin, scatter));
   require_strengths(base.coupon.material, fmt::format("{} (kind crossply)", origin));
-  return {name, base, fem, scatter_ninety, layups, counts};
+  return {name, base, fem, scatter == "90", layups, counts};
+}
+
+KindSettings crossply_kind_settings() {
+  ExperimentContext context;
+  return {strength_settings_description().rows(crossply_defaults(context), crossply_selection()),
+          crossply_own_keys()};
 }
 
 // One laminate pulled to failure, its 90° plies' cracks at the peak and CalculiX with them cut in.
@@ -544,6 +528,7 @@ void register_crossply_experiment(ExperimentRegistry& registry) {
                "cross-ply laminates in tension to failure: first-ply failure, transverse crack "
                "density and stiffness beside shear lag and ply discount",
                parse_crossply, run_crossply, report_crossply);
+  registry.set_settings("crossply", crossply_kind_settings);
 }
 
 }  // namespace plydem

@@ -29,6 +29,8 @@
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/report_text.hpp"
+#include "experiments/runner/settings_config.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 #include "strategies/laminate.hpp"
 
 namespace plydem {
@@ -43,78 +45,25 @@ struct DcbExperimentSettings {
 };
 
 DcbExperimentSettings parse_dcb(const ExperimentConfig& c, const ExperimentContext& context) {
-  c.require_known_keys({"experiment",
-                        "description",
-                        "material",
-                        "strategy",
-                        "strategy_options",
-                        "laminate.layup",
-                        "laminate.ply_thickness_mm",
-                        "coupon.length_mm",
-                        "coupon.width_mm",
-                        "coupon.crack_mm",
-                        "coupon.diameter_mm",
-                        "coupon.max_crack_mm",
-                        "quick.layup",
-                        "quick.ply_thickness_mm",
-                        "quick.length_mm",
-                        "quick.crack_mm",
-                        "quick.diameter_mm",
-                        "quick.max_crack_mm",
-                        "interface.normal",
-                        "interface.shear",
-                        "interface.strength_normal",
-                        "interface.strength_shear",
-                        "interface.GIc",
-                        "interface.GIIc",
-                        "interface.bk_exponent",
-                        "events.max_events",
-                        "events.tooth_stiffness_ratio",
-                        "events.max_update_rank",
-                        "output.vtu_series"});
+  const SettingsDescription<DcbSettings>& d = dcb_settings_description();
+  c.require_known_keys(config_keys(d));
   const std::string origin = c.path().string();
-  const bool quick = context.quick;
-  // A [quick] key replaces its full-size key in a quick run.
-  auto number = [&](const std::string& table, const std::string& key, double fallback) {
-    const double full = c.number(fmt::format("{}.{}", table, key), fallback);
-    return quick ? c.number(fmt::format("quick.{}", key), full) : full;
-  };
-  DcbSettings s;
-  if (c.contains("material")) s.material = load_material(c.string("material", ""));
-  s.strategy = c.string("strategy", s.strategy);
-  s.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
-                                              fmt::format("{}: strategy_options", origin));
+  DcbSettings s = d.defaults();
+  // The layup as written names the case ([quick] layup in a quick run).
   std::string layup = c.string("laminate.layup", format_layup(s.layup));
-  if (quick) layup = c.string("quick.layup", layup);
-  s.layup = parse_layup(layup);
-  s.ply_thickness =
-      number("laminate", "ply_thickness_mm", s.ply_thickness / kMetresPerMm) * kMetresPerMm;
-  s.length = number("coupon", "length_mm", s.length / kMetresPerMm) * kMetresPerMm;
-  s.width = number("coupon", "width_mm", s.width / kMetresPerMm) * kMetresPerMm;
-  s.crack = number("coupon", "crack_mm", s.crack / kMetresPerMm) * kMetresPerMm;
-  s.particle_diameter =
-      number("coupon", "diameter_mm", s.particle_diameter / kMetresPerMm) * kMetresPerMm;
-  s.max_crack = number("coupon", "max_crack_mm", s.max_crack / kMetresPerMm) * kMetresPerMm;
-  s.interface.normal = c.number("interface.normal", 0);
-  s.interface.shear = c.number("interface.shear", 0);
-  s.interface_strength.normal = c.number("interface.strength_normal", 0);
-  s.interface_strength.shear = c.number("interface.strength_shear", 0);
-  s.interface_strength.GIc = c.number("interface.GIc", 0);
-  s.interface_strength.GIIc = c.number("interface.GIIc", 0);
-  s.interface_strength.bk_exponent =
-      c.number("interface.bk_exponent", s.interface_strength.bk_exponent);
-  s.events.max_events = c.integer("events.max_events", s.events.max_events);
-  s.events.tooth_stiffness_ratio =
-      c.number("events.tooth_stiffness_ratio", s.events.tooth_stiffness_ratio);
-  s.events.max_update_rank =
-      static_cast<int>(c.integer("events.max_update_rank", s.events.max_update_rank));
-  s.record_snapshots = c.boolean("output.vtu_series", false);
+  if (context.quick) layup = c.string("quick.layup", layup);
+  read_config_settings(c, d, {}, context.quick, s);
   try {
     s.validate();
   } catch (const Error& e) {
     throw Error(fmt::format("{}: {}", origin, e.what()));
   }
   return {s, layup};
+}
+
+KindSettings dcb_kind_settings() {
+  const SettingsDescription<DcbSettings>& d = dcb_settings_description();
+  return {d.rows(d.defaults()), {}};
 }
 
 DcbResult run_dcb_experiment(const DcbExperimentSettings& settings, const ExperimentContext&) {
@@ -326,6 +275,7 @@ void register_dcb_experiment(ExperimentRegistry& registry) {
                "double cantilever beam of a unidirectional laminate opened to delamination "
                "growth, beside simple and corrected beam theory",
                parse_dcb, run_dcb_experiment, report_dcb);
+  registry.set_settings("dcb", dcb_kind_settings);
 }
 
 }  // namespace plydem

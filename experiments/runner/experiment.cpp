@@ -9,6 +9,8 @@
 
 #include "core/error.hpp"
 #include "core/toml_reader.hpp"
+#include "experiments/runner/settings_config.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 
 namespace plydem {
 
@@ -174,7 +176,12 @@ std::vector<double> ExperimentConfig::numbers(const std::string& key,
   return out;
 }
 
-void ExperimentConfig::require_known_keys(const std::vector<std::string>& known) const {
+void ExperimentConfig::require_known_keys(const std::vector<std::string>& given_known) const {
+  std::vector<std::string> known = given_known;
+  for (const char* key : {"experiment", "description"}) {
+    if (std::find(known.begin(), known.end(), key) == known.end()) known.push_back(key);
+  }
+  for (const std::string& key : config_keys(run_settings_description())) known.push_back(key);
   std::vector<std::string> keys;
   collect_keys(data_->table, "", keys);
   std::vector<std::string> unknown;
@@ -192,6 +199,20 @@ void ExperimentConfig::require_known_keys(const std::vector<std::string>& known)
     throw Error(
         fmt::format("{}: unknown key {} (this experiment knows: {})", data_->origin, bad, list));
   }
+}
+
+void Experiment::check(const ExperimentConfig&, const ExperimentContext&) const {}
+
+void ExperimentRegistry::set_settings(const std::string& kind,
+                                      std::function<KindSettings()> settings) {
+  require(contains(kind), fmt::format("unknown experiment kind '{}'", kind));
+  settings_[kind] = std::move(settings);
+}
+
+std::optional<KindSettings> ExperimentRegistry::settings(const std::string& kind) const {
+  const auto it = settings_.find(kind);
+  if (it == settings_.end()) return std::nullopt;
+  return it->second();
 }
 
 ExperimentRegistry::ExperimentRegistry()

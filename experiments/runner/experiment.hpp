@@ -25,9 +25,11 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/registry.hpp"
+#include "core/settings.hpp"
 
 namespace plydem {
 
@@ -60,7 +62,9 @@ class ExperimentConfig {
                                    const std::vector<std::string>& fallback) const;
   std::vector<double> numbers(const std::string& key, const std::vector<double>& fallback) const;
   /// Throws plydem::Error naming every key (dotted, at any depth) that is not in `known` or below
-  /// a known table: a misspelt key is an error, not a silent default.
+  /// a known table: a misspelt key is an error, not a silent default. The keys every kind takes
+  /// (`experiment`, `description` and the run's settings, `threads` and `petsc_options`:
+  /// run_settings_description()) are always known.
   void require_known_keys(const std::vector<std::string>& known) const;
 
  private:
@@ -108,9 +112,21 @@ class Experiment {
   /// Runs the experiment of `config`. Throws plydem::Error for a bad config or a failed run.
   virtual ExperimentOutput run(const ExperimentConfig& config,
                                const ExperimentContext& context) const = 0;
+  /// Reads `config` as run() would before building anything, and refuses what run() would refuse
+  /// there (a key it does not know, a bad value, a setting that does nothing); runs nothing. The
+  /// default reads nothing.
+  virtual void check(const ExperimentConfig& config, const ExperimentContext& context) const;
 };
 
 using ExperimentFactory = FactoryRegistry<Experiment>::Factory;
+
+/// What a kind's config takes, for the reference page (docs/settings.md, `plydem settings`) and the
+/// tests: its described settings with the kind's own defaults (SettingsDescription::rows), and the
+/// keys it reads itself, each with what it is.
+struct KindSettings {
+  std::vector<SettingRow> rows;
+  std::vector<std::pair<std::string, std::string>> own_keys;
+};
 
 /// An experiment kind written as three steps over its own settings struct, the shape of every
 /// built-in kind (one file each, experiments/runner/<kind>_experiment.cpp):
@@ -137,6 +153,9 @@ class ExperimentSteps : public Experiment {
     const Results results = run_(settings, context);
     return report_(settings, results, context);
   }
+  void check(const ExperimentConfig& config, const ExperimentContext& context) const override {
+    (void)parse_(config, context);
+  }
 
  private:
   Parse parse_;
@@ -162,6 +181,13 @@ class ExperimentRegistry : public FactoryRegistry<Experiment> {
     });
   }
   std::vector<std::string> kinds() const { return names(); }
+  /// Registers what `kind`'s config takes (read when asked: the reference page, the tests).
+  void set_settings(const std::string& kind, std::function<KindSettings()> settings);
+  /// What `kind`'s config takes, if it registered it.
+  std::optional<KindSettings> settings(const std::string& kind) const;
+
+ private:
+  std::map<std::string, std::function<KindSettings()>> settings_;
 };
 
 /// The process-wide experiment registry, filled with the built-in kinds on first use.

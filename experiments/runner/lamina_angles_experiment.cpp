@@ -244,6 +244,12 @@ void register_lamina_angles_experiment(ExperimentRegistry& registry) {
   registry.add("lamina-angles",
                "Table 3: laminae at several angles beside CLT, CalculiX and the paper",
                parse_lamina_angles, run_lamina_angles, report_lamina_angles);
+  registry.set_settings("lamina-angles", [] {
+    return paper_kind_settings(
+        coupon_config_selection(),
+        {{"strategies", "the strategies; default [\"hex2d\", \"square\"]"},
+         {"angles_deg", "the ply angles [deg]; default [0, 15, 30, 45, 60, 75, 90]"}});
+  });
 }
 
 }  // namespace plydem

@@ -15,7 +15,8 @@
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/paper_tables.hpp"
 #include "experiments/runner/report_text.hpp"
-#include "solvers/device_backend.hpp"
+#include "experiments/runner/settings_config.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 #include "strategies/registry.hpp"
 
 namespace plydem {
@@ -28,6 +29,11 @@ struct StrategyPaper {
   std::optional<Values> dem;  ///< paper.dem.NAME
   double minutes = kNaN;      ///< paper.minutes.NAME
 };
+
+// The tension command's settings this kind takes for its explicit runs (explicit.backend,
+// explicit.tolerance, explicit.ramp_cycles, explicit.load_stages, explicit.max_cycles).
+const SettingsSelection kExplicitKeys{
+    {"backend", "tolerance", "ramp_cycles", "load_stages", "max_cycles"}, {}};
 
 // A `lamina-strategies` config's settings.
 struct LaminaStrategiesSettings {
@@ -48,10 +54,11 @@ struct LaminaStrategiesSettings {
 
 LaminaStrategiesSettings parse_lamina_strategies(const ExperimentConfig& c,
                                                  const ExperimentContext& context) {
-  c.require_known_keys(
-      known_keys({"strategies", "angle_deg", "explicit.cycles", "explicit.quick_cycles",
-                  "explicit.tolerance", "explicit.ramp_cycles", "explicit.load_stages",
-                  "explicit.max_cycles", "explicit.time_limit_s", "explicit.backend"}));
+  std::vector<std::string> known = known_keys({"strategies", "angle_deg", "explicit.cycles",
+                                               "explicit.quick_cycles", "explicit.time_limit_s"});
+  for (const std::string& key : config_keys(tension_settings_description(), kExplicitKeys))
+    known.push_back(key);
+  c.require_known_keys(known);
   const std::string name = c.name();
   const bool quick = context.quick;
   const CouponSpec coupon = coupon_from_config(c, quick);
@@ -71,8 +78,12 @@ LaminaStrategiesSettings parse_lamina_strategies(const ExperimentConfig& c,
   base.coupon.ply_angle = radians(angle_deg);
   base.grips = grips_from_config(c);
   base.solver = TensionSolver::kStatic;
-  // Where the explicit runs' cycles run: cpu or cuda (solvers/device_backend.hpp).
-  base.explicit_settings.backend = parse_backend(c.string("explicit.backend", "cpu"));
+  // The explicit runs' settings, keys of the tension command's (explicit.*): the staged run's,
+  // whose solver is explicit; its backend (cpu or cuda) the fixed-cycle run's too.
+  TensionSettings staged = base;
+  staged.solver = TensionSolver::kExplicit;
+  read_config_settings(c, tension_settings_description(), kExplicitKeys, false, staged);
+  base.explicit_settings.backend = staged.explicit_settings.backend;
   const Values clt = values_of(in_plane_constants(
       rotate_reduced_stiffness(reduced_stiffness(coupon.material), base.coupon.ply_angle)));
   LaminaStrategiesSettings settings;
@@ -84,13 +95,8 @@ LaminaStrategiesSettings parse_lamina_strategies(const ExperimentConfig& c,
   settings.probe_cycles = probe_cycles;
   settings.time_limit = time_limit;
   settings.base = base;
-  settings.staged = base;
+  settings.staged = staged;
   settings.clt = clt;
-  TensionSettings& q = settings.staged;
-  q.tolerance = c.number("explicit.tolerance", q.tolerance);
-  q.ramp_cycles = c.integer("explicit.ramp_cycles", q.ramp_cycles);
-  q.load_stages = static_cast<int>(c.integer("explicit.load_stages", q.load_stages));
-  q.max_cycles = c.integer("explicit.max_cycles", q.max_cycles);
   settings.experiment = paper_values(c, "paper.experiment");
   for (const std::string& strategy_name : strategies) {
     settings.paper.push_back({paper_values(c, fmt::format("paper.dem.{}", strategy_name)),
@@ -370,6 +376,19 @@ void register_lamina_strategies_experiment(ExperimentRegistry& registry) {
   registry.add("lamina-strategies",
                "Table 2: one lamina with every strategy: moduli, explicit and static run times",
                parse_lamina_strategies, run_lamina_strategies, report_lamina_strategies);
+  registry.set_settings("lamina-strategies", [] {
+    KindSettings k = paper_kind_settings(
+        coupon_config_selection(),
+        {{"strategies", "the strategies; default [\"lattice\", \"hcp\", \"hex2d\", \"square\"]"},
+         {"angle_deg", "the ply angle [deg]; default 0"},
+         {"explicit.cycles", "the paper's fixed-cycle explicit run; default 200000"},
+         {"explicit.quick_cycles", "the probe's cycles, extrapolated (quick runs); default 500"},
+         {"explicit.time_limit_s",
+          "longer runs are extrapolated from the probe [s]; default 900"}});
+    const SettingsDescription<TensionSettings>& d = tension_settings_description();
+    for (const SettingRow& row : d.rows(d.defaults(), kExplicitKeys)) k.rows.push_back(row);
+    return k;
+  });
 }
 
 }  // namespace plydem

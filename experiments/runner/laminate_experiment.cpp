@@ -17,6 +17,8 @@
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/paper_tables.hpp"
 #include "experiments/runner/report_text.hpp"
+#include "experiments/runner/settings_config.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 #include "strategies/laminate.hpp"
 
 namespace plydem {
@@ -42,23 +44,27 @@ struct LaminateExperimentSettings {
   double window = 0;  ///< of the bond figure [m]
 };
 
+// The tension command's settings this kind takes: the strategy, the coupon, the grips, the layup
+// and its interfaces' stiffness.
+const SettingsSelection kLaminateSettings{
+    {"strategy", "material", "length", "width", "thickness", "diameter", "grips", "layup",
+     "interface_normal", "interface_shear"},
+    {}};
+
 LaminateExperimentSettings parse_laminate(const ExperimentConfig& c,
                                           const ExperimentContext& context) {
-  c.require_known_keys(
-      known_keys({"layup", "strategy", "interface.normal", "interface.shear", "table"}));
+  const SettingsDescription<TensionSettings>& d = tension_settings_description();
+  std::vector<std::string> known = known_keys({"table"});
+  for (const std::string& key : config_keys(d, kLaminateSettings)) known.push_back(key);
+  c.require_known_keys(known);
   const std::string name = c.name();
   const std::string layup_text = c.string("layup", "");
   if (layup_text.empty())
     throw Error(fmt::format("{}: the key 'layup' is missing", c.path().string()));
   const std::string table = c.string("table", "Laminate");
-  TensionSettings s;
+  TensionSettings s = d.defaults();
   s.force = context.force;
-  s.strategy = c.string("strategy", "hex2d");
-  s.coupon = coupon_from_config(c, context.quick);
-  s.layup = parse_layup(layup_text);
-  s.interface.normal = c.number("interface.normal", 0);
-  s.interface.shear = c.number("interface.shear", 0);
-  s.grips = grips_from_config(c);
+  read_config_settings(c, d, kLaminateSettings, context.quick, s);
   const std::string case_name = format_layup(s.layup);
   const LaminateSpec spec{s.coupon, s.layup, s.interface};
   const std::vector<Ply> plies = laminate_plies(spec);
@@ -353,6 +359,11 @@ void register_laminate_experiment(ExperimentRegistry& registry) {
   registry.add("laminate",
                "Tables 4 and 5: a laminate beside CLT (A matrix), CalculiX and the paper",
                parse_laminate, run_laminate, report_laminate);
+  registry.set_settings("laminate", [] {
+    return paper_kind_settings(kLaminateSettings,
+                               {{"layup", "required: the laminate"},
+                                {"table", "the report's table name; default \"Laminate\""}});
+  });
 }
 
 }  // namespace plydem

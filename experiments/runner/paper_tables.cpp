@@ -19,6 +19,7 @@
 #include "experiments/protocols/tension.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/report_text.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
@@ -36,35 +37,37 @@ double radians(double degrees) {
 
 namespace {
 
-// The keys every kind reads (coupon, quick overrides, FEM settings, the paper's data).
-const std::vector<std::string> kCommonKeys = {"experiment",
-                                              "description",
-                                              "material",
-                                              "coupon.length_mm",
-                                              "coupon.width_mm",
-                                              "coupon.thickness_mm",
-                                              "coupon.diameter_mm",
-                                              "coupon.grips",
-                                              "quick.length_mm",
-                                              "quick.width_mm",
-                                              "quick.thickness_mm",
-                                              "quick.diameter_mm",
-                                              "fem.run",
-                                              "fem.element",
-                                              "fem.elements_per_ply",
-                                              "fem.element_size_mm",
-                                              "fem.edge_band_mm",
-                                              "fem.length_mm",
-                                              "fem.width_mm",
-                                              "fem.same_coupon",
-                                              "figures.window_mm",
-                                              "paper"};
+// The keys every kind reads besides the coupon's (coupon_config_keys): FEM settings, figures,
+// the paper's data.
+const std::vector<std::string> kCommonKeys = {
+    "fem.run",           "fem.element",   "fem.elements_per_ply", "fem.element_size_mm",
+    "fem.edge_band_mm",  "fem.length_mm", "fem.width_mm",         "fem.same_coupon",
+    "figures.window_mm", "paper"};
 
 }  // namespace
 
 std::vector<std::string> known_keys(std::vector<std::string> extra) {
   extra.insert(extra.end(), kCommonKeys.begin(), kCommonKeys.end());
+  for (const std::string& key : coupon_config_keys()) extra.push_back(key);
   return extra;
+}
+
+KindSettings paper_kind_settings(const SettingsSelection& selection,
+                                 std::vector<std::pair<std::string, std::string>> own) {
+  const SettingsDescription<TensionSettings>& d = tension_settings_description();
+  const std::vector<std::pair<std::string, std::string>> common{
+      {"fem.run", "run CalculiX beside the DEM; default true"},
+      {"fem.element", "CalculiX's element, C3D8I (default) or C3D20R"},
+      {"fem.elements_per_ply", "CalculiX's elements through each ply; default 1"},
+      {"fem.element_size_mm", "CalculiX's in-plane element size [mm]; 0 = W / 8"},
+      {"fem.edge_band_mm", "CalculiX's gauge nodes this close to a free edge are left out [mm]"},
+      {"fem.length_mm", "CalculiX of a wider coupon: its length [mm]"},
+      {"fem.width_mm", "CalculiX of a wider coupon: its width [mm]"},
+      {"fem.same_coupon", "CalculiX of the DEM's own coupon (laminate); default true"},
+      {"figures.window_mm", "how much of the coupon the bond figures show [mm]"},
+      {"paper", "the paper's values, cited from its tables"}};
+  own.insert(own.end(), common.begin(), common.end());
+  return {d.rows(d.defaults(), selection), own};
 }
 
 std::string grips_sentence(GripCondition grips) {

@@ -33,6 +33,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/elasticity.hpp"
@@ -59,6 +60,12 @@ std::vector<std::string> known_keys(std::vector<std::string> extra);
 
 /// The report's sentence on the grips.
 std::string grips_sentence(GripCondition grips);
+
+/// What a paper-table kind's config takes, for ExperimentRegistry::set_settings: the tension
+/// command's settings of `selection` with their defaults, and `own` keys beside those every paper
+/// kind reads (FEM settings, figures, the paper's data).
+KindSettings paper_kind_settings(const SettingsSelection& selection,
+                                 std::vector<std::pair<std::string, std::string>> own);
 
 /// fem.element, fem.elements_per_ply, fem.element_size_mm, fem.edge_band_mm (default
 /// `default_edge_band` [m]) and coupon.grips. Throws plydem::Error naming the file.

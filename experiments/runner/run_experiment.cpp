@@ -13,6 +13,8 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "experiments/runner/settings_config.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 
 namespace plydem {
 namespace fs = std::filesystem;
@@ -149,6 +151,11 @@ RunSummary run_experiment(const RunOptions& options) {
   const std::string kind = config.kind();
   // An unknown kind fails before anything is written.
   const std::unique_ptr<Experiment> experiment = default_experiment_registry().create(kind);
+  // The run's settings (threads, petsc_options), the command line's over the config's.
+  RunSettings run = run_settings_description().defaults();
+  read_config_settings(config, run_settings_description(), {}, options.quick, run);
+  if (options.run_settings) options.run_settings(run);
+  const RunScope scope(run);
 
   RunSummary summary;
   summary.out_dir = options.out_dir.empty() ? fs::path("results") / config.name() : options.out_dir;

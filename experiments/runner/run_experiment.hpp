@@ -8,9 +8,11 @@
 /// beside the figures and VTU files the experiment wrote itself.
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "experiments/protocols/run_settings.hpp"
 #include "experiments/runner/experiment.hpp"
 
 namespace plydem {
@@ -21,6 +23,9 @@ struct RunOptions {
   bool quick = false;             ///< ExperimentContext::quick
   std::string calculix = "ccx";   ///< ExperimentContext::calculix
   bool force = false;             ///< ExperimentContext::force
+  /// Sets the command line's run settings (--threads, --petsc-options) over the config's
+  /// (`threads`, `petsc_options`); empty: the config's.
+  std::function<void(RunSettings&)> run_settings;
 };
 
 struct RunSummary {
@@ -31,8 +36,9 @@ struct RunSummary {
   double wall_seconds = 0;
 };
 
-/// Runs one experiment config. Throws plydem::Error for a missing or malformed config, an unknown
-/// kind or key, or a failed run (the output folder may then hold partial files).
+/// Runs one experiment config, with its run settings (threads, petsc_options: RunScope) for the
+/// run and its report. Throws plydem::Error for a missing or malformed config, an unknown kind or
+/// key, or a failed run (the output folder may then hold partial files).
 RunSummary run_experiment(const RunOptions& options);
 
 /// The two files write_run_report writes.

@@ -14,6 +14,8 @@
 #include "experiments/output/strength_report.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/report_text.hpp"
+#include "experiments/runner/settings_config.hpp"
+#include "experiments/runner/settings_descriptions.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
 
@@ -177,117 +179,39 @@ struct StrengthExperimentSettings {
   std::vector<double> angles;  ///< [deg]
 };
 
+// The kind's settings: the strength command's (strength_settings_description(), with its
+// defaults), but the ply angle, which each case sets (angle_deg, angles_deg).
+SettingsSelection strength_kind_selection() {
+  return {{}, {"angle"}};
+}
+
+const std::vector<std::pair<std::string, std::string>>& strength_own_keys() {
+  static const std::vector<std::pair<std::string, std::string>> keys{
+      {"angle_deg", "the ply angle of the one case [deg] when angles_deg is not given; default 0"},
+      {"angles_deg", "the ply angles of the cases [deg] (a laminate's layup turned by each)"}};
+  return keys;
+}
+
 StrengthExperimentSettings parse_strength(const ExperimentConfig& c,
                                           const ExperimentContext& context) {
-  c.require_known_keys({"experiment",
-                        "description",
-                        "material",
-                        "strategy",
-                        "strategy_options",
-                        "angle_deg",
-                        "angles_deg",
-                        "layup",
-                        "method",
-                        "weibull_modulus",
-                        "seed",
-                        "friction",
-                        "softening",
-                        "edge_strengths",
-                        "coupon.length_mm",
-                        "coupon.width_mm",
-                        "coupon.thickness_mm",
-                        "coupon.diameter_mm",
-                        "coupon.grips",
-                        "coupon.grip_mm",
-                        "coupon.gauge_fraction",
-                        "quick.length_mm",
-                        "quick.width_mm",
-                        "quick.thickness_mm",
-                        "quick.diameter_mm",
-                        "interface.normal",
-                        "interface.shear",
-                        "interface.strength_normal",
-                        "interface.strength_shear",
-                        "interface.GIc",
-                        "interface.GIIc",
-                        "interface.bk_exponent",
-                        "events.max_events",
-                        "events.stop_fraction",
-                        "events.tooth_stiffness_ratio",
-                        "events.max_update_rank",
-                        "output.vtu_series"});
-  const std::string name = c.name();
+  const SettingsDescription<StrengthSettings>& d = strength_settings_description();
+  c.require_known_keys(config_keys(d, strength_kind_selection(), strength_own_keys()));
   const std::string origin = c.path().string();
-  StrengthSettings base;
+  StrengthSettings base = d.defaults();
   base.force = context.force;
-  base.strategy = c.string("strategy", base.strategy);
-  base.strategy_options = parse_strategy_options(c.strings("strategy_options", {}),
-                                                 fmt::format("{}: strategy_options", origin));
-  base.coupon = coupon_from_config(c, context.quick);
-  base.grips = parse_strength_grips(c.string("coupon.grips", "uniform"));
-  base.grip_length = c.number("coupon.grip_mm", 0) * kMetresPerMm;
-  base.gauge_fraction = c.number("coupon.gauge_fraction", base.gauge_fraction);
-  const std::string layup_text = c.string("layup", "");
-  if (!layup_text.empty()) base.layup = parse_layup(layup_text);
-  base.interface.normal = c.number("interface.normal", 0);
-  base.interface.shear = c.number("interface.shear", 0);
-  base.interface_strength.normal = c.number("interface.strength_normal", 0);
-  base.interface_strength.shear = c.number("interface.strength_shear", 0);
-  base.interface_strength.GIc = c.number("interface.GIc", 0);
-  base.interface_strength.GIIc = c.number("interface.GIIc", 0);
-  base.interface_strength.bk_exponent =
-      c.number("interface.bk_exponent", base.interface_strength.bk_exponent);
-  base.method = parse_strength_method(c.string("method", "events"));
-  if (c.contains("weibull_modulus")) base.weibull_modulus = c.number("weibull_modulus", 0);
-  base.seed = static_cast<std::uint64_t>(c.integer("seed", 1));
-  if (c.contains("seed") && !(base.effective_weibull_modulus() > 0)) {
-    throw Error(fmt::format(
-        "{}: 'seed' needs strength scatter: set weibull_modulus (the material {} has none)", origin,
-        base.coupon.material.name));
-  }
-  base.strength_options.friction_coefficient = c.number("friction", 0);
-  base.strength_options.softening = c.boolean("softening", false);
-  const std::string edges = c.string("edge_strengths", "bulk");
-  require(edges == "bulk" || edges == "weighted",
-          fmt::format("{}: edge_strengths must be \"bulk\" or \"weighted\", got \"{}\"", origin,
-                      edges));
-  base.consistent_edges = edges == "bulk";
-  base.events.max_events = c.integer("events.max_events", base.events.max_events);
-  base.events.stop_fraction = c.number("events.stop_fraction", base.events.stop_fraction);
-  base.events.tooth_stiffness_ratio =
-      c.number("events.tooth_stiffness_ratio", base.events.tooth_stiffness_ratio);
-  base.events.max_update_rank =
-      static_cast<int>(c.integer("events.max_update_rank", base.events.max_update_rank));
-  base.record_snapshots = c.boolean("output.vtu_series", false);
-  // Keys that would change nothing are errors, as on the command line.
-  auto refuse_given = [&](std::initializer_list<const char*> keys, const char* reason) {
-    for (const char* key : keys) {
-      if (c.contains(key))
-        throw Error(fmt::format("{}: '{}' does nothing here: {}", origin, key, reason));
-    }
-  };
-  if (base.layup.empty()) {
-    refuse_given(
-        {"interface.normal", "interface.shear", "interface.strength_normal",
-         "interface.strength_shear", "interface.GIc", "interface.GIIc", "interface.bk_exponent"},
-        "interfaces join the plies of a laminate, and one ply has none (set layup)");
-  }
-  if (!base.strength_options.softening) {
-    refuse_given({"events.tooth_stiffness_ratio", "interface.GIc", "interface.GIIc",
-                  "interface.bk_exponent"},
-                 "it is a setting of softening bonds, and the bonds are brittle (softening = "
-                 "true)");
-  }
-  if (base.grips != StrengthGrips::kUniform) {
-    refuse_given({"edge_strengths"},
-                 "the edge strengths are made consistent with the bulk under uniform grips only");
-  }
+  read_config_settings(c, d, strength_kind_selection(), context.quick, base);
+  const std::string layup_text = c.string("layup", "");  // as written, naming the cases
   std::vector<double> angles = c.numbers("angles_deg", {c.number("angle_deg", 0)});
   require(!angles.empty(), fmt::format("{}: angles_deg is empty", origin));
   base.validate();  // a bad setting fails before the first coupon is built
   require_strengths(base.coupon.material, fmt::format("{} (kind strength)", origin),
                     base.strength_options.softening);
-  return {name, layup_text, base, angles};
+  return {c.name(), layup_text, base, angles};
+}
+
+KindSettings strength_kind_settings() {
+  const SettingsDescription<StrengthSettings>& d = strength_settings_description();
+  return {d.rows(d.defaults(), strength_kind_selection()), strength_own_keys()};
 }
 
 // One angle's test, or why it was refused.
@@ -474,6 +398,7 @@ void register_strength_experiment(ExperimentRegistry& registry) {
                "tension tests to failure at several angles: strength beside max-stress, "
                "Tsai-Hill, Tsai-Wu and Hashin",
                parse_strength, run_strength, report_strength);
+  registry.set_settings("strength", strength_kind_settings);
 }
 
 }  // namespace plydem

@@ -4,16 +4,17 @@
 /// the tension test to failure (experiments/protocols/strength.hpp) of one ply or laminate at
 /// each angle of the config, each strength beside the four classical criteria
 /// (core/failure_criteria.hpp), and the sections and files `plydem strength --out` writes for one
-/// test. Config keys (README, "Strength"):
+/// test. Config keys (README, "Strength"; docs/settings.md): the settings of `plydem strength`
+/// (strength_settings_description(), the same defaults) but the ply angle, and the cases' angles:
 ///
 ///   experiment = "strength"
-///   material = "eglass-my750"        strategy = "hex2d"      strategy_options = ["c=1.8"]
+///   material = "eglass-my750"        strategy = "square"     strategy_options = ["c=1.8"]
 ///   angles_deg = [0, 15, 30]         (or angle_deg = 30; default 0)
 ///   layup = "[0/90]s"                (optional: a laminate, turned by each angle)
 ///   method = "events"                weibull_modulus = 0     seed = 1
 ///   friction = 0                     softening = false      edge_strengths = "bulk"
-///   [coupon] length_mm, width_mm, thickness_mm, diameter_mm, grips, grip_mm, gauge_fraction
-///   [quick]  length_mm, width_mm, thickness_mm, diameter_mm
+///   [coupon] length_mm, width_mm, thickness_mm, diameter_mm, grips, grip_mm, gauge_fraction, ...
+///   [quick]  length_mm, width_mm, thickness_mm, diameter_mm, ...
 ///   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa), GIc, GIIc (J/m^2)
 ///   [events] max_events, stop_fraction, tooth_stiffness_ratio, max_update_rank
 ///   [output] vtu_series (false: the final state of each angle; true: selected events)
