@@ -495,6 +495,11 @@ void end_petsc_session() {
   session_initialized = false;
 }
 
+void broadcast_from_root(double* values, int count) {
+  if (petsc_size() <= 1) return;
+  MPI_Bcast(values, count, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
+}
+
 int petsc_rank() {
   PetscBool initialized = PETSC_FALSE;
   PetscInitialized(&initialized);

@@ -100,6 +100,7 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
   settings.pin_rigid_modes = true;  // out-of-plane motion of a layer is not restrained by the frame
   settings.linear_solver = linear_solver;
   settings.force = force;
+  settings.expected_solves = 3;  // the three strain cases
   const StaticSystem system(model, constraints, settings);
 
   for (int column = 0; column < 3; ++column) {
@@ -120,6 +121,9 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
     }
     Model solved = model;
     const StaticResult r = system.solve(solved, values);
+    result.linear_solver = r.method_name;
+    result.linear_iterations += r.iterations;
+    result.linear_solver_choice = r.linear_solver_choice;
     Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();
     for (int i : frame) {
       const Eigen::Vector2d x =

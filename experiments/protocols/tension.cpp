@@ -506,6 +506,7 @@ void TensionTest::PullRun::solve_at_target_strain() {
   result.final_ratio = solved.relative_residual;
   result.linear_solver = solved.method_name;
   result.linear_iterations = solved.iterations;
+  result.linear_solver_choice = solved.linear_solver_choice;
 }
 
 void TensionTest::PullRun::load_fixed_cycles() {
