@@ -365,6 +365,14 @@ class AutoSolver final : public LinearSolver {
     else
       direct_->solve_in_place(b);
   }
+  void solve_from(Eigen::VectorXd& x, const Eigen::VectorXd& b) const override {
+    if (chosen_) {
+      chosen_->solve_from(x, b);
+    } else {
+      x = b;
+      LinearSolver::solve_in_place(x);
+    }
+  }
   std::string name() const override {
     if (!chosen_) return "supernodal Cholesky (AMD on particles)";
     return reason_.empty() ? chosen_->name() : fmt::format("{} ({})", chosen_->name(), reason_);

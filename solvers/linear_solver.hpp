@@ -170,6 +170,13 @@ class LinearSolver {
   virtual Eigen::VectorXd pivots() const = 0;
   /// Solves A X = B for every column of `b`, in place (zero at zero pivots).
   virtual void solve_in_place(Eigen::MatrixXd& b) const = 0;
+  /// Solves A x = b with `x` as the first iterate of an iterative solver (kPetsc: its CG starts
+  /// there, and stops at the same residual relative to b as from zero); a direct solver ignores
+  /// it (x = A^-1 b exactly as solve_in_place). One column.
+  virtual void solve_from(Eigen::VectorXd& x, const Eigen::VectorXd& b) const {
+    x = b;
+    solve_in_place(x);
+  }
   /// E.g. "supernodal Cholesky (AMD on particles)" or "CHOLMOD supernodal (METIS)"; kAuto's
   /// names the one it chose.
   virtual std::string name() const = 0;

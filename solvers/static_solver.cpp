@@ -743,18 +743,23 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
   result.seconds.assembly += phase.seconds();
 
   phase.restart();
+  // The current state, scaled: the first iterate of an iterative solver (successive load stages,
+  // or a caller's estimate of the solution, then take fewer iterations); direct factors ignore it.
   Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);
+  for (int f = 0; f < nf; ++f) {
+    const int i = m.free_dofs[f] / kDofsPerParticle, c = m.free_dofs[f] % kDofsPerParticle;
+    y(f) = (c < 3 ? p.displacement(i, c) : p.rotation(i, c - 3)) / m.s(f);
+  }
+  if (!y.allFinite()) y.setZero();
   if (nf > 0 && m.direct) {
-    y = b;
-    m.cholesky->solve_in_place(y);
+    if (y.isZero(0)) {
+      y = b;
+      m.cholesky->solve_in_place(y);
+    } else {
+      m.cholesky->solve_from(y, b);
+    }
     result.iterations = m.cholesky->iterations();
   } else if (nf > 0) {
-    // Warm start from the current state: successive load stages then take few iterations.
-    for (int f = 0; f < nf; ++f) {
-      const int i = m.free_dofs[f] / kDofsPerParticle, c = m.free_dofs[f] % kDofsPerParticle;
-      y(f) = (c < 3 ? p.displacement(i, c) : p.rotation(i, c - 3)) / m.s(f);
-    }
-    if (!y.allFinite()) y.setZero();
     if (m.cg_ic)
       m.run_cg(*m.cg_ic, b, y, result);
     else

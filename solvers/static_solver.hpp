@@ -213,8 +213,11 @@ class StaticSystem {
   /// Solves with the prescribed dofs at `values` (one row per particle, Dof columns; read only
   /// where the constructor's constraints fix a dof; pinned dofs stay at zero) and writes the state
   /// into `model`, as solve_static does. `model` must be the one the system was built from, or a
-  /// copy of it (same particles and bonds; not checked beyond its size). Throws plydem::Error for
-  /// values of the wrong size or non-finite ones, or (CG) no convergence.
+  /// copy of it (same particles and bonds; not checked beyond its size). An iterative solver (CG,
+  /// kPetsc) starts from the model's current displacements and rotations, so that a caller's
+  /// estimate of the solution (the specimen stiffness' affine field) saves iterations; a direct
+  /// factor solves exactly whatever the state. Throws plydem::Error for values of the wrong size
+  /// or non-finite ones, or (CG) no convergence.
   StaticResult solve(Model& model, const DofArray& values) const;
 
   /// Factorizations done (1 for the direct method once the constructor returned; 0 for CG) and

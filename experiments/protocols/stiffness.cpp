@@ -112,14 +112,20 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
     }
     strain *= 1e-3;  // the model is linear; a small strain keeps the numbers physical
     DofArray values = DofArray::Zero(p.size(), kDofsPerParticle);
-    for (int i : frame) {
+    Model solved = model;
+    // The affine field everywhere: the frame's values, and the first iterate of an iterative
+    // solver inside (kPetsc: fewer iterations; a direct factor ignores it).
+    for (int i = 0; i < p.size(); ++i) {
       const Eigen::Vector2d x =
           (p.reference_position.row(i).matrix().transpose() - centre).head<2>();
       const Eigen::Vector2d u = strain * x;
-      values(i, static_cast<int>(Dof::kUx)) = u.x();
-      values(i, static_cast<int>(Dof::kUy)) = u.y();
+      solved.particles.displacement.row(i) << u.x(), u.y(), 0;
+      solved.particles.rotation.row(i).setZero();
     }
-    Model solved = model;
+    for (int i : frame) {
+      values(i, static_cast<int>(Dof::kUx)) = solved.particles.displacement(i, 0);
+      values(i, static_cast<int>(Dof::kUy)) = solved.particles.displacement(i, 1);
+    }
     const StaticResult r = system.solve(solved, values);
     result.linear_solver = r.method_name;
     result.linear_iterations += r.iterations;
