@@ -249,6 +249,7 @@ void print_json(const plydem::CouponSpec& spec, const plydem::Model& built, int 
   j["nonzeros"] = r.stiffness_nonzeros;
   j["method"] = r.method == plydem::StaticMethod::kDirect ? "direct" : "CG";
   j["solver"] = r.method_name;
+  j["linear_solver_choice"] = r.linear_solver_choice;
   j["factor_entries"] = r.factor_entries;
   j["factor_flops"] = r.factor_flops;
   j["solves"] = solves;

@@ -20,8 +20,10 @@
 ///   every solve. Under `mpiexec -n N` the matrix is a distributed PETSc matrix, each rank owning
 ///   a slice of the particles along the model's longest extent (see ParallelSession). Built when
 ///   PETSc is found (optional).
-/// kAuto chooses by predicted time, after the hand-written solver's symbolic analysis, which costs
-/// little and counts the factor's entries and floating-point operations before any numeric work:
+/// kAuto chooses by predicted time, from the entries and floating-point operations of the factor
+/// in the order given, which CHOLMOD's column counts give before any numeric work at the cost of
+/// a pass over the matrix (the solver taken then analyses it for itself; a hand-written analysis
+/// first, to decide, took 0.3 s of each [0/45/-45/90]s solve that PETSc then made):
 /// - memory first: where the direct factor with its workspace (on each MPI rank) would take more
 ///   than kAutoMemoryShare of the available memory, PETSc if it is built and the caller makes few
 ///   solves (LinearSolverUse::kFewSolves: a tension pull, the specimen stiffness' three); else it
@@ -124,11 +126,12 @@ struct UnknownLayout {
   /// and each cluster's rigid modes are prescribed); kPetsc then skips its mechanism probe.
   bool positive_definite = false;
 };
-/// What kAuto knows of a matrix after the hand-written symbolic analysis, and how it is used.
+/// What kAuto knows of a matrix before it chooses (its factor counted in the order given), and how
+/// it is used.
 struct AutoProblem {
   double unknowns = 0;
   double nonzeros = 0;        ///< stored entries of the lower triangle
-  double factor_entries = 0;  ///< of the hand-written factor (AMD on particles)
+  double factor_entries = 0;  ///< of the factor in the order given (AMD on particles)
   double factor_flops = 0;    ///< of its factorization
   int solves = 1;             ///< with one factorization (StaticSettings::expected_solves)
   int ranks = 1;              ///< MPI ranks: PETSc distributes, a direct factor is every rank's
@@ -139,7 +142,7 @@ struct AutoPrediction {
 };
 struct MachineRates;
 /// kAuto's model (linear_solver.cpp, fitted on the development VM): each factorization's
-/// floating-point operations (counted by the hand-written analysis, for CHOLMOD too) at a share
+/// floating-point operations (counted in the order given, for CHOLMOD's own order too) at a share
 /// of its kernel's rate, plus each solve streaming the factor; PETSc's setup and CG iterations
 /// stream the matrix a fitted number of times, divided among the ranks.
 AutoPrediction predict_linear_solvers(const AutoProblem& problem, const MachineRates& rates);
