@@ -37,6 +37,32 @@ Eigen::Vector3d window_stress(const Model& solved, const std::vector<char>& insi
   return {stress(0, 0), stress(1, 1), 0.5 * (stress(0, 1) + stress(1, 0))};
 }
 
+// The particles of the interior window `inset` inside the specimen's extent [low, high] (none
+// where that leaves less than three particle diameters across).
+struct InteriorWindow {
+  std::vector<char> inside;  // per particle
+  std::vector<int> particles;
+  double volume = 0;
+};
+
+InteriorWindow interior_window(const Particles& p, const Eigen::Vector3d& low,
+                               const Eigen::Vector3d& high, double inset) {
+  const bool has_window = high.x() - low.x() - 2 * inset >= 6 * p.radius.maxCoeff() &&
+                          high.y() - low.y() - 2 * inset >= 6 * p.radius.maxCoeff();
+  InteriorWindow w;
+  w.inside.assign(p.size(), 0);
+  for (int i = 0; has_window && i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0), y = p.reference_position(i, 1);
+    if (x >= low.x() + inset && x <= high.x() - inset && y >= low.y() + inset &&
+        y <= high.y() - inset) {
+      w.inside[i] = 1;
+      w.particles.push_back(i);
+      w.volume += p.volume(i);
+    }
+  }
+  return w;
+}
+
 }  // namespace
 
 SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
@@ -65,21 +91,10 @@ SpecimenStiffness measure_specimen_stiffness(const Model& model, double band,
   require(std::isfinite(interior_margin) && interior_margin >= 0,
           "the interior window's margin must be >= 0");
   if (interior_margin == 0) interior_margin = band;
-  const double inset = band + interior_margin;
-  const bool has_window = high.x() - low.x() - 2 * inset >= 6 * p.radius.maxCoeff() &&
-                          high.y() - low.y() - 2 * inset >= 6 * p.radius.maxCoeff();
-  std::vector<char> inside(p.size(), 0);
-  std::vector<int> window;
-  double window_volume = 0;
-  for (int i = 0; has_window && i < p.size(); ++i) {
-    const double x = p.reference_position(i, 0), y = p.reference_position(i, 1);
-    if (x >= low.x() + inset && x <= high.x() - inset && y >= low.y() + inset &&
-        y <= high.y() - inset) {
-      inside[i] = 1;
-      window.push_back(i);
-      window_volume += p.volume(i);
-    }
-  }
+  const InteriorWindow interior = interior_window(p, low, high, band + interior_margin);
+  const std::vector<char>& inside = interior.inside;
+  const std::vector<int>& window = interior.particles;
+  const double window_volume = interior.volume;
   Eigen::Matrix3d window_stresses, window_strains;
 
   SpecimenStiffness result;
