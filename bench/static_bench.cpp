@@ -48,6 +48,7 @@
 #include "core/stopwatch.hpp"
 #include "core/units.hpp"
 #include "solvers/linear_solver.hpp"
+#include "solvers/machine_rates.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
@@ -106,8 +107,9 @@ plydem::DofConstraints tension_constraints(const plydem::Model& model, double di
 // What the command line asked for.
 struct BenchOptions {
   double particles = 0;
-  bool paper = false, json = false, markdown = false, header = false;
+  bool paper = false, json = false, markdown = false, header = false, rates = false;
   int repeat = 1;
+  int solves = 1;
   std::string method = "auto";
   std::string linear_solver = "auto";
   std::string layup;
@@ -132,9 +134,16 @@ void add_options(CLI::App& app, BenchOptions& o) {
   app.add_option("--layup", o.layup, "a laminate of hex2d plies, e.g. \"[0/45/-45/90]s\"");
   app.add_option("--repeat", o.repeat, "solve this many times, report the best repeat too")
       ->check(CLI::Range(1, 1000));
+  app.add_option("--solves", o.solves,
+                 "solves with one factorization (the specimen stiffness makes 3): setup once, then "
+                 "this many solves, all timed together (solve_s, iterations: their sums)")
+      ->check(CLI::Range(1, 100));
   app.add_flag("--json", o.json, "one JSON object per line instead of text");
   app.add_flag("--markdown", o.markdown, "one row of a markdown table instead of text");
   app.add_flag("--markdown-header", o.header, "print the markdown table's header and exit");
+  app.add_flag("--machine-rates", o.rates,
+               "print this machine's rates that --linear-solver auto predicts from (measured now "
+               "and cached, or read from the cache: solvers/machine_rates.hpp) as JSON, and exit");
 }
 
 void print_markdown_header() {
@@ -198,12 +207,20 @@ void time_solves(const plydem::Model& built, const plydem::CouponSpec& spec, con
   if (o.method == "cg") settings.method = plydem::StaticMethod::kIterative;
   settings.linear_solver = plydem::parse_linear_solver(o.linear_solver);
 
+  settings.expected_solves = o.solves;
   for (int k = 0; k < o.repeat; ++k) {
     plydem::Model model = built;
     const long faults = minor_page_faults();
     const double cpu = cpu_seconds();
     const plydem::Stopwatch clock;
-    plydem::StaticResult solved = plydem::solve_static(model, constraints, settings);
+    const plydem::StaticSystem system(model, constraints, settings);
+    plydem::StaticResult solved = system.solve(model, constraints.value);
+    for (int more = 1; more < o.solves; ++more) {
+      const plydem::StaticResult again = system.solve(model, (more + 1.0) * constraints.value);
+      solved.seconds.assembly += again.seconds.assembly;
+      solved.seconds.solve += again.seconds.solve;
+      solved.iterations += again.iterations;
+    }
     const double wall = clock.seconds();
     const double used = cpu_seconds() - cpu;
     if (k == 0) {
@@ -219,7 +236,7 @@ void time_solves(const plydem::Model& built, const plydem::CouponSpec& spec, con
   m.rss = peak_rss_mib();
 }
 
-void print_json(const plydem::CouponSpec& spec, const plydem::Model& built, int repeat,
+void print_json(const plydem::CouponSpec& spec, const plydem::Model& built, int repeat, int solves,
                 const Measurement& m) {
   const plydem::StaticResult& r = m.result;
   const plydem::StaticTimings& t = r.seconds;
@@ -232,7 +249,10 @@ void print_json(const plydem::CouponSpec& spec, const plydem::Model& built, int 
   j["nonzeros"] = r.stiffness_nonzeros;
   j["method"] = r.method == plydem::StaticMethod::kDirect ? "direct" : "CG";
   j["solver"] = r.method_name;
+  j["linear_solver_choice"] = r.linear_solver_choice;
   j["factor_entries"] = r.factor_entries;
+  j["factor_flops"] = r.factor_flops;
+  j["solves"] = solves;
   j["iterations"] = r.iterations;
   j["relative_residual"] = r.relative_residual;
   j["build_s"] = m.build_seconds;
@@ -303,6 +323,19 @@ int main(int argc, char** argv) {
     print_markdown_header();
     return 0;
   }
+  if (o.rates) {
+    const plydem::MachineRates& r = plydem::machine_rates();
+    if (plydem::is_root())
+      std::cout << nlohmann::json{{"eigen_gflops", r.eigen_gflops},
+                                  {"blas_gflops", r.blas_gflops},
+                                  {"memory_gbytes", r.memory_gbytes},
+                                  {"blas", r.blas},
+                                  {"key", r.key},
+                                  {"source", r.source}}
+                       .dump()
+                << '\n';
+    return 0;
+  }
   try {
     const plydem::CouponSpec spec = coupon_of(o);
 
@@ -323,7 +356,7 @@ int main(int argc, char** argv) {
 
     if (!plydem::is_root()) return 0;  // under mpiexec, rank 0 reports (its own time and memory)
     if (o.json) {
-      print_json(spec, built, o.repeat, m);
+      print_json(spec, built, o.repeat, o.solves, m);
     } else if (o.markdown) {
       print_markdown_row(spec, built, o.repeat, m);
     } else {

@@ -18,25 +18,27 @@
 ///   Chebyshev-Jacobi smoothing, relative tolerance 1e-12); any PETSc option overrides these
 ///   (set_petsc_options, `--petsc-options`). The hierarchy is built once by factor() and reused by
 ///   every solve. Under `mpiexec -n N` the matrix is a distributed PETSc matrix, each rank owning
-///   a slice of the particles along the model's longest extent (see ParallelSession). Built when PETSc is found (optional).
-/// kAuto chooses after the hand-written solver's symbolic analysis, which costs little (it knows
-/// the factor's size before any numeric work):
-/// - PETSc, where it is built and the caller makes few solves with the matrix
-///   (LinearSolverUse::kFewSolves: a static solve, the specimen stiffness' three), when the
-///   direct factor with its workspace would take more than kAutoMemoryShare of the available
-///   memory, under mpiexec with more than one rank, or when the factor fills in densely (more
-///   than kAutoCholmodFill entries per unknown, as in a stacked laminate, whose factor is a band
-///   the width of its cross-section) and CHOLMOD's BLAS is the reference one;
-/// - CHOLMOD where the factor fills in densely and the BLAS is an optimized one (OpenBLAS);
-/// - the hand-written one otherwise;
-/// - and it refuses, with the estimate, a factor that does not fit where PETSc cannot take over
-///   (not built, or kManySolves: the events solver, solvers/bond_events.hpp, updates the factor
-///   by Woodbury's identity, many solves that want a direct factor).
-/// Measured on one thread (README, Benchmarks): on single plies (64-100 entries per unknown) the
-/// hand-written solver is as fast or faster than CHOLMOD at every size; on the [0/45/-45/90]s
-/// paper coupon (173,251 unknowns, 880 entries per unknown) the hand-written factor takes 14 s
-/// and 1.8 GB, CHOLMOD with METIS 35 s with the reference BLAS and 7.2 s with OpenBLAS, PETSc
-/// 4.6 s to set up and 4.1 s a solve in 394 MiB.
+///   a slice of the particles along the model's longest extent (see ParallelSession). Built when
+///   PETSc is found (optional).
+/// kAuto chooses by predicted time, from the entries and floating-point operations of the factor
+/// in the order given, which CHOLMOD's column counts give before any numeric work at the cost of
+/// a pass over the matrix (the solver taken then analyses it for itself; a hand-written analysis
+/// first, to decide, took 0.3 s of each [0/45/-45/90]s solve that PETSc then made):
+/// - memory first: where the direct factor with its workspace (on each MPI rank) would take more
+///   than kAutoMemoryShare of the available memory, PETSc if it is built and the caller makes few
+///   solves (LinearSolverUse::kFewSolves: a tension pull, the specimen stiffness' three); else it
+///   refuses, with the estimate (not built, or kManySolves: the events solver,
+///   solvers/bond_events.hpp, updates the factor by Woodbury's identity, many solves that want a
+///   direct factor), unless forced;
+/// - a factorization of at most kAutoSmallFactorFlops is the hand-written one's (a fraction of a
+///   second on any machine: single plies up to about 10^4 particles, the default job);
+/// - otherwise the solver of the least time predict_linear_solvers gives for this factor and
+///   the caller's number of solves (StaticSettings::expected_solves), on this machine's rates
+///   (solvers/machine_rates.hpp: its BLAS, Eigen's kernels and memory, measured at first use and
+///   cached per machine), among the hand-written factor, CHOLMOD, and PETSc where it may take
+///   few solves. The model and its constants were fitted to bench/static_solve's runs of the
+///   paper's plies and laminates with both Debian BLAS (README, Benchmarks); LinearSolver::
+///   choice() says what was predicted.
 ///
 /// Zero pivots. Both report the same diagnosis: the dofs whose LDL^T pivot is at or below
 /// `pivot_tolerance` times their diagonal entry (sparse_cholesky.hpp). CHOLMOD stops at the first
@@ -60,9 +62,10 @@ enum class LinearSolverKind {
   kPetsc     ///< PETSc CG + GAMG with the rigid-body near-null space (needs petsc_available())
 };
 
-/// Entries of the hand-written factor per unknown above which kAuto factors with CHOLMOD (with an
-/// optimized BLAS) or hands the matrix to PETSc (with the reference BLAS, for few solves).
-inline constexpr double kAutoCholmodFill = 300;
+/// Floating-point operations of the hand-written factorization up to which kAuto takes it
+/// without pricing the others (about 0.3 s on the development VM's Eigen kernels; the paper's
+/// single ply takes 1.1e8, its [0/45/-45/90]s laminate 1.6e11).
+inline constexpr double kAutoSmallFactorFlops = 2e9;
 /// The share of the available memory (core/machine_memory.hpp) a direct factor may take under
 /// kAuto; above it kAuto takes PETSc (few solves) or refuses with the estimate.
 inline constexpr double kAutoMemoryShare = 0.8;
@@ -123,6 +126,27 @@ struct UnknownLayout {
   /// and each cluster's rigid modes are prescribed); kPetsc then skips its mechanism probe.
   bool positive_definite = false;
 };
+/// What kAuto knows of a matrix before it chooses (its factor counted in the order given), and how
+/// it is used.
+struct AutoProblem {
+  double unknowns = 0;
+  double nonzeros = 0;        ///< stored entries of the lower triangle
+  double factor_entries = 0;  ///< of the factor in the order given (AMD on particles)
+  double factor_flops = 0;    ///< of its factorization
+  int solves = 1;             ///< with one factorization (StaticSettings::expected_solves)
+  int ranks = 1;              ///< MPI ranks: PETSc distributes, a direct factor is every rank's
+};
+/// Predicted seconds of one factorization (PETSc: its setup) and problem.solves solves.
+struct AutoPrediction {
+  double direct = 0, cholmod = 0, petsc = 0;
+};
+struct MachineRates;
+/// kAuto's model (linear_solver.cpp, fitted on the development VM): each factorization's
+/// floating-point operations (counted in the order given, for CHOLMOD's own order too) at a share
+/// of its kernel's rate, plus each solve streaming the factor; PETSc's setup and CG iterations
+/// stream the matrix a fitted number of times, divided among the ranks.
+AutoPrediction predict_linear_solvers(const AutoProblem& problem, const MachineRates& rates);
+
 /// Whether the BLAS that CHOLMOD calls is an optimized one (OpenBLAS, found at run time: the
 /// Debian alternative libblas.so.3 or LD_LIBRARY_PATH decide which one is loaded).
 bool optimized_blas();
@@ -149,22 +173,35 @@ class LinearSolver {
   virtual Eigen::VectorXd pivots() const = 0;
   /// Solves A X = B for every column of `b`, in place (zero at zero pivots).
   virtual void solve_in_place(Eigen::MatrixXd& b) const = 0;
+  /// Solves A x = b with `x` as the first iterate of an iterative solver (kPetsc: its CG starts
+  /// there, and stops at the same residual relative to b as from zero); a direct solver ignores
+  /// it (x = A^-1 b exactly as solve_in_place). One column.
+  virtual void solve_from(Eigen::VectorXd& x, const Eigen::VectorXd& b) const {
+    x = b;
+    solve_in_place(x);
+  }
   /// E.g. "supernodal Cholesky (AMD on particles)" or "CHOLMOD supernodal (METIS)"; kAuto's
   /// names the one it chose.
   virtual std::string name() const = 0;
   /// Stored entries of the factor L.
   virtual double factor_entries() const = 0;
+  /// Floating-point operations of the factorization (its symbolic analysis' count; 0 for PETSc).
+  virtual double factor_flops() const { return 0; }
+  /// kAuto's: what it chose and why ("chosen by auto: predicted ... against ..."); "" for the
+  /// others.
+  virtual std::string choice() const { return ""; }
 
   void solve_in_place(Eigen::VectorXd& b) const;
 };
 
 /// A solver of `kind`. The hand-written one and kAuto factor in the order the matrix is given
 /// (give it a fill-reducing one); CHOLMOD orders it itself; kPetsc numbers the particles itself
-/// (slices along the model's longest extent are the ranks' shares). Throws plydem::Error for kPetsc without
-/// PETSc.
-/// `force`: kAuto factors even where the factor does not fit and PETSc cannot take over.
+/// (slices along the model's longest extent are the ranks' shares). Throws plydem::Error for kPetsc
+/// without PETSc. `force`: kAuto factors even where the factor does not fit and PETSc cannot take
+/// over. `expected_solves`: how many solves the caller makes with one factor() (kAuto's
+/// prediction).
 std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind,
                                                  LinearSolverUse use = LinearSolverUse::kFewSolves,
-                                                 bool force = false);
+                                                 bool force = false, int expected_solves = 1);
 
 }  // namespace plydem

@@ -210,9 +210,22 @@ class PetscSolver final : public LinearSolver {
     iterations_ = 0;
     for (Eigen::Index c = 0; c < b.cols(); ++c) {
       Eigen::VectorXd column = b.col(c);
-      solve_one(column);
+      solve_one(column, nullptr);
       b.col(c) = column;
     }
+  }
+  void solve_from(Eigen::VectorXd& x, const Eigen::VectorXd& b) const override {
+    if (fallback_) {
+      x = b;
+      fallback_->solve_in_place(x);
+      return;
+    }
+    require(ksp_ != nullptr && b.rows() == n_ && x.rows() == n_,
+            "linear solver: solve before factor, or a right-hand side of the wrong size");
+    iterations_ = 0;
+    const Eigen::VectorXd guess = x;
+    x = b;
+    solve_one(x, &guess);
   }
   int iterations() const override { return iterations_; }
   std::string name() const override {
@@ -400,14 +413,26 @@ class PetscSolver final : public LinearSolver {
     return reason < 0 || !(probe_error_ <= kMechanismProbe);
   }
 
-  void solve_one(Eigen::VectorXd& y) const {
+  // This rank's rows of `values` (the unknowns' numbering) into `target` (prescribed rows 0).
+  void scatter_to(Vec target, const Eigen::VectorXd& values) const {
     PetscScalar* v = nullptr;
-    check(VecGetArray(b_, &v), "VecGetArray");
+    check(VecGetArray(target, &v), "VecGetArray");
     for (int row = first_; row < end_; ++row) v[row - first_] = 0;
     for (int k = 0; k < n_; ++k)
-      if (row_of_[k] >= first_ && row_of_[k] < end_) v[row_of_[k] - first_] = y(k);
-    check(VecRestoreArray(b_, &v), "VecRestoreArray");
-    check(VecSet(x_, 0), "VecSet");
+      if (row_of_[k] >= first_ && row_of_[k] < end_) v[row_of_[k] - first_] = values(k);
+    check(VecRestoreArray(target, &v), "VecRestoreArray");
+  }
+
+  // Solves for the right-hand side `y`, into `y`; CG starts from `guess` where given, else 0.
+  void solve_one(Eigen::VectorXd& y, const Eigen::VectorXd* guess) const {
+    scatter_to(b_, y);
+    if (guess) {
+      scatter_to(x_, *guess);
+    } else {
+      check(VecSet(x_, 0), "VecSet");
+    }
+    check(KSPSetInitialGuessNonzero(ksp_, guess ? PETSC_TRUE : PETSC_FALSE),
+          "KSPSetInitialGuessNonzero");
     PetscReal rtol = 0;
     check(KSPGetTolerances(ksp_, &rtol, nullptr, nullptr, nullptr), "KSPGetTolerances");
     start_progress("solve", rtol);
@@ -493,6 +518,11 @@ void start_petsc_session(int* argc, char*** argv) {
 void end_petsc_session() {
   if (session_initialized) PetscFinalize();
   session_initialized = false;
+}
+
+void broadcast_from_root(double* values, int count) {
+  if (petsc_size() <= 1) return;
+  MPI_Bcast(values, count, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
 }
 
 int petsc_rank() {

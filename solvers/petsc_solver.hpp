@@ -18,6 +18,8 @@ void insert_petsc_options(const std::string& options);
 /// started elsewhere).
 void start_petsc_session(int* argc, char*** argv);
 void end_petsc_session();
+/// Rank 0's `count` values to every rank of PETSC_COMM_WORLD (MPI_Bcast; nothing with one rank).
+void broadcast_from_root(double* values, int count);
 /// MPI rank and size of PETSC_COMM_WORLD; 0 and 1 before PETSc is initialized.
 int petsc_rank();
 int petsc_size();

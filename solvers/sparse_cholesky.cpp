@@ -464,6 +464,16 @@ void SupernodalCholesky::factorize(const SparseMatrix& a, double pivot_tolerance
   std::sort(zero_pivots_.begin(), zero_pivots_.end());
 }
 
+double SupernodalCholesky::factor_flops() const {
+  double flops = 0;
+  for (int s = 0; s < supernode_count(); ++s) {
+    const double k = first_column_[s + 1] - first_column_[s];
+    const double below = row_start_[s + 1] - row_start_[s] - k;
+    flops += k * k * k / 3 + k * k * below + k * below * below;
+  }
+  return flops;
+}
+
 Eigen::VectorXd SupernodalCholesky::pivots() const {
   Eigen::VectorXd d(size());
   for (int old = 0; old < size(); ++old) d(old) = pivot_[postorder_[old]];

@@ -480,11 +480,11 @@ SparseMatrix assemble_stiffness(const Model& model) {
 
 void validate(const StaticSettings& settings) {
   require(settings.direct_max_dofs >= 0 && settings.cg_max_iterations >= 0 &&
-              std::isfinite(settings.cg_tolerance) && settings.cg_tolerance > 0 &&
-              std::isfinite(settings.pivot_tolerance) && settings.pivot_tolerance > 0 &&
-              settings.pivot_tolerance < 1,
+              settings.expected_solves >= 1 && std::isfinite(settings.cg_tolerance) &&
+              settings.cg_tolerance > 0 && std::isfinite(settings.pivot_tolerance) &&
+              settings.pivot_tolerance > 0 && settings.pivot_tolerance < 1,
           "static solver settings out of range (need direct_max_dofs >= 0, cg_max_iterations >= "
-          "0, cg_tolerance > 0, 0 < pivot_tolerance < 1)");
+          "0, expected_solves >= 1, cg_tolerance > 0, 0 < pivot_tolerance < 1)");
 }
 
 using IncompleteCholeskyCg = Eigen::ConjugateGradient<
@@ -510,6 +510,7 @@ struct StaticSystem::Impl {
   std::unique_ptr<IncompleteCholeskyCg> cg_ic;
   std::unique_ptr<JacobiCg> cg_jacobi;
   std::string method_name;
+  std::string choice;  // kAuto's, LinearSolver::choice()
   StaticTimings setup;
   int factorizations = 0;
   mutable int solves = 0;
@@ -629,7 +630,8 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   if (nf == 0) {
     m.method_name = "none (every dof prescribed)";
   } else if (m.direct) {
-    m.cholesky = make_linear_solver(kind, settings.linear_solver_use, settings.force);
+    m.cholesky = make_linear_solver(kind, settings.linear_solver_use, settings.force,
+                                    settings.expected_solves);
     // Round-off leaves a zero pivot far above machine epsilon, the more so the larger the
     // system: on hex2d coupons with a free rigid mode we measured up to 4e-10 at 2.3e4 free dofs
     // and 2.4e-8 at 9.1e4, while the smallest genuine pivot stayed above 3e-5. Hence a threshold
@@ -645,6 +647,7 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
       refuse_zero_pivots(p, m.free_dofs, m.cholesky->pivots(), m.cholesky->zero_pivots(),
                          threshold);
     m.method_name = m.cholesky->name();
+    m.choice = m.cholesky->choice();
     m.setup.factorization = ordering_seconds + phase.seconds();
   } else if (settings.preconditioner == StaticPreconditioner::kIncompleteCholesky) {
     m.method_name = "ConjugateGradient + IncompleteCholesky";
@@ -708,6 +711,7 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
   StaticResult result;
   result.method = m.direct ? StaticMethod::kDirect : StaticMethod::kIterative;
   result.method_name = m.method_name;
+  result.linear_solver_choice = m.choice;
   result.dofs = m.dofs;
   result.free_dofs = m.nf;
   result.prescribed_dofs = m.prescribed;
@@ -715,6 +719,7 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
   result.pinned = m.pinned;
   result.reused_factorization = m.solves > 0;
   result.factor_entries = m.cholesky ? m.cholesky->factor_entries() : 0.0;
+  result.factor_flops = m.cholesky ? m.cholesky->factor_flops() : 0.0;
   if (!result.reused_factorization) result.seconds = m.setup;
   ++m.solves;
 
@@ -738,18 +743,23 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
   result.seconds.assembly += phase.seconds();
 
   phase.restart();
+  // The current state, scaled: the first iterate of an iterative solver (successive load stages,
+  // or a caller's estimate of the solution, then take fewer iterations); direct factors ignore it.
   Eigen::VectorXd y = Eigen::VectorXd::Zero(nf);
+  for (int f = 0; f < nf; ++f) {
+    const int i = m.free_dofs[f] / kDofsPerParticle, c = m.free_dofs[f] % kDofsPerParticle;
+    y(f) = (c < 3 ? p.displacement(i, c) : p.rotation(i, c - 3)) / m.s(f);
+  }
+  if (!y.allFinite()) y.setZero();
   if (nf > 0 && m.direct) {
-    y = b;
-    m.cholesky->solve_in_place(y);
+    if (y.isZero(0)) {
+      y = b;
+      m.cholesky->solve_in_place(y);
+    } else {
+      m.cholesky->solve_from(y, b);
+    }
     result.iterations = m.cholesky->iterations();
   } else if (nf > 0) {
-    // Warm start from the current state: successive load stages then take few iterations.
-    for (int f = 0; f < nf; ++f) {
-      const int i = m.free_dofs[f] / kDofsPerParticle, c = m.free_dofs[f] % kDofsPerParticle;
-      y(f) = (c < 3 ? p.displacement(i, c) : p.rotation(i, c - 3)) / m.s(f);
-    }
-    if (!y.allFinite()) y.setZero();
     if (m.cg_ic)
       m.run_cg(*m.cg_ic, b, y, result);
     else

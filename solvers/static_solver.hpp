@@ -113,6 +113,10 @@ struct StaticSettings {
   /// factor always). With PETSc built, kFewSolves and linear_solver kAuto or kPetsc, the method
   /// kAuto solves above direct_max_dofs by PETSc's CG + AMG instead of Eigen's CG.
   LinearSolverUse linear_solver_use = LinearSolverUse::kFewSolves;
+  /// How many solves the caller makes with one StaticSystem (a tension pull 1, the specimen
+  /// stiffness 3): kAuto weighs a factorization, paid once, against the solves with it
+  /// (solvers/linear_solver.hpp).
+  int expected_solves = 1;
   /// Factor even where kAuto's symbolic analysis finds that the factor does not fit in the
   /// available memory and PETSc cannot take over (the user's --force); refused otherwise.
   bool force = false;
@@ -153,17 +157,21 @@ struct StaticTimings {
 struct StaticResult {
   StaticMethod method = StaticMethod::kDirect;  ///< kDirect or kIterative, as used
   std::string method_name;                      ///< e.g. "supernodal Cholesky (AMD on particles)"
+  /// What kAuto chose and why (LinearSolver::choice(): "chosen by auto: predicted ..."); "" for a
+  /// solver the caller named.
+  std::string linear_solver_choice;
   /// The factorization (or preconditioner) was made for an earlier solve of the same StaticSystem:
   /// `seconds` then holds this solve's right-hand side (assembly) and solve only.
   bool reused_factorization = false;
   double factor_entries = 0;  ///< stored entries of the Cholesky factor (0 for kIterative)
+  double factor_flops = 0;    ///< floating-point operations of the factorization (0 without one)
   int dofs = 0;
   int free_dofs = 0;
   int prescribed_dofs = 0;              ///< pins included
   Eigen::Index stiffness_nonzeros = 0;  ///< in the lower triangle of K_ff
-  int iterations = 0;  ///< conjugate gradient iterations (0 for kDirect but with kPetsc)
-  double relative_residual = 0;         ///< |A y - b| / |b| of the scaled free-free system
-  double strain_energy = 0;             ///< of the solution [J]
+  int iterations = 0;            ///< conjugate gradient iterations (0 for kDirect but with kPetsc)
+  double relative_residual = 0;  ///< |A y - b| / |b| of the scaled free-free system
+  double strain_energy = 0;      ///< of the solution [J]
   /// The generalized force each support applies to its particle [N, N m]: (K u) on prescribed
   /// dofs, 0 on free ones. It is taken from the kernel's forces at the solution (reaction =
   /// -particles.force / torque there), so it is the grip force an explicit run would report.
@@ -205,8 +213,11 @@ class StaticSystem {
   /// Solves with the prescribed dofs at `values` (one row per particle, Dof columns; read only
   /// where the constructor's constraints fix a dof; pinned dofs stay at zero) and writes the state
   /// into `model`, as solve_static does. `model` must be the one the system was built from, or a
-  /// copy of it (same particles and bonds; not checked beyond its size). Throws plydem::Error for
-  /// values of the wrong size or non-finite ones, or (CG) no convergence.
+  /// copy of it (same particles and bonds; not checked beyond its size). An iterative solver (CG,
+  /// kPetsc) starts from the model's current displacements and rotations, so that a caller's
+  /// estimate of the solution (the specimen stiffness' affine field) saves iterations; a direct
+  /// factor solves exactly whatever the state. Throws plydem::Error for values of the wrong size
+  /// or non-finite ones, or (CG) no convergence.
   StaticResult solve(Model& model, const DofArray& values) const;
 
   /// Factorizations done (1 for the direct method once the constructor returned; 0 for CG) and

@@ -130,17 +130,17 @@ Specimen build_laminate(SpecimenBuilder& builder, const LaminateSpec& spec) {
   const int plies = static_cast<int>(spec.ply_angles.size());
   const InterfaceStiffness interface = spec.interface.resolved(spec.coupon.material, t);
 
-  // The plies, each built with its own angle's calibration (once per distinct ply), stacked
-  // along z.
+  // The plies, each built with its own angle's calibration (calibrated and built once per
+  // distinct ply: SpecimenBuilder::ply), stacked along z.
   Specimen specimen;
   std::vector<Model> ply_models;
   int particles = 0;
   for (int k = 0; k < plies; ++k) {
     CouponSpec coupon = spec.coupon;
     coupon.ply_angle = spec.ply_angles[k];
-    Specimen built = builder.build(coupon);
-    specimen.ply_calibrations.push_back(std::move(built.ply_calibrations.front()));
-    Model ply = std::move(built.model);
+    const Specimen& built = builder.ply(coupon);
+    specimen.ply_calibrations.push_back(built.ply_calibrations.front());
+    Model ply = built.model;
     ply.particles.reference_position.col(2) += k * t;
     ply.particles.ply.setConstant(k);
     particles += ply.particles.size();

@@ -95,8 +95,8 @@ std::vector<Ply> laminate_plies(const LaminateSpec& spec);
 /// `ply` = k), then the interface bonds (kind BondKind::kInterface, family = k for the interface
 /// above ply k). The model's thickness is the laminate's. Throws plydem::Error for an empty layup,
 /// a bad interface stiffness, or an interface with no bonds. The specimen's ply_calibrations are
-/// the plies', bottom to top; `builder` calibrates each distinct ply once (and remembers it for
-/// later builds).
+/// the plies', bottom to top; `builder` calibrates and builds each distinct ply once (and
+/// remembers both for later builds: SpecimenBuilder::ply).
 Specimen build_laminate(SpecimenBuilder& builder, const LaminateSpec& spec);
 /// The same with a builder of its own.
 Specimen build_laminate(const Strategy& strategy, const LaminateSpec& spec);

@@ -75,6 +75,21 @@ const Calibration& SpecimenBuilder::calibration(const CouponSpec& coupon) {
   return it->second;
 }
 
+std::string SpecimenBuilder::ply_key(const CouponSpec& coupon) const {
+  // Hexadecimal floats: equal keys mean equal numbers, bit for bit.
+  return fmt::format("{}|length {:a}|width {:a}|diameter {:a}|edges {}",
+                     strategy_.calibration_key(coupon), coupon.length, coupon.width,
+                     coupon.particle_diameter, coupon.complete_boundary_cells ? 1 : 0);
+}
+
+const Specimen& SpecimenBuilder::ply(const CouponSpec& coupon) {
+  coupon.validate();
+  const std::string key = ply_key(coupon);
+  auto it = plies_.find(key);
+  if (it == plies_.end()) it = plies_.emplace(key, build(coupon)).first;
+  return it->second;
+}
+
 Specimen SpecimenBuilder::build(const CouponSpec& coupon) {
   const Stopwatch clock;
   const Calibration& cal = calibration(coupon);

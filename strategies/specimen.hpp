@@ -26,7 +26,7 @@ FamilyStiffnessRule parallel_bond_rule(double bond_radius);
 /// The particles and bond graph of a coupon, as a packing gives them.
 struct SpecimenLayout {
   Eigen::Array<double, Eigen::Dynamic, 3> position;  ///< particle centres [m]
-  double radius = 0;                       ///< of every particle [m]
+  double radius = 0;                                 ///< of every particle [m]
   double particle_volume = 0;              ///< each particle's share of the ply's volume [m^3]
   double density = 0;                      ///< [kg/m^3]
   std::vector<std::pair<int, int>> pairs;  ///< bonded particles
@@ -54,12 +54,22 @@ class SpecimenBuilder {
   const Calibration& calibration(const CouponSpec& coupon);
   /// The coupon built with its ply's calibration.
   Specimen build(const CouponSpec& coupon);
+  /// The coupon of a laminate's ply, built on first use and kept: the plies of a laminate at the
+  /// same angle, and those the laminates of one experiment share (a tension test's pulls along x
+  /// and y: [0/45/-45/90]s and [-90/-45/-135/0]s have 6 distinct plies among their 16), are built
+  /// (and their free edges balanced) once. A build is a function of the strategy, its options and
+  /// the coupon (ply_key), so a kept ply is the ply a new build would give, bit for bit.
+  const Specimen& ply(const CouponSpec& coupon);
   /// What this builder did: calibrations computed, coupons built.
   const BuildStatistics& statistics() const { return statistics_; }
 
  private:
+  /// What ply() keys its coupons by: the calibration key and the coupon's size and edges.
+  std::string ply_key(const CouponSpec& coupon) const;
+
   const Strategy& strategy_;
   std::map<std::string, Calibration> calibrations_;
+  std::map<std::string, Specimen> plies_;
   BuildStatistics statistics_;
 };
 

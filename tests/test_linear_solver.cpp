@@ -7,7 +7,11 @@
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
+#include <unistd.h>
+
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <random>
 #include <string>
@@ -17,6 +21,7 @@
 #include "experiments/protocols/stiffness.hpp"
 #include "experiments/protocols/tension.hpp"
 #include "solvers/linear_solver.hpp"
+#include "solvers/machine_rates.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/hex2d.hpp"
 #include "strategies/laminate.hpp"
@@ -247,6 +252,98 @@ TEST_CASE("auto: a direct factor that does not fit goes to PETSc for few solves,
     setenv("PLYDEM_AVAILABLE_MEMORY", saved.c_str(), 1);
   else
     unsetenv("PLYDEM_AVAILABLE_MEMORY");
+}
+
+TEST_CASE("auto prices each solver by the machine's rates, the factor and the solves") {
+  // The paper's [0/45/-45/90]s coupon (bench/static_solve): 173,251 unknowns, 3.44e6 stored
+  // entries, a factor of 1.26e8 entries and 1.9e11 flops in AMD's order on particles; and its 0 deg
+  // ply of 3e4 particles.
+  AutoProblem laminate;
+  laminate.unknowns = 173251;
+  laminate.nonzeros = 3.44e6;
+  laminate.factor_entries = 1.26e8;
+  laminate.factor_flops = 1.9e11;
+  AutoProblem ply;
+  ply.unknowns = 181981;
+  ply.nonzeros = 1.71e6;
+  ply.factor_entries = 1.48e7;
+  ply.factor_flops = 2.46e9;
+  // The development VM with the reference BLAS and with OpenBLAS on its two cores; a machine of
+  // many cores with OpenBLAS.
+  MachineRates reference, openblas, many_cores;
+  reference.eigen_gflops = openblas.eigen_gflops = 13;
+  many_cores.eigen_gflops = 20;
+  reference.blas_gflops = 5;
+  openblas.blas_gflops = 46;
+  many_cores.blas_gflops = 1000;
+  reference.memory_gbytes = openblas.memory_gbytes = 29;
+  many_cores.memory_gbytes = 40;
+  for (const MachineRates* rates : {&reference, &openblas}) {
+    const AutoPrediction t = predict_linear_solvers(laminate, *rates);
+    MESSAGE("laminate: direct ", t.direct, " s, CHOLMOD ", t.cholmod, " s, PETSc ", t.petsc, " s");
+    CHECK(t.petsc < t.cholmod);
+    CHECK(t.petsc < t.direct);
+    // As measured: PETSc 5 s (setup and 57 iterations), the hand-written factor 20 s.
+    CHECK(t.petsc == doctest::Approx(5.1).epsilon(0.2));
+    CHECK(t.direct == doctest::Approx(20).epsilon(0.2));
+    const AutoPrediction p = predict_linear_solvers(ply, *rates);
+    CHECK(p.direct < p.cholmod);
+    CHECK(p.direct < p.petsc);
+  }
+  CHECK(predict_linear_solvers(laminate, reference).cholmod >
+        3 * predict_linear_solvers(laminate, openblas).cholmod);
+  const AutoPrediction fast = predict_linear_solvers(laminate, many_cores);
+  CHECK(fast.cholmod < fast.petsc);
+  // More solves cost each solver its solves; more ranks divide PETSc's work alone.
+  AutoProblem three = laminate, two_ranks = laminate;
+  three.solves = 3;
+  two_ranks.ranks = 2;
+  const AutoPrediction one = predict_linear_solvers(laminate, reference);
+  const AutoPrediction more = predict_linear_solvers(three, reference);
+  CHECK(more.direct > one.direct);
+  CHECK(more.petsc - one.petsc > 4 * (more.direct - one.direct));
+  const AutoPrediction shared = predict_linear_solvers(two_ranks, reference);
+  CHECK(shared.petsc == doctest::Approx(one.petsc / 2));
+  CHECK(shared.direct == one.direct);
+}
+
+TEST_CASE("the machine's rates are measured once and read back from the cache") {
+  const std::string file = fmt::format("{}/plydem_machine_rates_{}.json",
+                                       std::filesystem::temp_directory_path().string(), getpid());
+  std::filesystem::remove(file);
+  const MachineRates first = machine_rates_from(file);
+  CHECK(first.eigen_gflops > 0);
+  CHECK(first.blas_gflops > 0);
+  CHECK(first.memory_gbytes > 0);
+  CHECK(contains(first.source, "measured"));
+  CHECK(contains(first.source, "kept in"));
+  CHECK(contains(first.key, first.blas));
+  const MachineRates again = machine_rates_from(file);
+  CHECK(contains(again.source, "cached in"));
+  CHECK(again.eigen_gflops == first.eigen_gflops);
+  CHECK(again.blas_gflops == first.blas_gflops);
+  CHECK(again.memory_gbytes == first.memory_gbytes);
+  // A damaged file is measured again, and replaced.
+  std::ofstream(file) << "{ not json";
+  CHECK(contains(machine_rates_from(file).source, "measured"));
+  CHECK(contains(machine_rates_from(file).source, "cached in"));
+  std::filesystem::remove(file);
+  // No file: measured every time.
+  CHECK(machine_rates_from("").source.find("kept") == std::string::npos);
+}
+
+TEST_CASE("auto takes the hand-written factor of a small problem and says so") {
+  const Model built = small_coupon(0.3);
+  const DofConstraints c = grips(built, 1e-6);
+  Model m = built;
+  const StaticResult r = solve_static(m, c, with(LinearSolverKind::kAuto));
+  CHECK(r.factor_flops > 0);
+  CHECK(r.factor_flops <= kAutoSmallFactorFlops);
+  CHECK(contains(r.linear_solver_choice, "chosen by auto: a small direct factor"));
+  CHECK(contains(r.method_name, "supernodal Cholesky"));
+  // A solver the caller names is not a choice.
+  Model d = built;
+  CHECK(solve_static(d, c, with(LinearSolverKind::kDirect)).linear_solver_choice.empty());
 }
 
 TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {

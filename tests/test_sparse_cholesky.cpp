@@ -116,3 +116,29 @@ TEST_CASE("supernodal Cholesky: one zero pivot per null vector, and the solution
   CHECK(residual.norm() < 1e-12 * b.norm());
   for (int z : cholesky.zero_pivots()) CHECK(x(z) == 0);
 }
+
+TEST_CASE("supernodal Cholesky counts the floating-point operations of its factorization") {
+  // A dense matrix is one supernode of n columns: n^3 / 3.
+  const int n = 30;
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Random(n, n);
+  dense = dense * dense.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+  const SparseMatrix full = dense.sparseView();
+  const SparseMatrix lower = full.triangularView<Eigen::Lower>();
+  SupernodalCholesky one;
+  one.analyze(lower);
+  CHECK(one.supernode_count() == 1);
+  CHECK(one.factor_flops() == doctest::Approx(n * n * n / 3.0));
+  // A diagonal matrix: one operation per pivot, however it is grouped.
+  const SparseMatrix diagonal =
+      Eigen::VectorXd::Constant(n, 2.0).asDiagonal().toDenseMatrix().sparseView();
+  SupernodalCholesky none;
+  none.analyze(diagonal);
+  CHECK(none.factor_flops() == doctest::Approx(n / 3.0).epsilon(1.0));
+  // Larger and denser fronts cost more: a finer grid of the same lattice takes more per unknown.
+  SupernodalCholesky small, large;
+  const SparseMatrix a = lattice_matrix(8, 3, 4, 0.1, 1), b = lattice_matrix(16, 3, 4, 0.1, 1);
+  small.analyze(a);
+  large.analyze(b);
+  CHECK(small.factor_flops() > small.factor_entries());
+  CHECK(large.factor_flops() / b.rows() > small.factor_flops() / a.rows());
+}

@@ -37,6 +37,7 @@ nlohmann::json pull_json(const PullResult& r) {
           {"final_unbalanced_ratio", r.final_ratio},
           {"linear_solver", r.linear_solver},
           {"linear_iterations", r.linear_iterations},
+          {"linear_solver_choice", r.linear_solver_choice},
           {"time_step", r.time_step},
           {"grip_velocity", r.grip_velocity},
           {"loading_transits", r.loading_transits},
@@ -158,6 +159,9 @@ nlohmann::json tension_json(const TensionResult& r, const TensionSettings& s) {
         {"stiffness", matrix_json(r.specimen.stiffness)},
         {"constants", constants_json(r.specimen.constants)},
         {"frame_particles", r.specimen.frame_particles},
+        {"linear_solver", r.specimen.linear_solver},
+        {"linear_iterations", r.specimen.linear_iterations},
+        {"linear_solver_choice", r.specimen.linear_solver_choice},
         {"wall_seconds", r.specimen.wall_seconds}};
     if (r.specimen.interior_particles > 0) {
       j["specimen_stiffness"]["interior"] = {

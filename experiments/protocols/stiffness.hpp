@@ -46,8 +46,13 @@ struct SpecimenStiffness {
   InPlaneConstants interior_constants;
   int interior_particles = 0;
   double interior_margin = 0;
-  int factorizations = 0;       ///< of the stiffness matrix (one serves the three solves)
-  int solves = 0;               ///< static solves (three)
+  int factorizations = 0;  ///< of the stiffness matrix (one serves the three solves)
+  int solves = 0;          ///< static solves (three)
+  /// The solves' linear solver (StaticResult::method_name), their Krylov iterations (summed; 0
+  /// for a direct factor) and what --linear-solver auto chose and why.
+  std::string linear_solver;
+  int linear_iterations = 0;
+  std::string linear_solver_choice;
   double wall_seconds = 0;
 };
 

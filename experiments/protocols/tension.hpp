@@ -107,6 +107,8 @@ struct PullResult {
   /// for a direct factor); empty and 0 for explicit dynamics.
   std::string linear_solver;
   int linear_iterations = 0;
+  /// --linear-solver auto: what it chose and why (StaticResult::linear_solver_choice).
+  std::string linear_solver_choice;
   double time_step = 0;      ///< [s]
   double grip_velocity = 0;  ///< [m/s] per grip
   double cross_section = 0;  ///< [m^2]
