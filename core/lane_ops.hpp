@@ -10,8 +10,11 @@
 ///    compiler would contract by itself: GCC contracts a * b + c wherever the instruction set has
 ///    FMA (the host kernel's AVX2 and AVX-512 clones) and nowhere else (its baseline x86-64 code),
 ///    so a kernel written with plain a * b + c gave different last bits on different processors and
-///    backends. Explicit fmadd is one vfmadd per vector on the clones, libm's fma (itself the FMA
-///    instruction where the processor has one) in baseline code, and fma() on the device;
+///    backends. Explicit fmadd is libm's fma (itself the FMA instruction where the processor has
+///    one) for one particle on the host, fma() on the device, and one vfmadd per vector in the
+///    host kernel's clones (contacts/bond_kernel.hpp: the one place that relies on GCC's
+///    contraction, made unambiguous; the baseline x86-64 clone, for processors without FMA,
+///    rounds twice there);
 ///  - masks select whole values (select, keep): no arithmetic on the masks' side.
 ///
 /// Shared code must write a product that feeds a sum as fmadd, or keep the product out of any sum
