@@ -205,7 +205,9 @@ struct LaneOps<lanes::Doubles> {
     const Doubles with_sign = (Doubles)((Mask)magnitude | ((Mask)v & sign_bit));
     return v == Doubles{} ? Doubles{} : with_sign;
   }
-  [[gnu::always_inline]] static bool any(const Mask& m) { return lanes::any(m); }
+  [[gnu::always_inline]] static bool any(const Mask& m) {
+    return lanes::any(m);
+  }
 };
 
 /// A HalfBondType with every parameter repeated in all lanes: what a block whose eight particles

@@ -176,14 +176,15 @@ class CudaBackend final : public DeviceBackend {
 
   std::size_t bytes_needed(const DeviceArrays& a) const override {
     // The kernel's arrays, the block partials (6 / 8 per particle) and the event log.
-    std::size_t bytes = kernel_array_bytes(a.sizes) +
-                        a.sizes.count(ArrayExtent::kPartials) / 8 * sizeof(double);
+    std::size_t bytes =
+        kernel_array_bytes(a.sizes) + a.sizes.count(ArrayExtent::kPartials) / 8 * sizeof(double);
     if (breaks_bonds(a.sizes.mode)) bytes += event_capacity(a.sizes) * sizeof(SlotEvent);
     return bytes;
   }
 
   void upload(const DeviceArrays& a) override {
-    require(a.sizes.padded % 8 == 0, "CUDA backend: the kernel's particles come in blocks of eight");
+    require(a.sizes.padded % 8 == 0,
+            "CUDA backend: the kernel's particles come in blocks of eight");
     const std::size_t needed = bytes_needed(a);
     std::size_t free = 0, total = 0;
     check(cudaMemGetInfo(&free, &total), "cudaMemGetInfo");
@@ -283,8 +284,8 @@ class CudaBackend final : public DeviceBackend {
   // The report sums in the host kernel's order: block partials in lane order, then a fixed tree.
   void reduce_report(const ParticleStepView& v, DeviceBatch& batch) {
     const int blocks = v.padded / 8;
-    block_partials_kernel<<<(blocks + kThreads - 1) / kThreads, kThreads>>>(
-        v.a.partial, v.padded, block_sums_.data());
+    block_partials_kernel<<<(blocks + kThreads - 1) / kThreads, kThreads>>>(v.a.partial, v.padded,
+                                                                            block_sums_.data());
     check(cudaGetLastError(), "the block partials' launch");
     reduce_kernel<<<kParticlePartials, kReduceThreads>>>(block_sums_.data(), blocks, sums_.data());
     check(cudaGetLastError(), "the reduction's launch");
