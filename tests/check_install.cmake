@@ -1,7 +1,7 @@
 # `cmake --install` into a fresh prefix, then examples/custom_strategy as its own project against it
 # (find_package(plydem)), as docs/install.md does: the installed files are where they belong, the
-# example's program runs the tension test with its strategy; with PYTHON, the installed module
-# imports.
+# example's program runs the tension test with its strategy, and the installed `plydem` loads the
+# example's plug-in (--plugin and PLYDEM_PLUGIN_PATH); with PYTHON, the installed module imports.
 #   cmake -DBUILD=<plydem build> -DWORK=<scratch folder> -DVERSION=0.1.0 -DGENERATOR=Ninja
 #         -DCXX=<compiler> [-DLAUNCHER=ccache] [-DPYTHON=/usr/bin/python3] -P check_install.cmake
 function(run what)
@@ -26,6 +26,7 @@ file(REMOVE_RECURSE "${WORK}")
 run("cmake --install" COMMAND ${CMAKE_COMMAND} --install "${BUILD}" --prefix "${prefix}")
 
 foreach(file bin/plydem include/plydem/core/model.hpp include/plydem/strategies/registry.hpp
+             include/plydem/experiments/runner/plugin.hpp include/plydem/plydem_version.hpp
              lib/cmake/plydem/plydemConfig.cmake lib/cmake/plydem/plydemConfigVersion.cmake
              lib/cmake/plydem/plydemTargets.cmake share/plydem/examples/custom_strategy/CMakeLists.txt)
   if(NOT EXISTS "${prefix}/${file}")
@@ -58,6 +59,21 @@ run("the example's program" COMMAND "${example}/custom_strategy" --angle 30 --le
                                     --width-mm 0.6
     EXPECT "strategy hex2d-affine.*relaxed stiffness vs target: [1-9][.][0-9]+e-0[1-4] relative")
 
+# The installed command with the example's plug-in.
+set(plugin "${example}/libcustom_strategy_plugin.so")
+run("plydem --plugin strategies" COMMAND "${prefix}/bin/plydem" --plugin "${plugin}" strategies
+    EXPECT "hex2d-affine +hexagonal layer with the corrected eq")
+run("plydem --plugin tension --json"
+    COMMAND "${prefix}/bin/plydem" tension --plugin "${plugin}" --strategy hex2d-affine --angle 30
+            --length-mm 2 --width-mm 0.6 --json --quiet
+    OUTPUT json)
+string(JSON strategy GET "${json}" strategy)
+string(JSON version GET "${json}" provenance version)
+if(NOT strategy STREQUAL "hex2d-affine" OR NOT version STREQUAL VERSION)
+  message(FATAL_ERROR "tension with the plug-in: strategy '${strategy}', version '${version}'")
+endif()
+run("PLYDEM_PLUGIN_PATH" COMMAND "${prefix}/bin/plydem" strategies ENV "PLYDEM_PLUGIN_PATH=${example}"
+    EXPECT "hex2d-affine")
 run("plydem --version" COMMAND "${prefix}/bin/plydem" --version EXPECT "^plydem ${VERSION}")
 
 if(PYTHON)

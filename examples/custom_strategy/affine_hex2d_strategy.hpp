@@ -1,5 +1,6 @@
 #pragma once
-// hex2d-affine: the strategy of this example, registered by its own program (custom_strategy.cpp).
+// hex2d-affine: the strategy of this example, used by its own program (custom_strategy.cpp) and by
+// its plug-in (plugin.cpp), which `plydem --plugin` loads into the installed command.
 //
 // It is the Hex2D layer with the corrected eq. (27) springs as they are, without the relaxed
 // correction: the closed form assumes that particles do not spin (ERRATA §3), so the model comes

@@ -1,14 +1,19 @@
 // A strategy of your own, registered from outside the library.
 //
 // plydem's strategies are objects found by name in a registry (strategies/registry.hpp). This
-// folder defines one, `hex2d-affine` (affine_hex2d_strategy.hpp), in a program of its own that adds
-// the strategy to the registry in its main() and runs the library's tension test with it: nothing
-// in plydem is edited or recompiled. CMakeLists.txt builds it against an installed plydem
-// (find_package(plydem); docs/install.md), or inside plydem's own build tree.
+// folder defines one, `hex2d-affine` (affine_hex2d_strategy.hpp), and uses it twice, with nothing
+// in plydem edited or recompiled:
+//   - custom_strategy.cpp (this file): a program of its own that adds the strategy to the
+//     registry in its main() and runs the library's tension test with it;
+//   - plugin.cpp: a plug-in, a shared library that the installed `plydem` command loads with
+//     `--plugin` (or PLYDEM_PLUGIN_PATH), after which every command knows the strategy.
+// CMakeLists.txt builds both against an installed plydem (find_package(plydem); docs/install.md),
+// or inside plydem's own build tree.
 //
 // Sample runs:
 //   build/examples/custom_strategy                    # 0 deg ply, the paper's coupon
 //   build/examples/custom_strategy --angle 30 --length-mm 4 --width-mm 1
+//   plydem --plugin build/examples/libcustom_strategy_plugin.so tension --strategy hex2d-affine
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 

@@ -13,6 +13,7 @@
 //   plydem run --list                        # the experiment configs
 //   plydem settings > docs/settings.md       # every setting: flags, config keys, Python names
 //   plydem --version                         # version, commit, compiler, backends
+//   plydem --plugin libmine.so strategies    # a C++ plug-in's strategies (docs/install.md)
 //
 // The commands' settings (their flags, defaults, help and the "does nothing here" refusals) come
 // from the settings descriptions (experiments/runner/settings_descriptions.hpp) through
@@ -36,6 +37,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/progress.hpp"
+#include "experiments/cli/plugins.hpp"
 #include "experiments/cli/python_plugin.hpp"
 #include "experiments/cli/settings_cli.hpp"
 #include "experiments/output/report.hpp"
@@ -485,8 +487,10 @@ void add_commands(CLI::App& app, Commands& c) {
     c.run_settings.add(*command, command->get_name());
   }
   app.add_option("--plugin", c.plugins,
-                 "a Python file run before the command, whose plydem.register_strategy calls add "
-                 "strategies for --strategy (repeatable; see README, Python)");
+                 "a plug-in loaded before the command, which adds strategies and experiment kinds: "
+                 "a Python file whose plydem.register_strategy calls add strategies (see README, "
+                 "Python), or a C++ shared library (libNAME.so) built with PLYDEM_PLUGIN "
+                 "(docs/install.md); repeatable, after those of PLYDEM_PLUGIN_PATH");
   app.set_version_flag(
       "--version",
       [] {
