@@ -1,4 +1,4 @@
-# `cmake --install build --prefix P` (docs/install.md). Included at the end of
+# `cmake --install build --prefix P` and `cpack -G DEB` (docs/install.md). Included at the end of
 # CMakeLists.txt, when every target exists.
 #   P/bin/plydem                          the command (its plydem symbols exported for plug-ins)
 #   P/lib/libplydem_<layer>.a             one static library per layer
@@ -47,3 +47,29 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/generated/plydemConfig.cmake
 # The example built against the installed package (tests: install_find_package).
 install(DIRECTORY examples/custom_strategy/
         DESTINATION ${CMAKE_INSTALL_DATADIR}/plydem/examples/custom_strategy)
+
+# --- Debian package: `cpack -G DEB` in the build folder ------------------------------------------
+# Depends: the runtime packages of the shared libraries bin/plydem and the Python module link
+# (dpkg-shlibdeps); Recommends: the -dev packages that find_package(plydem) needs to build against
+# the headers and static libraries. Installed under /usr with DESTDIR, so that the Python module's
+# install (python/CMakeLists.txt) sees the prefix /usr and goes where Debian's python3 looks.
+set(CPACK_GENERATOR DEB)
+set(CPACK_PACKAGE_NAME plydem)
+set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_PACKAGE_CONTACT "plydem maintainers")
+string(CONCAT CPACK_PACKAGE_DESCRIPTION_SUMMARY
+       "particle (DEM) models of fibre-reinforced composite laminae: the plydem command, C++ "
+       "libraries, headers, CMake package and Python module")
+set(CPACK_SET_DESTDIR ON)
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_INSTALL_PREFIX /usr)  # the prefix the install sees under CPACK_SET_DESTDIR
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_SECTION science)
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+string(CONCAT CPACK_DEBIAN_PACKAGE_RECOMMENDS
+       "cmake, g++, libeigen3-dev, libboost-dev, libfmt-dev, libspdlog-dev, libtomlplusplus-dev, "
+       "nlohmann-json3-dev, libsuitesparse-dev, libcli11-dev")
+if(PLYDEM_PETSC)
+  string(APPEND CPACK_DEBIAN_PACKAGE_RECOMMENDS ", petsc-dev, pkg-config")
+endif()
+include(CPack)
