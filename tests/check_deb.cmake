@@ -15,7 +15,7 @@ message(STATUS "${deb}")
 execute_process(COMMAND dpkg-deb -c "${deb}" RESULT_VARIABLE rc OUTPUT_VARIABLE contents)
 set(expected "./usr/bin/plydem" "./usr/include/plydem/core/model.hpp"
              "./usr/include/plydem/experiments/runner/plugin.hpp"
-             "./usr/lib/cmake/plydem/plydemConfig.cmake" "./usr/lib/cmake/plydem/plydemTargets.cmake"
+             "/cmake/plydem/plydemConfig.cmake" "/cmake/plydem/plydemTargets.cmake"
              "./usr/share/plydem/examples/custom_strategy/CMakeLists.txt" "/libplydem_core.a")
 if(PYTHON)
   list(APPEND expected "./usr/lib/python3/dist-packages/plydem")

@@ -2,8 +2,9 @@
 # (find_package(plydem)), as docs/install.md does: the installed files are where they belong, the
 # example's program runs the tension test with its strategy, and the installed `plydem` loads the
 # example's plug-in (--plugin and PLYDEM_PLUGIN_PATH); with PYTHON, the installed module imports.
-#   cmake -DBUILD=<plydem build> -DWORK=<scratch folder> -DVERSION=0.1.0 -DGENERATOR=Ninja
-#         -DCXX=<compiler> [-DLAUNCHER=ccache] [-DPYTHON=/usr/bin/python3] -P check_install.cmake
+#   cmake -DBUILD=<plydem build> -DWORK=<scratch folder> -DVERSION=0.1.0 -DLIBDIR=lib
+#         -DGENERATOR=Ninja -DCXX=<compiler> [-DLAUNCHER=ccache] [-DPYTHON=/usr/bin/python3]
+#         -P check_install.cmake
 function(run what)
   cmake_parse_arguments(ARG "" "EXPECT;OUTPUT" "COMMAND;ENV" ${ARGN})
   execute_process(COMMAND ${CMAKE_COMMAND} -E env ${ARG_ENV} ${ARG_COMMAND} RESULT_VARIABLE rc
@@ -27,19 +28,22 @@ run("cmake --install" COMMAND ${CMAKE_COMMAND} --install "${BUILD}" --prefix "${
 
 foreach(file bin/plydem include/plydem/core/model.hpp include/plydem/strategies/registry.hpp
              include/plydem/experiments/runner/plugin.hpp include/plydem/plydem_version.hpp
-             lib/cmake/plydem/plydemConfig.cmake lib/cmake/plydem/plydemConfigVersion.cmake
-             lib/cmake/plydem/plydemTargets.cmake share/plydem/examples/custom_strategy/CMakeLists.txt)
+             ${LIBDIR}/cmake/plydem/plydemConfig.cmake
+             ${LIBDIR}/cmake/plydem/plydemConfigVersion.cmake
+             ${LIBDIR}/cmake/plydem/plydemTargets.cmake
+             share/plydem/examples/custom_strategy/CMakeLists.txt)
   if(NOT EXISTS "${prefix}/${file}")
     message(FATAL_ERROR "cmake --install put no ${file} under ${prefix}")
   endif()
 endforeach()
-file(GLOB_RECURSE layers "${prefix}/*/libplydem_*.a")
+file(GLOB layers "${prefix}/${LIBDIR}/libplydem_*.a")
 list(LENGTH layers count)
 if(count LESS 9)
   message(FATAL_ERROR "cmake --install put ${count} layer libraries under ${prefix}: ${layers}")
 endif()
 if(EXISTS "${prefix}/include/plydem/experiments/cli")
-  message(FATAL_ERROR "the command line's headers are not a library's: include/plydem/experiments/cli")
+  message(FATAL_ERROR "the command line's headers are not a library's: "
+                      "include/plydem/experiments/cli")
 endif()
 
 # The example as its own project: find_package(plydem) in the prefix, nothing of the build tree.
@@ -72,8 +76,8 @@ string(JSON version GET "${json}" provenance version)
 if(NOT strategy STREQUAL "hex2d-affine" OR NOT version STREQUAL VERSION)
   message(FATAL_ERROR "tension with the plug-in: strategy '${strategy}', version '${version}'")
 endif()
-run("PLYDEM_PLUGIN_PATH" COMMAND "${prefix}/bin/plydem" strategies ENV "PLYDEM_PLUGIN_PATH=${example}"
-    EXPECT "hex2d-affine")
+run("PLYDEM_PLUGIN_PATH" COMMAND "${prefix}/bin/plydem" strategies
+    ENV "PLYDEM_PLUGIN_PATH=${example}" EXPECT "hex2d-affine")
 run("plydem --version" COMMAND "${prefix}/bin/plydem" --version EXPECT "^plydem ${VERSION}")
 
 if(PYTHON)
