@@ -1,5 +1,5 @@
 # Runs COMMAND and checks that its stdout is a JSON object with the contract keys of
-# `plydem tension --json`.
+# `plydem tension --json`, and its provenance: the version, commit and command line.
 execute_process(COMMAND ${COMMAND} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "exit ${rc}:\n${out}${err}")
@@ -23,4 +23,14 @@ endif()
 string(JSON gxy GET "${out}" Gxy)
 if(gxy LESS 1e9)
   message(FATAL_ERROR "Gxy = ${gxy} is not in Pa")
+endif()
+foreach(key version git commit compiler command_line)
+  string(JSON value ERROR_VARIABLE e GET "${out}" provenance ${key})
+  if(e)
+    message(FATAL_ERROR "missing key provenance.${key}: ${e}")
+  endif()
+endforeach()
+string(JSON command_line GET "${out}" provenance command_line)
+if(NOT command_line MATCHES "plydem tension --strategy hex2d --angle 30 --json")
+  message(FATAL_ERROR "provenance.command_line '${command_line}' is not the command that ran")
 endif()

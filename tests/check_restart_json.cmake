@@ -12,8 +12,9 @@ function(run_json out_var)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "exit ${rc} for ${ARGN}:\n${out}${err}")
   endif()
-  # Wall times differ from run to run: drop them (one key per line in the indented JSON).
-  string(REGEX REPLACE "\"[a-z_]*seconds\": [^\n]*\n" "" out "${out}")
+  # Wall times differ from run to run, and the command lines (provenance) by the flags: drop them
+  # (one key per line in the indented JSON).
+  string(REGEX REPLACE "\"([a-z_]*seconds|command_line)\": [^\n]*\n" "" out "${out}")
   set(${out_var} "${out}" PARENT_SCOPE)
   set(${out_var}_log "${err}" PARENT_SCOPE)
 endfunction()

@@ -52,7 +52,8 @@ bool same_model(const Model& a, const Model& b) {
          (a.bonds.first == b.bonds.first).all() && (a.bonds.second == b.bonds.second).all();
 }
 
-// A user's strategy as in examples/custom_strategy.cpp: only calibrate() overridden.
+// A user's strategy as in examples/custom_strategy/affine_hex2d_strategy.hpp: only calibrate()
+// overridden.
 class StifferHex2d : public Hex2dStrategy {
  public:
   Calibration calibrate(const Material& material, double ply_angle,

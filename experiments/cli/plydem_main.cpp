@@ -12,11 +12,14 @@
 //   plydem run experiments/table4.toml       # the paper's Table 4 into results/table4/
 //   plydem run --list                        # the experiment configs
 //   plydem settings > docs/settings.md       # every setting: flags, config keys, Python names
+//   plydem --version                         # version, commit, compiler, backends
+//   plydem --plugin libmine.so strategies    # a C++ plug-in's strategies (docs/install.md)
 //
 // The commands' settings (their flags, defaults, help and the "does nothing here" refusals) come
 // from the settings descriptions (experiments/runner/settings_descriptions.hpp) through
 // experiments/cli/settings_cli.hpp; the flags here are the command line's own (--json, --out,
-// --quiet, --plugin, run's).
+// --quiet, --plugin, --version, run's). Every JSON object printed carries "provenance"
+// (experiments/runner/provenance.hpp): the version, commit and command line that produced it.
 #include <fmt/format.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -34,6 +37,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/progress.hpp"
+#include "experiments/cli/plugins.hpp"
 #include "experiments/cli/python_plugin.hpp"
 #include "experiments/cli/settings_cli.hpp"
 #include "experiments/output/report.hpp"
@@ -42,6 +46,7 @@
 #include "experiments/protocols/strength.hpp"
 #include "experiments/protocols/tension.hpp"
 #include "experiments/runner/coupon_config.hpp"
+#include "experiments/runner/provenance.hpp"
 #include "experiments/runner/run_experiment.hpp"
 #include "experiments/runner/settings_descriptions.hpp"
 #include "experiments/runner/settings_reference.hpp"
@@ -245,7 +250,10 @@ int run_tension(const TensionCommand& c) {
     result = test.run();
   } catch (const plydem::UnreachableStiffness& e) {
     if (c.json)
-      std::cout << nlohmann::json{{"refused", plydem::refusal_json(e.refusal())}}.dump(2) << "\n";
+      std::cout << nlohmann::json{{"refused", plydem::refusal_json(e.refusal())},
+                                  {"provenance", plydem::provenance_json()}}
+                       .dump(2)
+                << "\n";
     throw;
   }
   log_build_statistics();
@@ -254,6 +262,7 @@ int run_tension(const TensionCommand& c) {
   if (c.json) {
     nlohmann::json j = plydem::tension_json(result, settings);  // with "warnings"
     if (fem) j["fem"] = plydem::same_coupon_json(result, *fem);
+    j["provenance"] = plydem::provenance_json();
     std::cout << j.dump(2) << "\n";
   } else {
     std::cout << plydem::format_tension_table(result, settings);
@@ -308,7 +317,9 @@ int run_strength(const StrengthCommand& c, const std::string& command_line) {
   const plydem::StrengthResult result = test.run();
   log_build_statistics();
   if (c.json) {
-    std::cout << plydem::strength_json(result, settings).dump(2) << "\n";
+    nlohmann::json j = plydem::strength_json(result, settings);
+    j["provenance"] = plydem::provenance_json();
+    std::cout << j.dump(2) << "\n";
   } else {
     std::cout << plydem::format_strength_table(result, settings);
   }
@@ -336,7 +347,10 @@ int run_calibrate(const CalibrateCommand& c) {
   } catch (const plydem::UnreachableStiffness& e) {
     // The refusal's numbers on stdout; its sentence on stderr and exit status 2 as any error.
     if (c.json)
-      std::cout << nlohmann::json{{"refused", plydem::refusal_json(e.refusal())}}.dump(2) << "\n";
+      std::cout << nlohmann::json{{"refused", plydem::refusal_json(e.refusal())},
+                                  {"provenance", plydem::provenance_json()}}
+                       .dump(2)
+                << "\n";
     throw;
   }
   const CommandLineSettings<plydem::TensionSettings>& given = *c.settings;
@@ -350,6 +364,7 @@ int run_calibrate(const CalibrateCommand& c) {
                    {"width", coupon.width},
                    {"particle_diameter", coupon.particle_diameter}};
     j["units"] = "SI (N/m, N m/rad, Pa)";
+    j["provenance"] = plydem::provenance_json();
     std::cout << j.dump(2) << "\n";
   } else {
     std::cout << plydem::format_calibration(calibration, settings.strategy, material, angle);
@@ -472,8 +487,18 @@ void add_commands(CLI::App& app, Commands& c) {
     c.run_settings.add(*command, command->get_name());
   }
   app.add_option("--plugin", c.plugins,
-                 "a Python file run before the command, whose plydem.register_strategy calls add "
-                 "strategies for --strategy (repeatable; see README, Python)");
+                 "a plug-in loaded before the command, which adds strategies and experiment kinds: "
+                 "a Python file whose plydem.register_strategy calls add strategies (see README, "
+                 "Python), or a C++ shared library (libNAME.so) built with PLYDEM_PLUGIN "
+                 "(docs/install.md); repeatable, after those of PLYDEM_PLUGIN_PATH");
+  app.set_version_flag(
+      "--version",
+      [] {
+        std::string text = plydem::version_text();
+        if (!text.empty() && text.back() == '\n') text.pop_back();
+        return text;
+      },
+      "print the version, git commit, compiler and backends, and exit");
 }
 
 // The command after parsing (and after the plug-ins registered their strategies).

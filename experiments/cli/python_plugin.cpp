@@ -36,24 +36,22 @@ bool python_plugins_available() {
   return true;
 }
 
-void load_plugins(const std::vector<std::string>& files) {
-  for (const std::string& file : files) {
-    const std::filesystem::path path(file);
-    require(std::filesystem::is_regular_file(path),
-            "--plugin " + file + ": no such file (a Python file that registers strategies)");
-    if (!interpreter()) interpreter() = std::make_unique<py::scoped_interpreter>();
-    try {
-      const std::string absolute = std::filesystem::absolute(path).string();
-      py::module_::import("sys").attr("path").attr("insert")(
-          0, std::filesystem::absolute(path).parent_path().string());
-      py::dict globals;
-      globals["__builtins__"] = py::module_::import("builtins");
-      globals["__name__"] = "__plydem_plugin__";
-      globals["__file__"] = absolute;
-      py::eval_file(absolute, globals);
-    } catch (py::error_already_set& e) {
-      throw Error("--plugin " + file + " raised " + std::string(e.what()));
-    }
+void load_python_plugin(const std::string& file) {
+  const std::filesystem::path path(file);
+  require(std::filesystem::is_regular_file(path),
+          "--plugin " + file + ": no such file (a Python file that registers strategies)");
+  if (!interpreter()) interpreter() = std::make_unique<py::scoped_interpreter>();
+  try {
+    const std::string absolute = std::filesystem::absolute(path).string();
+    py::module_::import("sys").attr("path").attr("insert")(
+        0, std::filesystem::absolute(path).parent_path().string());
+    py::dict globals;
+    globals["__builtins__"] = py::module_::import("builtins");
+    globals["__name__"] = "__plydem_plugin__";
+    globals["__file__"] = absolute;
+    py::eval_file(absolute, globals);
+  } catch (py::error_already_set& e) {
+    throw Error("--plugin " + file + " raised " + std::string(e.what()));
   }
 }
 
@@ -74,12 +72,11 @@ bool python_plugins_available() {
   return false;
 }
 
-void load_plugins(const std::vector<std::string>& files) {
-  if (files.empty()) return;
-  throw Error(
-      "--plugin needs Python, and this plydem was built without it (the sanitizer build, or no "
-      "pybind11 and Python headers when it was configured: scripts/setup installs pybind11-dev "
-      "and python3-dev)");
+void load_python_plugin(const std::string& file) {
+  throw Error("--plugin needs Python for " + file +
+              ", and this plydem was built without it (the sanitizer build, or no pybind11 and "
+              "Python headers when it was configured: scripts/setup installs pybind11-dev and "
+              "python3-dev)");
 }
 
 int run_with_plugins(const std::function<int()>& command) {

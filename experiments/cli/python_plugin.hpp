@@ -8,20 +8,20 @@
 ///   plydem tension --plugin examples/python/custom_packing.py --strategy py-square --angle 30
 ///
 /// Built when the Python module is (pybind11 found, not the sanitizer build); elsewhere
-/// `--plugin` is refused with the reason.
+/// `--plugin FILE.py` is refused with the reason. experiments/cli/plugins.hpp chooses between
+/// these and the C++ plug-ins (`--plugin libNAME.so`) by the file's extension.
 #include <functional>
 #include <string>
-#include <vector>
 
 namespace plydem::cli {
 
 /// Whether this program can run Python plug-ins.
 bool python_plugins_available();
 
-/// Runs each file, in order, in the embedded interpreter (started on first use, alive until the
-/// program ends) with `__file__` set and its folder first on sys.path. Throws plydem::Error naming
-/// a missing file, the exception a file raised (with its traceback), or a build without Python.
-void load_plugins(const std::vector<std::string>& files);
+/// Runs `file` in the embedded interpreter (started on first use, alive until the program ends)
+/// with `__file__` set and its folder first on sys.path. Throws plydem::Error naming a missing
+/// file, the exception the file raised (with its traceback), or a build without Python.
+void load_python_plugin(const std::string& file);
 
 /// Runs `command` with Python's lock released, so that the library may call a plug-in's
 /// strategies from any thread (each call takes the lock), and turns a Python exception raised

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "experiments/runner/provenance.hpp"
 #include "experiments/runner/settings_config.hpp"
 #include "experiments/runner/settings_descriptions.hpp"
 
@@ -125,19 +126,29 @@ RunReportFiles write_run_report(const fs::path& out_dir, const ExperimentOutput&
   RunReportFiles files;
   files.results = out_dir / "results.csv";
   write_text(files.results, results_csv(out.rows));
+  // Which plydem wrote the files, and how: beside results.csv, whose readers expect its header on
+  // the first line (tests/support/results_csv.hpp, pandas), rather than in it.
+  const nlohmann::json provenance = provenance_json();
+  write_text(out_dir / "provenance.json", provenance.dump(2) + "\n");
   files.report = out_dir / "report.md";
   std::string report = fmt::format("# {}\n\n", out.title.empty() ? fallback_title : out.title);
   if (!description.empty()) report += fmt::format("{}\n\n", description);
   report += fmt::format(
-      "- {}{}\n- date: {}\n- machine: {}\n- plydem: {}\n- wall time: {:.1f} s\n\n", what,
+      "- {}{}\n- date: {}\n- machine: {}\n- plydem: {}\n- commit: {}\n- command line: `{}`\n"
+      "- wall time: {:.1f} s\n\n",
+      what,
       quick ? "\n- **quick run** (`--quick`): smaller coupons and fewer cycles than the paper; use "
               "a full run for the tables"
             : "",
-      utc_now(), machine_line(), plydem_version(), wall_seconds);
+      utc_now(), machine_line(), plydem_version(),
+      provenance["commit"].get<std::string>().empty() ? "unknown (not built from git)"
+                                                      : provenance["commit"].get<std::string>(),
+      provenance["command_line"].get<std::string>(), wall_seconds);
   report += out.report_markdown;
   report +=
       "\n## Files\n\n- `report.md` (this file)\n- `results.csv`: one row per value "
-      "(experiment, case, quantity, source, value, unit)\n";
+      "(experiment, case, quantity, source, value, unit)\n- `provenance.json`: the plydem version, "
+      "commit, compiler, backends and command line that wrote these files\n";
   for (const fs::path& file : out.files) {
     report += fmt::format("- `{}`\n", file.generic_string());
   }

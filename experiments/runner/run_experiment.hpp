@@ -5,6 +5,8 @@
 /// writes
 ///   DIR/report.md    title, date, machine, plydem version, the experiment's section, the files;
 ///   DIR/results.csv  one row per value: experiment,case,quantity,source,value,unit;
+///   DIR/provenance.json  the plydem version, commit, compiler, backends and command line
+///                    (experiments/runner/provenance.hpp);
 /// beside the figures and VTU files the experiment wrote itself.
 
 #include <filesystem>
@@ -47,9 +49,10 @@ struct RunReportFiles {
   std::filesystem::path results;  ///< DIR/results.csv
 };
 
-/// Writes DIR/results.csv (the output's rows) and DIR/report.md: the output's title (or
-/// `fallback_title`), `description`, `what` was run (a config and its kind, or a command line),
-/// the date, machine, plydem version and wall time, the output's section and its file list.
+/// Writes DIR/results.csv (the output's rows), DIR/provenance.json (provenance_json()) and
+/// DIR/report.md: the output's title (or `fallback_title`), `description`, `what` was run (a
+/// config and its kind, or a command line), the date, machine, plydem version, commit, this
+/// process's command line and wall time, the output's section and its file list.
 /// `quick` adds the line that says it was a quick run. Throws plydem::Error if a file cannot be
 /// written. run_experiment writes its files with it; `plydem strength --out` too.
 RunReportFiles write_run_report(const std::filesystem::path& out_dir,
