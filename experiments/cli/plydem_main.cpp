@@ -473,7 +473,8 @@ void add_commands(CLI::App& app, Commands& c) {
   }
   app.add_option("--plugin", c.plugins,
                  "a Python file run before the command, whose plydem.register_strategy calls add "
-                 "strategies for --strategy (repeatable; see README, Python)");
+                 "strategies for --strategy (repeatable; see docs/python.md, \"Strategies written "
+                 "in Python\")");
 }
 
 // The command after parsing (and after the plug-ins registered their strategies).

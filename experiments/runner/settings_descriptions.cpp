@@ -267,7 +267,7 @@ void add_solves(SettingsDescription<S>& d) {
           "(without it such a coupon is refused, with the estimate, before building)");
 }
 
-// Checkpoint and restart (README, "Checkpoint and restart"), every `unit` of the run.
+// Checkpoint and restart (docs/restart.md, "Checkpoint and restart"), every `unit` of the run.
 template <class S>
 void add_checkpoint(SettingsDescription<S>& d, const std::string& unit) {
   d.integer(
