@@ -70,5 +70,6 @@ endforeach()
 
 if(NOT violations STREQUAL "")
   message(FATAL_ERROR "upward or sideways includes: a layer may include only itself and the layers "
-                      "below it (CMakeLists.txt, plydem_layer; README, Architecture):${violations}")
+                      "below it (CMakeLists.txt, plydem_layer; docs/architecture.md, "
+                      "\"Architecture\"):${violations}")
 endif()

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// Checkpoint files: the state of a run stopped part way, from which a later run continues to the
-/// result, bit for bit, of a run that was not stopped (README, "Checkpoint and restart").
+/// result, bit for bit, of a run that was not stopped (docs/restart.md, "Checkpoint and restart").
 ///
 /// Format (version kCheckpointVersion), little-endian:
 ///   "PLYDEMCK" (8 bytes) | u32 version | u64 body length | u64 FNV-1a 64 of the body | body

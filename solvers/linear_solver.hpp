@@ -37,8 +37,8 @@
 ///   (solvers/machine_rates.hpp: its BLAS, Eigen's kernels and memory, measured at first use and
 ///   cached per machine), among the hand-written factor, CHOLMOD, and PETSc where it may take
 ///   few solves. The model and its constants were fitted to bench/static_solve's runs of the
-///   paper's plies and laminates with both Debian BLAS (README, Benchmarks); LinearSolver::
-///   choice() says what was predicted.
+///   paper's plies and laminates with both Debian BLAS (bench/README.md, "Static solves with
+///   PETSc"); LinearSolver::choice() says what was predicted.
 ///
 /// Zero pivots. Both report the same diagnosis: the dofs whose LDL^T pivot is at or below
 /// `pivot_tolerance` times their diagonal entry (sparse_cholesky.hpp). CHOLMOD stops at the first

@@ -5,8 +5,9 @@
 ///
 /// The global stiffness is assembled from parallel_bond_stiffness (core/parallel_bond.hpp),
 /// the same bond law the explicit kernel integrates, so a static solution is the state the damped
-/// explicit run converges to (README "How the tension test works"), up to round-off. Each particle
-/// has six degrees of freedom (dofs), numbered dof = 6 * particle + component with the components
+/// explicit run converges to (docs/tension-test.md, "How the tension test works"), up to
+/// round-off. Each particle has six degrees of freedom (dofs), numbered
+/// dof = 6 * particle + component with the components
 /// ux uy uz theta_x theta_y theta_z (enum Dof). Every dof is either prescribed (DofConstraints) or
 /// free; there are no external loads, so the free dofs satisfy
 ///   K_ff u_f = -K_fp u_p,

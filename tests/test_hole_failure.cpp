@@ -130,13 +130,14 @@ double first_failure_error(double particle) {
 
 }  // namespace
 
-// Measured on this plate (README): +74% at 1 mm particles (D = 3 d), +44% at 0.5 mm, +28% at
-// 0.375 mm, +8% at 0.25 mm (D = 12 d). The particles resolve the hole's stress gradient, which
-// decays over about a radius, coarsely, and the lattice's staircase edge carries less than the
-// continuum's peak. The error depends on the particle size, not on D/d alone: on a 15 x 9 mm
-// plate with a 1.5 mm hole and the same 0.5 mm plies it stays at +24% to +26% from 0.375 to
-// 0.1875 mm particles (the interface's shear-lag length, sqrt(E2 t / K_s) ~ 0.9 mm, is not small
-// against that hole). Tolerances: each measured error plus about a quarter of it.
+// Measured on this plate (docs/experiments.md, "Notched strength"): +74% at 1 mm particles
+// (D = 3 d), +44% at 0.5 mm, +28% at 0.375 mm, +8% at 0.25 mm (D = 12 d). The particles resolve
+// the hole's stress gradient, which decays over about a radius, coarsely, and the lattice's
+// staircase edge carries less than the continuum's peak. The error depends on the particle size,
+// not on D/d alone: on a 15 x 9 mm plate with a 1.5 mm hole and the same 0.5 mm plies it stays at
+// +24% to +26% from 0.375 to 0.1875 mm particles (the interface's shear-lag length,
+// sqrt(E2 t / K_s) ~ 0.9 mm, is not small against that hole). Tolerances: each measured error
+// plus about a quarter of it.
 TEST_CASE(
     "a notched [0/90/0] plate first breaks at the hole's edge, nearer Kt as particles shrink") {
   const double coarse = first_failure_error(0.5e-3);

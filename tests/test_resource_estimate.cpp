@@ -139,8 +139,8 @@ TEST_CASE("the memory estimate is made of the model's own row sizes and grows wi
       estimate_resources(*hex2d, coupon, {}, InterfaceStiffness{}, SolverUse::kStatic, 4);
   CHECK(four.model_bytes > 3.5 * (one.particles * particle_row_bytes()));
   CHECK(one.total_bytes == doctest::Approx(one.model_bytes + one.solver_bytes));
-  // The paper's coupon: 3,791 particles; its factor has 1.44e6 entries (README, Benchmarks), which
-  // the bound must not undercut.
+  // The paper's coupon: 3,791 particles; its factor has 1.44e6 entries (bench/README.md,
+  // "Static solves"), which the bound must not undercut.
   CHECK(relative(one.particles, 3791) < 0.05);
   CHECK(one.factor_entries > 1.44e6);
   CHECK(one.factor_entries < 4 * 1.44e6);

@@ -45,8 +45,9 @@ Subject subject_for(const std::string& strategy) {
     s.options = {{"sample_diameters", 8}};
     s.length = 0.8e-3;
     s.width = 0.6e-3;
-    // The bonds cut at a lattice coupon's free edges are not completed (README, lattice): this
-    // 16 x 12 diameter coupon measures 6.0-7.3% softer than its periodic packing.
+    // The bonds cut at a lattice coupon's free edges are not completed (docs/strategies.md,
+    // "Strategies"): this 16 x 12 diameter coupon measures 6.0-7.3% softer than its periodic
+    // packing.
     s.tolerance = 0.09;
   } else if (strategy == "hcp-eq26") {
     // Eq. (26) fixes C2233/C1122 and needs C1212 >= C1122: E-glass is refused at every angle

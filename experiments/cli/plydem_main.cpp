@@ -488,9 +488,10 @@ void add_commands(CLI::App& app, Commands& c) {
   }
   app.add_option("--plugin", c.plugins,
                  "a plug-in loaded before the command, which adds strategies and experiment kinds: "
-                 "a Python file whose plydem.register_strategy calls add strategies (see README, "
-                 "Python), or a C++ shared library (libNAME.so) built with PLYDEM_PLUGIN "
-                 "(docs/install.md); repeatable, after those of PLYDEM_PLUGIN_PATH");
+                 "a Python file whose plydem.register_strategy calls add strategies (see "
+                 "docs/python.md, \"Strategies written in Python\"), or a C++ shared library "
+                 "(libNAME.so) built with PLYDEM_PLUGIN (docs/install.md); repeatable, after those "
+                 "of PLYDEM_PLUGIN_PATH");
   app.set_version_flag(
       "--version",
       [] {

@@ -141,12 +141,12 @@ struct StrengthSettings {
   /// Build even when the coupon's estimate (experiments/protocols/resource_estimate.hpp) exceeds
   /// the machine's available memory; run() refuses it otherwise, before building.
   bool force = false;
-  /// Checkpoint and restart (core/checkpoint.hpp, README "Checkpoint and restart"): every
-  /// `checkpoint.every` events the run's state goes to `checkpoint.file`; with `checkpoint.restart`
-  /// the run continues from that file (which must be of a run with the same settings: a
-  /// checkpoint of another is a plydem::Error naming the setting that differs) to the result, bit
-  /// for bit, of the run that was not stopped. Not itself part of the settings a checkpoint
-  /// matches.
+  /// Checkpoint and restart (core/checkpoint.hpp; docs/restart.md, "Checkpoint and restart"):
+  /// every `checkpoint.every` events the run's state goes to `checkpoint.file`; with
+  /// `checkpoint.restart` the run continues from that file (which must be of a run with the same
+  /// settings: a checkpoint of another is a plydem::Error naming the setting that differs) to the
+  /// result, bit for bit, of the run that was not stopped. Not itself part of the settings a
+  /// checkpoint matches.
   CheckpointOptions checkpoint;
 
   /// The Weibull modulus the run uses: weibull_modulus or the material's.

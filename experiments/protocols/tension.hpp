@@ -75,10 +75,11 @@ struct TensionSettings {
   /// Build even when the coupon's estimate (experiments/protocols/resource_estimate.hpp) exceeds
   /// the machine's available memory; run() refuses it otherwise, before building.
   bool force = false;
-  /// Checkpoint and restart of explicit runs (core/checkpoint.hpp, README "Checkpoint and
-  /// restart"): at the first check at or past every `checkpoint.every` cycles of a pull, the run's
-  /// state (the pull and its stage, the integrator, the points so far, the finished pull along x)
-  /// goes to `checkpoint.file`; with `checkpoint.restart` the run continues from that file to the
+  /// Checkpoint and restart of explicit runs (core/checkpoint.hpp; docs/restart.md,
+  /// "Checkpoint and restart"): at the first check at or past every `checkpoint.every` cycles of
+  /// a pull, the run's state (the pull and its stage, the integrator, the points so far, the
+  /// finished pull along x) goes to `checkpoint.file`; with `checkpoint.restart` the run continues
+  /// from that file to the
   /// result, bit for bit, of the run that was not stopped. A checkpoint of a run with other
   /// settings is a plydem::Error naming the setting that differs. Static solves refuse it.
   CheckpointOptions checkpoint;

@@ -5,8 +5,8 @@
 // CLT's closed form, and the laminate's secant stiffness against the 90° layer's crack density
 // beside the shear-lag model and the ply-discount limit (core/transverse_cracking.hpp) and
 // beside CalculiX of the same laminate with the same transverse cracks cut in (the DEM's cracks
-// across at least 80% of the width at the peak). Config keys (README, "Transverse cracking of
-// cross-plies"):
+// across at least 80% of the width at the peak). Config keys (docs/experiments.md,
+// "Transverse cracking of cross-plies"):
 //
 //   experiment = "crossply"
 //   material = "eglass-my750"   strategy = "square"   strategy_options = []

@@ -1,6 +1,6 @@
 // The DCB experiment kind (`plydem run experiments/dcb.toml`, kind `dcb`): the double cantilever
 // beam of experiments/protocols/dcb.hpp opened to propagation, beside simple and corrected
-// beam theory. Config keys (README, "Delamination: the DCB"):
+// beam theory. Config keys (docs/experiments.md, "Delamination: the DCB"):
 //
 //   experiment = "dcb"
 //   material = "eglass-my750"     strategy = "square"      strategy_options = []

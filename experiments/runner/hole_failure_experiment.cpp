@@ -7,7 +7,7 @@
 // orthotropic stress concentration with Heywood's finite-width factor
 // (core/stress_concentration.hpp), damage maps per ply at chosen fractions of the peak load, the
 // cracks per ply and each plate's strength-test section (figures, VTU series). Config keys
-// (README, "Notched strength: the hole plate to failure"):
+// (docs/experiments.md, "Notched strength: the hole plate to failure"):
 //
 //   experiment = "hole_failure"
 //   material = "eglass-my750"   strategy = "square"   strategy_options = []
@@ -445,7 +445,8 @@ std::string hole_failure_markdown(const HoleFailureSettings& s, const NotchedMea
       "resolve the hole's stress gradient coarsely (D = {:.3g} particle diameters; the edge is "
       "a staircase of the lattice, and the hole's stress gradient decays over about a radius): "
       "the discrete plate concentrates less than the continuum, and its first failure "
-      "approaches the closed form as the particles shrink (README, \"Notched strength\").\n\n",
+      "approaches the closed form as the particles shrink (docs/experiments.md, \"Notched "
+      "strength\").\n\n",
       m.first_ply >= 0 ? fmt::format("ply {}", m.first_ply) : std::string("an interface"),
       m.from_edge / kMetresPerMm, m.at_edge ? "at the hole's edge" : "away from the hole's edge",
       m.notched_first * kMPaPerPa, m.kt_inf, m.laminate.Ex * 1e-9, m.laminate.Ey * 1e-9,

@@ -253,7 +253,8 @@ void add_solves(SettingsDescription<S>& d) {
       .parsed_by_setter(true)
       .with_help(
           "linear solver of the static solves: auto (by the factor's fill and memory, and the MPI "
-          "ranks; README, Static solves with PETSc), direct (plydem's supernodal Cholesky), "
+          "ranks; bench/README.md, \"Static solves with PETSc\"), direct (plydem's supernodal "
+          "Cholesky), "
           "cholmod "
           "(SuiteSparse) or petsc (CG + algebraic multigrid; distributed under mpiexec -n N; a "
           "build with PETSc)");
@@ -267,7 +268,7 @@ void add_solves(SettingsDescription<S>& d) {
           "(without it such a coupon is refused, with the estimate, before building)");
 }
 
-// Checkpoint and restart (README, "Checkpoint and restart"), every `unit` of the run.
+// Checkpoint and restart (docs/restart.md, "Checkpoint and restart"), every `unit` of the run.
 template <class S>
 void add_checkpoint(SettingsDescription<S>& d, const std::string& unit) {
   d.integer(

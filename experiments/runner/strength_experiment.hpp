@@ -4,8 +4,9 @@
 /// the tension test to failure (experiments/protocols/strength.hpp) of one ply or laminate at
 /// each angle of the config, each strength beside the four classical criteria
 /// (core/failure_criteria.hpp), and the sections and files `plydem strength --out` writes for one
-/// test. Config keys (README, "Strength"; docs/settings.md): the settings of `plydem strength`
-/// (strength_settings_description(), the same defaults) but the ply angle, and the cases' angles:
+/// test. Config keys (docs/strength.md, "Strength"; docs/settings.md): the settings of
+/// `plydem strength` (strength_settings_description(), the same defaults) but the ply angle, and
+/// the cases' angles:
 ///
 ///   experiment = "strength"
 ///   material = "eglass-my750"        strategy = "square"     strategy_options = ["c=1.8"]
