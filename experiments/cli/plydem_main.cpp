@@ -37,6 +37,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/progress.hpp"
+#include "experiments/cli/command_line.hpp"
 #include "experiments/cli/plugins.hpp"
 #include "experiments/cli/python_plugin.hpp"
 #include "experiments/cli/settings_cli.hpp"
@@ -534,9 +535,6 @@ int run_command(Commands& c, int argc, char** argv, bool check_only) {
 
 }  // namespace
 
-/// The command line without main(): `check_only` parses, refuses what does not apply, converts
-/// the options to the tests' settings and estimates the coupon's memory, and returns there (the
-/// fuzz target tests/fuzz/fuzz_command_line.cpp calls it so).
 int plydem_command_line(int argc, char** argv, bool check_only) {
   CLI::App app{
       "plydem: particle (DEM and lattice) models of fibre-reinforced composite laminae.\n"
@@ -570,16 +568,3 @@ int plydem_command_line(int argc, char** argv, bool check_only) {
     return 3;
   }
 }
-
-#ifndef PLYDEM_NO_MAIN
-int main(int argc, char** argv) {
-  // Under mpiexec -n N every rank runs the command (solvers/linear_solver.hpp, ParallelSession);
-  // only rank 0 prints.
-  const plydem::ParallelSession session(&argc, &argv);
-  if (!plydem::is_root()) {
-    std::cout.setstate(std::ios::badbit);
-    std::cerr.setstate(std::ios::badbit);
-  }
-  return plydem_command_line(argc, argv, false);
-}
-#endif

@@ -2,10 +2,8 @@
 #include <string>
 #include <vector>
 
+#include "experiments/cli/command_line.hpp"
 #include "tests/fuzz/fuzz_inputs.hpp"
-
-// experiments/cli/plydem_main.cpp, compiled without its main().
-int plydem_command_line(int argc, char** argv, bool check_only);
 
 namespace plydem::fuzz {
 
