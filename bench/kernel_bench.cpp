@@ -32,6 +32,8 @@
 #include <string>
 #include <vector>
 
+#include "contacts/bond_kernel.hpp"
+#include "contacts/particle_ordering.hpp"
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/stopwatch.hpp"
@@ -45,22 +47,32 @@ namespace {
 
 using namespace plydem;
 
+// The Hex2D strategy with its free edges treated by edge equilibrium (1, the default: each edge
+// bond its own weight, so the kernel holds thousands of half-bond types) or by the count
+// completion (0: a few types, the model plydem built before edge equilibrium; the kernel's speed
+// compared across versions needs the same model on both sides).
+Hex2dStrategy hex2d_with_edges(int edge_equilibrium) {
+  Hex2dStrategy strategy;
+  strategy.set_option("edge_equilibrium", edge_equilibrium);
+  return strategy;
+}
+
 // A square Hex2D layer of about `particles` particles (the edges lose a few).
-Model square_layer(long particles) {
+Model square_layer(long particles, int edge_equilibrium) {
   CouponSpec spec;
   spec.material = load_material("eglass-my750");
   const double d = spec.particle_diameter;
   const double side = std::sqrt(static_cast<double>(particles) * std::sqrt(3.0) / 2.0) * d;
   spec.length = side;
   spec.width = side;
-  return Hex2dStrategy().build(spec).model;
+  return hex2d_with_edges(edge_equilibrium).build(spec).model;
 }
 
 // The paper's Table 2 coupon: 0 deg E-glass/MY750, 10 x 0.83 mm, 200 x 19 particles.
-Model table2_coupon() {
+Model table2_coupon(int edge_equilibrium) {
   CouponSpec spec;
   spec.material = load_material("eglass-my750");
-  return Hex2dStrategy().build(spec).model;
+  return hex2d_with_edges(edge_equilibrium).build(spec).model;
 }
 
 // Grips within two diameters of either end move apart along x (free laterally), reaching a
@@ -205,6 +217,23 @@ ExplicitSettings bench_settings(const std::string& order, const std::string& bac
   return settings;
 }
 
+// The kernel's bond table in the bench's order (GatherBonds, as the CPU backend builds it): its
+// half-bond types and the share of a block's occupied slots whose eight particles hold different
+// types (those load the types lane by lane; a slot whose particles share one loads it as vectors).
+void describe_bond_table(const Model& model, const std::string& order, nlohmann::json& r) {
+  const GatherBonds g(model.bonds, kernel_order(model, order_named(order)));
+  long occupied = 0, mixed = 0;
+  for (int block = 0; block < g.padded_count() / lanes::kCount; ++block) {
+    for (int slot = 0; slot < g.width(); ++slot) {
+      const std::int32_t type = g.block_types(block)[slot];
+      occupied += type != 0;
+      mixed += type < 0;
+    }
+  }
+  r["half_bond_types"] = g.type_count() - 1;  // type 0 is the empty slot's
+  r["mixed_slot_share"] = occupied > 0 ? static_cast<double>(mixed) / occupied : 0.0;
+}
+
 // The largest number of bonds of one particle: the gather table's width on a lattice.
 int max_degree(const Model& model) {
   std::vector<int> degree(static_cast<std::size_t>(model.particles.size()), 0);
@@ -223,8 +252,8 @@ double streamed_bytes(const Model& model, bool breaking) {
 
 int run_layer(long particles, long steps, int threads, const std::string& order,
               const std::string& api, const std::string& lammps_data, const std::string& yade_layer,
-              bool describe, const std::string& backend, bool breakable) {
-  Model model = square_layer(particles);
+              bool describe, const std::string& backend, bool breakable, int edge_equilibrium) {
+  Model model = square_layer(particles, edge_equilibrium);
   if (breakable) unreachable_strengths(model);
   const long n = model.particles.size(), bonds = model.bonds.size();
   if (!lammps_data.empty()) write_lammps_data(model, lammps_data);
@@ -260,15 +289,18 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   r["backend"] = backend;
   r["breakable"] = breakable;
   r["streamed_bytes_per_particle_step"] = streamed_bytes(model, integrator.breaking());
+  r["edge_equilibrium"] = edge_equilibrium;
+  describe_bond_table(model, order, r);
   if (timers.is_object()) r.update(timers);
   std::cout << r.dump() << "\n";
   return 0;
 }
 
 int run_coupon(long cycles, int threads, const std::string& order, const std::string& api,
-               long report_every, bool breakable, const std::string& backend) {
+               long report_every, bool breakable, const std::string& backend,
+               int edge_equilibrium) {
   require(cycles >= 1 && report_every >= 1, "--cycles and --report-every must be at least 1");
-  Model model = table2_coupon();
+  Model model = table2_coupon(edge_equilibrium);
   if (breakable) unreachable_strengths(model);
   omp_set_num_threads(threads);
   const ExplicitSettings settings = bench_settings(order, backend);
@@ -293,6 +325,8 @@ int run_coupon(long cycles, int threads, const std::string& order, const std::st
   r["backend"] = backend;
   r["streamed_bytes_per_particle_step"] = streamed_bytes(model, integrator.breaking());
   r["unbalanced_force_ratio"] = report.unbalanced_force_ratio;
+  r["edge_equilibrium"] = edge_equilibrium;
+  describe_bond_table(model, order, r);
   if (timers.is_object()) r.update(timers);
   std::cout << r.dump() << "\n";
   return 0;
@@ -421,6 +455,7 @@ int main(int argc, char** argv) {
       ->check(backends)
       ->capture_default_str();
   bool breakable = false;
+  int edge_equilibrium = 1;
   layer->add_flag("--breakable", breakable,
                   "give every bond a strength it never reaches: times the breaking kernel");
   CLI::App* coupon = app.add_subcommand("coupon", "the paper's Table 2 Hex2D coupon, timed");
@@ -443,6 +478,15 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   coupon->add_flag("--breakable", breakable,
                    "give every bond a strength it never reaches: times the breaking kernel");
+  for (CLI::App* command : {layer, coupon}) {
+    command
+        ->add_option("--edge-equilibrium", edge_equilibrium,
+                     "free edges: 1 edge equilibrium (each edge bond its own weight: thousands of "
+                     "half-bond types), 0 the count completion (a few types, as plydem built "
+                     "before edge equilibrium)")
+        ->check(CLI::IsMember({0, 1}))
+        ->capture_default_str();
+  }
   CLI::App* tension =
       app.add_subcommand("tension", "the same coupon through the tension test's explicit path");
   tension->add_option("--cycles", cycles, "fixed explicit cycles")->capture_default_str();
@@ -460,8 +504,10 @@ int main(int argc, char** argv) {
     require(threads >= 1, "--threads must be at least 1");
     if (*layer)
       return run_layer(particles, steps, threads, order, api, lammps_data, yade_layer, describe,
-                       backend, breakable);
-    if (*coupon) return run_coupon(cycles, threads, order, api, report_every, breakable, backend);
+                       backend, breakable, edge_equilibrium);
+    if (*coupon)
+      return run_coupon(cycles, threads, order, api, report_every, breakable, backend,
+                        edge_equilibrium);
     if (*tension) return run_tension(cycles, threads);
     if (*table) return print_table();
     if (*copy) {
