@@ -151,24 +151,26 @@ class Array {
 }  // namespace lanes
 
 /// Eight particles in the lanes of a vector (core/lane_ops.hpp). fmadd is the vector's a * b + c,
-/// which GCC contracts into one vfmadd per vector in the kernel's AVX2 and AVX-512 clones (the
-/// host kernel is compiled with GCC's default contraction); c passes through
-/// __builtin_assoc_barrier, so that where c is itself a product (fmadd(a, b, x * y), the shared
-/// code's pattern) only a * b can be fused with the sum, as the scalar fmadd does, and x * y stays
-/// a rounded product. test_cuda_backend checks that this gives the device's bits. Written lane by
+/// which GCC contracts into one vfmadd per vector in the kernel's AVX2 and AVX-512 clones (the host
+/// kernel is compiled with GCC's default contraction); c passes through __builtin_assoc_barrier, so
+/// that where c is itself a product (fmadd(a, b, x * y), the shared code's pattern) only a * b can
+/// be fused with the sum, as the scalar fmadd does, and x * y stays a rounded product.
+/// test_cuda_backend checks that this gives the device's bits. GCC 12 fuses them here from -O2 on
+/// (the sanitizer tree, built at -O1, compiles solvers/cpu_backend.cpp at -O2: CMakeLists.txt); an
+/// unoptimized build (-O0) takes the lane-by-lane form below, exact at any level. Written lane by
 /// lane with the scalar builtin instead, GCC kept much of the step in scalar registers and the
-/// Table 2 coupon ran at a third of this speed. The baseline x86-64 clone (processors without
-/// FMA) fuses nothing: there the host kernel's last bits differ from the device's. Every other
-/// operation is the vector's own, lane by lane. The functions take and return vectors by value,
-/// which would change the ABI of a call between instruction sets (GCC's -Wpsabi, off in the
-/// build), but they are always inlined: no call remains.
+/// Table 2 coupon ran at a third of this speed. The baseline x86-64 clone (processors without FMA)
+/// fuses nothing: there the host kernel's last bits differ from the device's. Every other operation
+/// is the vector's own, lane by lane. The functions take and return vectors by value, which would
+/// change the ABI of a call between instruction sets (GCC's -Wpsabi, off in the build), but they
+/// are always inlined: no call remains.
 template <>
 struct LaneOps<lanes::Doubles> {
   using Doubles = lanes::Doubles;
   using Mask = lanes::Mask;
   [[gnu::always_inline]] static Doubles fmadd(const Doubles& a, const Doubles& b,
                                               const Doubles& c) {
-#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12 && defined(__OPTIMIZE__)
     return a * b + __builtin_assoc_barrier(c);
 #else
     Doubles r;
