@@ -220,7 +220,9 @@ ExplicitSettings bench_settings(const std::string& order, const std::string& bac
 // The kernel's bond table in the bench's order (GatherBonds, as the CPU backend builds it): its
 // half-bond types and the share of a block's occupied slots whose eight particles hold different
 // types (those load the types lane by lane; a slot whose particles share one loads it as vectors).
-void describe_bond_table(const Model& model, const std::string& order, nlohmann::json& r) {
+// Built and freed before the integrator builds its own, so the two are never held at once.
+nlohmann::json describe_bond_table(const Model& model, const std::string& order,
+                                   int edge_equilibrium) {
   const GatherBonds g(model.bonds, kernel_order(model, order_named(order)));
   long occupied = 0, mixed = 0;
   for (int block = 0; block < g.padded_count() / lanes::kCount; ++block) {
@@ -230,8 +232,11 @@ void describe_bond_table(const Model& model, const std::string& order, nlohmann:
       mixed += type < 0;
     }
   }
+  nlohmann::json r;
+  r["edge_equilibrium"] = edge_equilibrium;
   r["half_bond_types"] = g.type_count() - 1;  // type 0 is the empty slot's
   r["mixed_slot_share"] = occupied > 0 ? static_cast<double>(mixed) / occupied : 0.0;
+  return r;
 }
 
 // The largest number of bonds of one particle: the gather table's width on a lattice.
@@ -271,6 +276,7 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
     return 0;
   }
   require(steps >= 1, "--steps must be at least 1");
+  const nlohmann::json table = describe_bond_table(model, order, edge_equilibrium);
   omp_set_num_threads(threads);
   const ExplicitSettings settings = bench_settings(order, backend);
   ExplicitIntegrator integrator(model, settings);
@@ -289,8 +295,7 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   r["backend"] = backend;
   r["breakable"] = breakable;
   r["streamed_bytes_per_particle_step"] = streamed_bytes(model, integrator.breaking());
-  r["edge_equilibrium"] = edge_equilibrium;
-  describe_bond_table(model, order, r);
+  r.update(table);
   if (timers.is_object()) r.update(timers);
   std::cout << r.dump() << "\n";
   return 0;
@@ -302,6 +307,7 @@ int run_coupon(long cycles, int threads, const std::string& order, const std::st
   require(cycles >= 1 && report_every >= 1, "--cycles and --report-every must be at least 1");
   Model model = table2_coupon(edge_equilibrium);
   if (breakable) unreachable_strengths(model);
+  const nlohmann::json table = describe_bond_table(model, order, edge_equilibrium);
   omp_set_num_threads(threads);
   const ExplicitSettings settings = bench_settings(order, backend);
   ExplicitIntegrator integrator(model, settings);
@@ -325,8 +331,7 @@ int run_coupon(long cycles, int threads, const std::string& order, const std::st
   r["backend"] = backend;
   r["streamed_bytes_per_particle_step"] = streamed_bytes(model, integrator.breaking());
   r["unbalanced_force_ratio"] = report.unbalanced_force_ratio;
-  r["edge_equilibrium"] = edge_equilibrium;
-  describe_bond_table(model, order, r);
+  r.update(table);
   if (timers.is_object()) r.update(timers);
   std::cout << r.dump() << "\n";
   return 0;
