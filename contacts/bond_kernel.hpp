@@ -85,14 +85,21 @@ inline constexpr int kCount = 8;
 using Doubles = double __attribute__((vector_size(kCount * sizeof(double))));
 using Mask = std::int64_t __attribute__((vector_size(kCount * sizeof(double))));
 
+// Loads and stores through vector types that may alias double: one vector move each, straight
+// to or from a register (through std::memcpy, GCC 12 split some of the kernel's vectors into
+// 16-byte pieces on the stack and rebuilt them).
+using AlignedDoubles [[gnu::may_alias]] =
+    double __attribute__((vector_size(kCount * sizeof(double))));
+using UnalignedDoubles [[gnu::may_alias, gnu::aligned(8)]] =
+    double __attribute__((vector_size(kCount * sizeof(double))));
 [[gnu::always_inline]] inline void load(const double* p, Doubles& v) {
-  std::memcpy(&v, __builtin_assume_aligned(p, 64), sizeof v);
+  v = *reinterpret_cast<const AlignedDoubles*>(__builtin_assume_aligned(p, 64));
 }
 [[gnu::always_inline]] inline void store(double* p, const Doubles& v) {
-  std::memcpy(__builtin_assume_aligned(p, 64), &v, sizeof v);
+  *reinterpret_cast<AlignedDoubles*>(__builtin_assume_aligned(p, 64)) = v;
 }
 [[gnu::always_inline]] inline void load_unaligned(const double* p, Doubles& v) {
-  std::memcpy(&v, p, sizeof v);
+  v = *reinterpret_cast<const UnalignedDoubles*>(p);
 }
 [[gnu::always_inline]] inline void broadcast(double x, Doubles& v) {
   v = x - Doubles{};  // exact for every x (unlike x + 0, which turns -0 into +0): one broadcast
