@@ -117,6 +117,70 @@ double hashin(const PlyStress& s, const LaminaStrength& x) {
   return factor;
 }
 
+// Puck's plane-stress inter-fibre fracture (Puck & Schuermann 2002, eqs. for modes A, B, C), with
+// R23A, the fracture resistance of the action plane against its own transverse shear, and p23-
+// from p12- by the consistency conditions: R23A = S12 / (2 p12-) (sqrt(1 + 2 p12- YC / S12) - 1),
+// p23- = p12- R23A / S12, tau12c = S12 sqrt(1 + 2 p23-) (the shear at the mode B/C corner).
+struct PuckEnvelope {
+  double YT = 0, YC = 0, S12 = 0, p_tension = 0, p_compression = 0;
+  double R23A = 0, p23 = 0, tau12c = 0;
+};
+
+PuckEnvelope puck_envelope(const PlyStress& s, const LaminaStrength& x) {
+  const FailureCriterion c = FailureCriterion::kPuck;
+  PuckEnvelope e;
+  e.S12 = needed(x.S12, "S12", c);
+  e.p_tension = x.puck_p12_tension;
+  e.p_compression = x.puck_p12_compression;
+  if (s.sigma2 >= 0) {
+    if (s.sigma2 > 0) e.YT = needed(x.YT, "YT", c);
+    return e;
+  }
+  e.YC = needed(x.YC, "YC", c);
+  const double p = e.p_compression;
+  e.R23A = p > 0 ? e.S12 / (2 * p) * (std::sqrt(1 + 2 * p * e.YC / e.S12) - 1) : 0.5 * e.YC;
+  e.p23 = p * e.R23A / e.S12;
+  e.tau12c = e.S12 * std::sqrt(1 + 2 * e.p23);
+  return e;
+}
+
+PuckMode puck_mode(const PlyStress& s, const PuckEnvelope& e) {
+  if (s.sigma2 >= 0) return PuckMode::kA;
+  return std::abs(s.sigma2) <= e.R23A / e.tau12c * std::abs(s.tau12) ? PuckMode::kB : PuckMode::kC;
+}
+
+// Puck's stress exposure of inter-fibre fracture: homogeneous of degree one in the stress, so the
+// load factor is its inverse.
+double puck_matrix_exposure(const PlyStress& s, const PuckEnvelope& e) {
+  const double t = s.tau12 / e.S12;
+  switch (puck_mode(s, e)) {
+    case PuckMode::kA: {
+      const double r = s.sigma2 > 0 ? (1 - e.p_tension * e.YT / e.S12) * s.sigma2 / e.YT : 0.0;
+      return std::sqrt(t * t + r * r) + e.p_tension * s.sigma2 / e.S12;
+    }
+    case PuckMode::kB:
+      return (std::hypot(s.tau12, e.p_compression * s.sigma2) + e.p_compression * s.sigma2) / e.S12;
+    case PuckMode::kC: {
+      const double a = s.tau12 / (2 * (1 + e.p23) * e.S12);
+      const double b = s.sigma2 / e.YC;
+      return (a * a + b * b) * e.YC / -s.sigma2;
+    }
+  }
+  return 0;
+}
+
+double puck(const PlyStress& s, const LaminaStrength& x) {
+  const FailureCriterion c = FailureCriterion::kPuck;
+  double factor = kNever;
+  if (s.sigma1 > 0) factor = needed(x.XT, "XT", c) / s.sigma1;
+  if (s.sigma1 < 0) factor = needed(x.XC, "XC", c) / -s.sigma1;
+  if (s.sigma2 != 0 || s.tau12 != 0) {
+    const double exposure = puck_matrix_exposure(s, puck_envelope(s, x));
+    if (exposure > 0) factor = std::min(factor, 1.0 / exposure);
+  }
+  return factor;
+}
+
 }  // namespace
 
 PlyStress to_ply_axes(double sigma_x, double sigma_y, double tau_xy, double ply_angle) {
@@ -138,13 +202,15 @@ const char* criterion_name(FailureCriterion criterion) {
       return "tsai_wu";
     case FailureCriterion::kHashin:
       return "hashin";
+    case FailureCriterion::kPuck:
+      return "puck";
   }
   return "unknown";
 }
 
 std::vector<FailureCriterion> all_criteria() {
   return {FailureCriterion::kMaxStress, FailureCriterion::kTsaiHill, FailureCriterion::kTsaiWu,
-          FailureCriterion::kHashin};
+          FailureCriterion::kHashin, FailureCriterion::kPuck};
 }
 
 double failure_load_factor(FailureCriterion criterion, const PlyStress& stress,
@@ -162,8 +228,24 @@ double failure_load_factor(FailureCriterion criterion, const PlyStress& stress,
       return tsai_wu(stress, strength);
     case FailureCriterion::kHashin:
       return hashin(stress, strength);
+    case FailureCriterion::kPuck:
+      return puck(stress, strength);
   }
   throw Error("unknown failure criterion");
+}
+
+PuckFracturePlane puck_fracture_plane(const PlyStress& stress, const LaminaStrength& strength) {
+  require(std::isfinite(stress.sigma2) && std::isfinite(stress.tau12),
+          "puck_fracture_plane: the ply stress is not finite");
+  const PuckEnvelope e = puck_envelope(stress, strength);
+  PuckFracturePlane plane;
+  plane.mode = puck_mode(stress, e);
+  if (plane.mode == PuckMode::kC) {
+    const double ratio = e.R23A / e.S12 * stress.tau12 / stress.sigma2;
+    const double cos2 = (ratio * ratio + 1) / (2 * (1 + e.p23));
+    plane.angle = std::acos(std::sqrt(std::min(1.0, cos2)));
+  }
+  return plane;
 }
 
 double off_axis_strength(FailureCriterion criterion, const LaminaStrength& strength,

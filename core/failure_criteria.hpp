@@ -8,7 +8,12 @@
 ///  - Tsai-Wu (Tsai & Wu, J. Compos. Mater. 5 (1971) 58) with F12* = -1/2:
 ///    F1 s1 + F2 s2 + F11 s1^2 + F22 s2^2 + F66 t^2 + 2 F12 s1 s2 = 1, F12 = -1/2 sqrt(F11 F22);
 ///  - Hashin (J. Appl. Mech. 47 (1980) 329), plane stress, its four modes; the transverse shear
-///    strength S23 of the matrix-compression mode is taken as YC / 2 (no S23 in the material).
+///    strength S23 of the matrix-compression mode is taken as YC / 2 (no S23 in the material);
+///  - Puck (Puck & Schuermann, Compos. Sci. Technol. 58 (1998) 1045 and 62 (2002) 1633), plane
+///    stress: fibre failure sigma1 = XT or -XC, and inter-fibre fracture on its action plane in the
+///    closed forms of modes A (sigma2 >= 0), B and C (sigma2 < 0), with the inclination parameters
+///    p12+ and p12- of LaminaStrength; mode C breaks on a plane inclined by the fracture angle
+///    (puck_fracture_angle).
 /// Strengths are magnitudes; compression is negative stress.
 
 #include <vector>
@@ -28,12 +33,25 @@ struct PlyStress {
 /// at `ply_angle` [rad] from x.
 PlyStress to_ply_axes(double sigma_x, double sigma_y, double tau_xy, double ply_angle);
 
-enum class FailureCriterion { kMaxStress, kTsaiHill, kTsaiWu, kHashin };
+enum class FailureCriterion { kMaxStress, kTsaiHill, kTsaiWu, kHashin, kPuck };
 
-/// "max_stress", "tsai_hill", "tsai_wu", "hashin" (the keys of `plydem strength --json`).
+/// "max_stress", "tsai_hill", "tsai_wu", "hashin", "puck" (the keys of `plydem strength --json`).
 const char* criterion_name(FailureCriterion criterion);
-/// The four, in that order.
+/// The five, in that order.
 std::vector<FailureCriterion> all_criteria();
+
+/// Which of Puck's inter-fibre fracture modes a ply stress is in (plane stress).
+enum class PuckMode { kA, kB, kC };
+
+/// The mode, and the inclination of the fracture plane from the ply's thickness direction [rad]:
+/// 0 in modes A and B; in mode C, cos^2(theta) = (1 / (2 (1 + p23-))) ((R23A / S12)^2 (tau12 /
+/// sigma2)^2 + 1), about 50 to 53 degrees in transverse compression. Throws plydem::Error if a
+/// strength it needs (YT, YC, S12) is missing.
+struct PuckFracturePlane {
+  PuckMode mode = PuckMode::kA;
+  double angle = 0;  ///< [rad]
+};
+PuckFracturePlane puck_fracture_plane(const PlyStress& stress, const LaminaStrength& strength);
 
 /// The factor lambda > 0 by which `stress` must be scaled to reach the criterion's failure surface
 /// (+inf if never: e.g. max-stress with a zero stress). Throws plydem::Error if a strength the

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/elasticity.hpp"
@@ -131,8 +132,16 @@ double* strength_entry(LaminaStrength& s, std::string_view key) {
   return nullptr;
 }
 
+// Keys that are not numbers among the strengths: the failure model, the shear curve and Puck's
+// inclination parameters.
+constexpr std::string_view kOtherKeys[] = {"failure_criterion", "shear_curve", "puck_p12_tension",
+                                           "puck_p12_compression"};
+
 bool is_known_key(std::string_view key) {
   if (key == "name") return true;
+  for (auto known : kOtherKeys) {
+    if (key == known) return true;
+  }
   for (auto known : kNumberKeys) {
     if (key == known) return true;
   }
@@ -142,6 +151,7 @@ bool is_known_key(std::string_view key) {
 std::string known_keys_list() {
   std::string list = "name";
   for (auto known : kNumberKeys) list += ", " + std::string(known);
+  for (auto known : kOtherKeys) list += ", " + std::string(known);
   return list;
 }
 
@@ -158,6 +168,43 @@ std::optional<double> read_number(const toml::table& table, std::string_view key
   type << node->type();
   throw Error("material file " + in_quotes(file) + ": key " + in_quotes(key) +
               " must be a number, got a " + type.str());
+}
+
+// failure_criterion, Puck's inclination parameters and shear_curve (validated with the rest by
+// validate()).
+void read_failure_model(const toml::table& table, const std::string& file, Material& m) {
+  if (const toml::node* node = table.get("failure_criterion")) {
+    const auto* name = node->as_string();
+    require(name != nullptr, "material file " + in_quotes(file) +
+                                 ": key 'failure_criterion' must be a string (one of " +
+                                 failure_model_names() + ")");
+    const std::optional<PlyFailureModel> model = failure_model_from_name(name->get());
+    require(model.has_value(), "material file " + in_quotes(file) + ": unknown failure_criterion " +
+                                   in_quotes(name->get()) + " (expected one of " +
+                                   failure_model_names() + ")");
+    m.failure_criterion = *model;
+  }
+  if (auto p = read_number(table, "puck_p12_tension", file, false)) {
+    m.strength.puck_p12_tension = *p;
+  }
+  if (auto p = read_number(table, "puck_p12_compression", file, false)) {
+    m.strength.puck_p12_compression = *p;
+  }
+  const toml::node* curve = table.get("shear_curve");
+  if (curve == nullptr) return;
+  const std::string what = "material file " + in_quotes(file) + ": shear_curve";
+  const auto* points = curve->as_array();
+  require(points != nullptr && !points->empty(),
+          what + " must be a non-empty list of [gamma12, tau12 in Pa] points");
+  for (const toml::node& point : *points) {
+    const auto* pair = point.as_array();
+    require(pair != nullptr && pair->size() == 2,
+            what + ": every point must be a pair [gamma12, tau12 in Pa]");
+    const std::optional<double> strain = toml_number(*pair->get(0));
+    const std::optional<double> stress = toml_number(*pair->get(1));
+    require(strain && stress, what + ": every point must be two numbers [gamma12, tau12 in Pa]");
+    m.shear_curve.push_back({*strain, *stress});
+  }
 }
 
 // `text` is the file's content when given, else the file is read.
@@ -204,7 +251,38 @@ Material parse_material_file(const std::string& file, const std::string* text = 
       *entry = *value;
     }
   }
+  read_failure_model(table, file, m);
   return m;
+}
+
+// Puck's inclination parameters lie in [0, 1); the shear curve starts above zero, rises strictly in
+// strain and stress, and never lies above the linear response G12 gamma (a secant modulus above
+// G12 is not a softening curve; 0.1% of slack for digitised data).
+void validate_failure_model(const Material& material) {
+  const std::string who = "material " + in_quotes(material.name);
+  for (const auto& [key, p] :
+       {std::pair{"puck_p12_tension", material.strength.puck_p12_tension},
+        std::pair{"puck_p12_compression", material.strength.puck_p12_compression}}) {
+    require(std::isfinite(p) && p >= 0 && p < 1,
+            who + ": " + key + " must lie in [0, 1), got " + format_number(p));
+  }
+  ShearCurvePoint previous{0, 0};
+  for (std::size_t i = 0; i < material.shear_curve.size(); ++i) {
+    const ShearCurvePoint& q = material.shear_curve[i];
+    const std::string point = fmt::format("shear_curve point {} [{}, {} Pa]", i + 1,
+                                          format_number(q.strain), format_number(q.stress));
+    require(std::isfinite(q.strain) && std::isfinite(q.stress) && q.strain > 0 && q.stress > 0,
+            who + ": " + point + ": gamma12 and tau12 must be finite and positive");
+    require(q.strain > previous.strain && q.stress > previous.stress,
+            who + ": " + point +
+                ": the shear curve must rise strictly in both gamma12 and tau12 (it is not "
+                "monotonic after the point before it)");
+    require(q.stress <= material.G12 * q.strain * (1 + 1e-3),
+            who + ": " + point + " lies above the linear response G12 gamma12 = " +
+                format_number(material.G12 * q.strain) +
+                " Pa: a measured shear curve softens from G12, it cannot be stiffer");
+    previous = q;
+  }
 }
 
 }  // namespace
@@ -230,6 +308,8 @@ void validate(const Material& material) {
     }
   }
 
+  validate_failure_model(material);
+
   // Scaled by E2 so the test sees numbers of order one; positive definiteness is scale-free.
   if (is_positive_definite(compliance_3d(material) * material.E2)) return;
 
@@ -253,6 +333,13 @@ void validate(const Material& material) {
 }
 
 void require_strengths(const Material& material, const std::string& purpose, bool softening) {
+  require(material.failure_criterion == PlyFailureModel::kBond,
+          "material " + in_quotes(material.name) + " asks for failure_criterion = " +
+              in_quotes(failure_model_name(material.failure_criterion)) + ", but " + purpose +
+              " breaks bonds one by one with the parallel-bond law: failure decided at the "
+              "material point is not in the engine yet (set failure_criterion = \"bond\" or "
+              "leave the key out; the lamina criteria are reported beside the model's strengths "
+              "by plydem strength)");
   const LaminaStrength& s = material.strength;
   std::string missing;
   auto need = [&](const char* key, double value) {
@@ -271,6 +358,41 @@ void require_strengths(const Material& material, const std::string& purpose, boo
                                purpose +
                                " needs them (add them to the material file: XT, YT, S12 in Pa" +
                                (softening ? ", G_fibre and G_matrix in J/m^2" : "") + ")");
+}
+
+namespace {
+struct FailureModelName {
+  PlyFailureModel model;
+  std::string_view name;
+};
+constexpr FailureModelName kFailureModelNames[] = {{PlyFailureModel::kBond, "bond"},
+                                                   {PlyFailureModel::kHashin, "hashin"},
+                                                   {PlyFailureModel::kPuck, "puck"},
+                                                   {PlyFailureModel::kMaxStress, "max-stress"},
+                                                   {PlyFailureModel::kTsaiWu, "tsai-wu"}};
+}  // namespace
+
+const char* failure_model_name(PlyFailureModel model) {
+  for (const FailureModelName& n : kFailureModelNames) {
+    if (n.model == model) return n.name.data();
+  }
+  return "unknown";
+}
+
+std::optional<PlyFailureModel> failure_model_from_name(std::string_view name) {
+  for (const FailureModelName& n : kFailureModelNames) {
+    if (n.name == name) return n.model;
+  }
+  return std::nullopt;
+}
+
+std::string failure_model_names() {
+  std::string list;
+  for (const FailureModelName& n : kFailureModelNames) {
+    if (!list.empty()) list += ", ";
+    list += n.name;
+  }
+  return list;
 }
 
 std::vector<std::string> builtin_material_names() {

@@ -3,7 +3,9 @@
 /// The lamina's material: a transversely isotropic ply with the fibre along local axis 1
 /// (paper Table 1, with ERRATA §2: nu13 = nu12). SI units (Pa, kg/m^3).
 
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace plydem {
@@ -20,11 +22,34 @@ struct LaminaStrength {
   double G_matrix = 0;  ///< fracture energy of a crack along the fibres [J/m^2]
   /// Weibull modulus m of the bonds' strength scatter; 0 = no scatter.
   double weibull_modulus = 0;
+  /// Puck's inclination parameters of the inter-fibre fracture envelope
+  /// (core/failure_criteria.hpp), p12+ under transverse tension and p12- under compression: Puck's
+  /// values for glass/epoxy unless the material file gives puck_p12_tension and
+  /// puck_p12_compression (carbon/epoxy: about 0.35, 0.30).
+  double puck_p12_tension = 0.30;
+  double puck_p12_compression = 0.25;
 
   /// XT, YT and S12 are all given (what a tension test to failure needs).
   bool tensile_and_shear() const { return XT > 0 && YT > 0 && S12 > 0; }
   /// G_fibre and G_matrix are both given (what softening bonds need).
   bool fracture_energies() const { return G_fibre > 0 && G_matrix > 0; }
+};
+
+/// How a breaking model decides that the ply fails (material key `failure_criterion`): bond by bond
+/// with the PFC parallel-bond law ("bond", the default), or at the material point by a lamina
+/// criterion ("hashin", "puck", "max-stress", "tsai-wu"; core/failure_criteria.hpp).
+enum class PlyFailureModel { kBond, kHashin, kPuck, kMaxStress, kTsaiWu };
+
+/// The material file's name of a failure model, and the model of a name (nullopt if unknown).
+const char* failure_model_name(PlyFailureModel model);
+std::optional<PlyFailureModel> failure_model_from_name(std::string_view name);
+/// "bond, hashin, puck, max-stress, tsai-wu".
+std::string failure_model_names();
+
+/// One point the ply's in-plane shear response passes through (material key `shear_curve`).
+struct ShearCurvePoint {
+  double strain = 0;  ///< engineering shear strain gamma12 [-]
+  double stress = 0;  ///< tau12 [Pa]
 };
 
 struct Material {
@@ -38,6 +63,10 @@ struct Material {
   /// explicit time step, never an elastic result.
   double density = 2000.0;
   LaminaStrength strength;  ///< optional (all zero for a material without strengths)
+  PlyFailureModel failure_criterion = PlyFailureModel::kBond;
+  /// The measured in-plane shear curve, strictly increasing in both strain and stress, never above
+  /// the linear G12 gamma line; empty: linear to S12 (core/shear_curve.hpp fits it).
+  std::vector<ShearCurvePoint> shear_curve;
 
   double nu21() const { return nu12 * E2 / E1; }
   double G23() const { return E2 / (2.0 * (1.0 + nu23)); }
@@ -49,7 +78,9 @@ struct Material {
 void validate(const Material& material);
 
 /// Throws plydem::Error naming the material and every one of XT, YT, S12 it lacks, and what needs
-/// them (`purpose`, e.g. "plydem strength"); with `softening`, G_fibre and G_matrix too.
+/// them (`purpose`, e.g. "plydem strength"); with `softening`, G_fibre and G_matrix too. Also
+/// refuses a material whose failure_criterion is not "bond": failure at the material point is not
+/// in the engine yet, and a breaking run would otherwise break bond by bond without saying so.
 void require_strengths(const Material& material, const std::string& purpose,
                        bool softening = false);
 

@@ -3,8 +3,12 @@
 /// plydem.CouponSpec.
 #include "python/export.hpp"
 
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "core/error.hpp"
 #include "core/material.hpp"
 #include "experiments/runner/settings_descriptions.hpp"
 #include "python/settings_python.hpp"
@@ -29,7 +33,11 @@ void export_material(py::module_& m) {
       .def_readwrite("G_matrix", &LaminaStrength::G_matrix,
                      "fracture energy of a crack along the fibres [J/m^2]")
       .def_readwrite("weibull_modulus", &LaminaStrength::weibull_modulus,
-                     "Weibull modulus of the bonds' strength scatter; 0 = none");
+                     "Weibull modulus of the bonds' strength scatter; 0 = none")
+      .def_readwrite("puck_p12_tension", &LaminaStrength::puck_p12_tension,
+                     "Puck's inclination parameter p12+ (transverse tension; default 0.30)")
+      .def_readwrite("puck_p12_compression", &LaminaStrength::puck_p12_compression,
+                     "Puck's inclination parameter p12- (transverse compression; default 0.25)");
   py::class_<Material>(m, "Material",
                        "A transversely isotropic ply, fibre along local axis 1 (paper Table 1). "
                        "Keywords: name, E1, E2, G12 [Pa], nu12, nu23, density [kg/m^3]; validated "
@@ -51,6 +59,30 @@ void export_material(py::module_& m) {
       .def_readwrite("strength", &Material::strength,
                      "LaminaStrength: XT, XC, YT, YC, S12 [Pa], G_fibre, G_matrix [J/m^2], "
                      "weibull_modulus (0 = not given)")
+      .def_property(
+          "failure_criterion",
+          [](const Material& x) { return std::string(failure_model_name(x.failure_criterion)); },
+          [](Material& x, const std::string& name) {
+            const std::optional<PlyFailureModel> model = failure_model_from_name(name);
+            require(model.has_value(), "unknown failure_criterion '" + name +
+                                           "' (expected one of " + failure_model_names() + ")");
+            x.failure_criterion = *model;
+          },
+          "how breaking runs decide failure: bond (the default; the only one the engine simulates "
+          "yet), hashin, puck, max-stress, tsai-wu")
+      .def_property(
+          "shear_curve",
+          [](const Material& x) {
+            py::list points;
+            for (const ShearCurvePoint& p : x.shear_curve)
+              points.append(py::make_tuple(p.strain, p.stress));
+            return points;
+          },
+          [](Material& x, const std::vector<std::pair<double, double>>& points) {
+            x.shear_curve.clear();
+            for (const auto& [strain, stress] : points) x.shear_curve.push_back({strain, stress});
+          },
+          "the measured in-plane shear curve: [(gamma12, tau12 [Pa]), ...] (validate() checks it)")
       .def_property_readonly("nu21", &Material::nu21, "minor Poisson's ratio nu12 E2 / E1")
       .def_property_readonly("G23", &Material::G23, "transverse shear modulus E2 / (2 (1 + nu23))")
       .def(

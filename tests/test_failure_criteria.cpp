@@ -43,11 +43,12 @@ TEST_CASE("to_ply_axes turns a coupon stress into the ply's axes") {
 
 TEST_CASE("criterion names and order") {
   const std::vector<FailureCriterion> all = all_criteria();
-  REQUIRE(all.size() == 4);
+  REQUIRE(all.size() == 5);
   CHECK(std::string(criterion_name(all[0])) == "max_stress");
   CHECK(std::string(criterion_name(all[1])) == "tsai_hill");
   CHECK(std::string(criterion_name(all[2])) == "tsai_wu");
   CHECK(std::string(criterion_name(all[3])) == "hashin");
+  CHECK(std::string(criterion_name(all[4])) == "puck");
 }
 
 TEST_CASE("every criterion gives the lamina strengths under uniaxial ply stresses") {
@@ -159,4 +160,102 @@ TEST_CASE("a strength the criterion needs and the material lacks is a clear erro
       failure_load_factor(FailureCriterion::kTsaiHill,
                           {std::numeric_limits<double>::quiet_NaN(), 0, 0}, eglass_strength()),
       doctest::Contains("non-finite stress"), Error);
+}
+
+namespace {
+
+// Puck's three-dimensional action-plane criterion (Puck & Schuermann 2002, eqs. (7)-(9)), searched
+// over the plane's inclination theta by brute force: the reference for the library's plane-stress
+// closed forms of modes A, B and C. A plane at theta to the thickness direction carries
+// sigma_n = sigma2 cos^2, tau_nt = -sigma2 sin cos and tau_n1 = tau12 cos; the resistances of the
+// action plane are R_perp_perp^A (from YC and p23- by R = YC / (2 (1 + p23-)), p23- = p12- R / S12,
+// solved here by fixed-point iteration) and S12, and the inclination parameters are blended by
+// cos^2 psi = tau_nt^2 / (tau_nt^2 + tau_n1^2). Returns the largest exposure and its angle.
+struct ActionPlane {
+  double exposure = 0;
+  double angle = 0;
+};
+
+ActionPlane puck_action_plane_search(double sigma2, double tau12, const LaminaStrength& x) {
+  const double S = x.S12, pt = x.puck_p12_tension, pc = x.puck_p12_compression;
+  double R = 0.5 * x.YC;
+  for (int i = 0; i < 200; ++i) R = x.YC / (2 * (1 + pc * R / S));
+  const double p23 = pc * R / S;
+  ActionPlane best;
+  auto exposure = [&](double theta) {
+    const double c = std::cos(theta), s = std::sin(theta);
+    const double sn = sigma2 * c * c, tnt = -sigma2 * s * c, tn1 = tau12 * c;
+    const double t2 = tnt * tnt + tn1 * tn1;
+    const double cos2psi = t2 > 0 ? tnt * tnt / t2 : 0.0, sin2psi = t2 > 0 ? tn1 * tn1 / t2 : 0.0;
+    if (sn >= 0) {
+      const double p = p23 / R * cos2psi + pt / S * sin2psi;  // p23+ taken as p23-
+      const double a = (1 / x.YT - p) * sn;
+      return std::sqrt(a * a + (tnt / R) * (tnt / R) + (tn1 / S) * (tn1 / S)) + p * sn;
+    }
+    const double p = p23 / R * cos2psi + pc / S * sin2psi;
+    return std::sqrt((tnt / R) * (tnt / R) + (tn1 / S) * (tn1 / S) + (p * sn) * (p * sn)) + p * sn;
+  };
+  // A scan at 0.01 degrees, then golden-section refinement around the best point.
+  for (int k = -9000; k <= 9000; ++k) {
+    const double theta = k * 0.01 * kDeg;
+    const double f = exposure(theta);
+    if (f > best.exposure) best = {f, theta};
+  }
+  double lo = best.angle - 0.01 * kDeg, hi = best.angle + 0.01 * kDeg;
+  const double phi = (std::sqrt(5.0) - 1) / 2;
+  for (int i = 0; i < 100; ++i) {
+    const double a = hi - phi * (hi - lo), b = lo + phi * (hi - lo);
+    (exposure(a) > exposure(b) ? hi : lo) = exposure(a) > exposure(b) ? b : a;
+  }
+  const double theta = 0.5 * (lo + hi);
+  if (exposure(theta) > best.exposure) best = {exposure(theta), theta};
+  return best;
+}
+
+}  // namespace
+
+TEST_CASE("Puck's plane-stress modes A, B, C agree with a search of the 3D action plane") {
+  // E-glass/MY750 (WWFE-I) and T300/914C-like strengths, with Puck's inclinations for each.
+  LaminaStrength glass = eglass_strength();
+  LaminaStrength carbon = test::carbon_ply().strength;
+  carbon.puck_p12_tension = 0.35;
+  carbon.puck_p12_compression = 0.30;
+  for (const LaminaStrength& x : {glass, carbon}) {
+    for (int k = 0; k < 72; ++k) {
+      // Directions all round the (sigma2, tau12) plane, sigma1 = 0 (no fibre failure).
+      const double psi = k * 5.0 * kDeg + 0.5 * kDeg;
+      const PlyStress unit{0, std::cos(psi), std::sin(psi)};
+      CAPTURE(x.YT);
+      CAPTURE(psi / kDeg);
+      const double factor = failure_load_factor(FailureCriterion::kPuck, unit, x);
+      const ActionPlane search = puck_action_plane_search(unit.sigma2, unit.tau12, x);
+      CHECK(factor == doctest::Approx(1.0 / search.exposure).epsilon(1e-6));
+      const PuckFracturePlane plane = puck_fracture_plane(unit, x);
+      CHECK(std::abs(plane.angle - std::abs(search.angle)) < 0.01 * kDeg);
+      CHECK((plane.angle > 0) == (plane.mode == PuckMode::kC));
+      CHECK((plane.mode == PuckMode::kA) == (unit.sigma2 >= 0));
+    }
+  }
+}
+
+TEST_CASE("Puck's fracture plane in transverse compression is inclined by about 50 degrees") {
+  // Pure transverse compression fails in mode C at sigma2 = -YC on a plane whose angle the search
+  // finds independently; Puck reports 50-55 degrees for these inclinations (DAMAGE_NOTES §7).
+  const LaminaStrength x = eglass_strength();
+  const PlyStress compression{0, -1, 0};
+  CHECK(failure_load_factor(FailureCriterion::kPuck, compression, x) ==
+        doctest::Approx(x.YC).epsilon(1e-12));
+  const PuckFracturePlane plane = puck_fracture_plane(compression, x);
+  CHECK(plane.mode == PuckMode::kC);
+  const ActionPlane search = puck_action_plane_search(-1, 0, x);
+  CHECK(plane.angle == doctest::Approx(std::abs(search.angle)).epsilon(1e-4));
+  CHECK(plane.angle / kDeg > 49);
+  CHECK(plane.angle / kDeg < 56);
+  // Transverse tension and in-plane shear break on the plane of the fibres and the thickness.
+  CHECK(puck_fracture_plane({0, 1, 0}, x).angle == 0);
+  CHECK(puck_fracture_plane({0, -0.1, 1}, x).mode == PuckMode::kB);
+  CHECK(puck_fracture_plane({0, 0, 1}, x).angle == 0);
+  // Fibre failure: Puck's fibre modes are XT and XC alone.
+  CHECK(failure_load_factor(FailureCriterion::kPuck, {1, 0, 0.1}, x) ==
+        doctest::Approx(std::min(x.XT, 1.0 / (0.1 / x.S12))).epsilon(1e-12));
 }

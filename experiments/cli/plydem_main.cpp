@@ -148,7 +148,7 @@ CLI::App* add_strength_command(CLI::App& app, StrengthCommand& c) {
   CLI::App* strength = app.add_subcommand(
       "strength",
       "tension test to failure: strength, strain at peak, first-failure stress and broken bonds "
-      "beside XT, YT, S12 and the max-stress, Tsai-Hill, Tsai-Wu and Hashin criteria");
+      "beside XT, YT, S12 and the max-stress, Tsai-Hill, Tsai-Wu, Hashin and Puck criteria");
   c.settings.emplace(*strength, plydem::strength_settings_description(), "strength");
   strength->add_flag("--json", c.json, "print one JSON object (SI units) instead of the table");
   strength->add_option("--out", c.out,

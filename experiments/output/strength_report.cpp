@@ -45,6 +45,8 @@ const char* criterion_label(FailureCriterion criterion) {
       return "Tsai-Wu";
     case FailureCriterion::kHashin:
       return "Hashin";
+    case FailureCriterion::kPuck:
+      return "Puck";
   }
   return "?";
 }

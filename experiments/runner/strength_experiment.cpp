@@ -38,6 +38,8 @@ const char* source_name(FailureCriterion c) {
       return "tsai-wu";
     case FailureCriterion::kHashin:
       return "hashin";
+    case FailureCriterion::kPuck:
+      return "puck";
   }
   return "?";
 }
@@ -396,7 +398,7 @@ ExperimentOutput report_strength(const StrengthExperimentSettings& settings,
 void register_strength_experiment(ExperimentRegistry& registry) {
   registry.add("strength",
                "tension tests to failure at several angles: strength beside max-stress, "
-               "Tsai-Hill, Tsai-Wu and Hashin",
+               "Tsai-Hill, Tsai-Wu, Hashin and Puck",
                parse_strength, run_strength, report_strength);
   registry.set_settings("strength", strength_kind_settings);
 }
