@@ -76,6 +76,26 @@ double bond_strain_energy(const Particles& particles, const Bonds& bonds) {
   return energy;
 }
 
+std::vector<Eigen::Matrix3d> particle_stresses(const Particles& particles, const Bonds& bonds) {
+  std::vector<Eigen::Matrix3d> stress(static_cast<std::size_t>(particles.size()),
+                                      Eigen::Matrix3d::Zero());
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_broken(b)) continue;
+    const Eigen::Vector3d force = evaluate(particles, bonds, b).force_on_first;
+    const Eigen::Vector3d branch = bonds.length(b) * row3(bonds.normal, b);
+    const Eigen::Matrix3d virial = 0.25 * (force * branch.transpose() + branch * force.transpose());
+    stress[static_cast<std::size_t>(bonds.first(b))] += virial;
+    stress[static_cast<std::size_t>(bonds.second(b))] += virial;
+  }
+  for (int i = 0; i < particles.size(); ++i) {
+    const double volume = particles.volume(i);
+    stress[static_cast<std::size_t>(i)] =
+        volume > 0 ? Eigen::Matrix3d(stress[static_cast<std::size_t>(i)] / volume)
+                   : Eigen::Matrix3d::Zero();
+  }
+  return stress;
+}
+
 BondDeformation bond_deformation(const Particles& p, const Bonds& bonds, int b, double* du_out,
                                  double* dtheta_out) {
   const int i = bonds.first(b), j = bonds.second(b);

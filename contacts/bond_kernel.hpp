@@ -63,6 +63,15 @@ BondPass compute_bond_forces(Particles& particles, const Bonds& bonds);
 /// none).
 double bond_strain_energy(const Particles& particles, const Bonds& bonds);
 
+/// The stress each particle carries at the current state [Pa], the site stress of failure at the
+/// material point (issue 32): the virial of its bonds over the material volume it stands for,
+///   sigma_p = (1 / V_p) sum over p's bonds of 1/2 sym(F (x) L),
+/// F the bond's force on its first particle and L = length n the branch vector from the first to
+/// the second (the same product seen from either end), each particle owning half of each of its
+/// bonds, so that a uniform state is measured exactly. Bonds act through the reference loop's law
+/// (compute_bond_forces); broken bonds carry nothing; a particle of zero volume gets zero.
+std::vector<Eigen::Matrix3d> particle_stresses(const Particles& particles, const Bonds& bonds);
+
 /// Bond b's deformation at the particles' current state, for the reference loop. The lever term
 /// (s_i theta_i + s_j theta_j) x n is written as (sigma (theta_i + theta_j) + delta (theta_j -
 /// theta_i)) x n with sigma = (s_i + s_j) / 2 and delta = (s_j - s_i) / 2, the form the fused
