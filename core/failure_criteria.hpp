@@ -13,7 +13,7 @@
 ///    stress: fibre failure sigma1 = XT or -XC, and inter-fibre fracture on its action plane in the
 ///    closed forms of modes A (sigma2 >= 0), B and C (sigma2 < 0), with the inclination parameters
 ///    p12+ and p12- of LaminaStrength; mode C breaks on a plane inclined by the fracture angle
-///    (puck_fracture_angle).
+///    (puck_fracture_plane).
 /// Strengths are magnitudes; compression is negative stress.
 
 #include <vector>
@@ -45,8 +45,8 @@ enum class PuckMode { kA, kB, kC };
 
 /// The mode, and the inclination of the fracture plane from the ply's thickness direction [rad]:
 /// 0 in modes A and B; in mode C, cos^2(theta) = (1 / (2 (1 + p23-))) ((R23A / S12)^2 (tau12 /
-/// sigma2)^2 + 1), about 50 to 53 degrees in transverse compression. Throws plydem::Error if a
-/// strength it needs (YT, YC, S12) is missing.
+/// sigma2)^2 + 1), about 50 degrees in transverse compression of glass/epoxy. Throws plydem::Error
+/// if a strength it needs (YT, YC, S12) is missing.
 struct PuckFracturePlane {
   PuckMode mode = PuckMode::kA;
   double angle = 0;  ///< [rad]

@@ -178,11 +178,11 @@ void read_failure_model(const toml::table& table, const std::string& file, Mater
     require(name != nullptr, "material file " + in_quotes(file) +
                                  ": key 'failure_criterion' must be a string (one of " +
                                  failure_model_names() + ")");
-    const std::optional<PlyFailureModel> model = failure_model_from_name(name->get());
-    require(model.has_value(), "material file " + in_quotes(file) + ": unknown failure_criterion " +
-                                   in_quotes(name->get()) + " (expected one of " +
-                                   failure_model_names() + ")");
-    m.failure_criterion = *model;
+    try {
+      m.failure_criterion = failure_model_named(name->get());
+    } catch (const Error& e) {
+      throw Error("material file " + in_quotes(file) + ": " + e.what());
+    }
   }
   if (auto p = read_number(table, "puck_p12_tension", file, false)) {
     m.strength.puck_p12_tension = *p;
@@ -384,6 +384,13 @@ std::optional<PlyFailureModel> failure_model_from_name(std::string_view name) {
     if (n.name == name) return n.model;
   }
   return std::nullopt;
+}
+
+PlyFailureModel failure_model_named(std::string_view name) {
+  const std::optional<PlyFailureModel> model = failure_model_from_name(name);
+  require(model.has_value(), "unknown failure_criterion " + in_quotes(name) + " (expected one of " +
+                                 failure_model_names() + ")");
+  return *model;
 }
 
 std::string failure_model_names() {

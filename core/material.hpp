@@ -43,6 +43,9 @@ enum class PlyFailureModel { kBond, kHashin, kPuck, kMaxStress, kTsaiWu };
 /// The material file's name of a failure model, and the model of a name (nullopt if unknown).
 const char* failure_model_name(PlyFailureModel model);
 std::optional<PlyFailureModel> failure_model_from_name(std::string_view name);
+/// The model of a name; throws plydem::Error "unknown failure_criterion 'NAME' (expected one of
+/// ...)" for any other (the material file and Python give the same message).
+PlyFailureModel failure_model_named(std::string_view name);
 /// "bond, hashin, puck, max-stress, tsai-wu".
 std::string failure_model_names();
 

@@ -3,12 +3,10 @@
 /// plydem.CouponSpec.
 #include "python/export.hpp"
 
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "core/error.hpp"
 #include "core/material.hpp"
 #include "experiments/runner/settings_descriptions.hpp"
 #include "python/settings_python.hpp"
@@ -63,10 +61,7 @@ void export_material(py::module_& m) {
           "failure_criterion",
           [](const Material& x) { return std::string(failure_model_name(x.failure_criterion)); },
           [](Material& x, const std::string& name) {
-            const std::optional<PlyFailureModel> model = failure_model_from_name(name);
-            require(model.has_value(), "unknown failure_criterion '" + name +
-                                           "' (expected one of " + failure_model_names() + ")");
-            x.failure_criterion = *model;
+            x.failure_criterion = failure_model_named(name);
           },
           "how breaking runs decide failure: bond (the default; the only one the engine simulates "
           "yet), hashin, puck, max-stress, tsai-wu")
