@@ -85,8 +85,10 @@ BondDeformation bond_deformation(const Particles& particles, const Bonds& bonds,
 /// are passed by reference only, so no function boundary depends on the vector ABI.
 // GCC 12 lowers a 64-byte vector to narrower registers piece by piece for instruction sets without
 // AVX-512 and then warns that the pieces of a freshly built vector "may be used uninitialized".
+#if defined(__GNUC__) && !defined(__clang__)  // Clang has no such warning
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 
 namespace lanes {
 
@@ -610,6 +612,8 @@ template <bool kEnergy>
   gather_half_bonds<kEnergy, kElasticMode>(slots, u_i, t_i, force, torque, energy, force_norm);
 }
 
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
 
 }  // namespace plydem

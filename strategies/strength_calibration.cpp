@@ -378,7 +378,8 @@ std::string strategy_name(const Strategy& strategy) {
   const Registry& registry = default_registry();
   for (const std::string& name : registry.names()) {
     const std::unique_ptr<Strategy> candidate = registry.create(name);
-    if (typeid(*candidate) == typeid(strategy)) return name;
+    const Strategy& built = *candidate;
+    if (typeid(built) == typeid(strategy)) return name;
   }
   return "this strategy";
 }

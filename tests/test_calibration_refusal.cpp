@@ -82,7 +82,9 @@ TEST_CASE(
 
 TEST_CASE("a target built forward from positive springs is recovered: hex2d, square, hcp") {
   for (const std::string name : {"hex2d", "square", "hcp"}) {
-    for (const auto& [normal, shear] : {std::pair{1.3, 0.6}, std::pair{0.8, 1.7}}) {
+    for (const auto& target : {std::pair{1.3, 0.6}, std::pair{0.8, 1.7}}) {
+      const double normal = target.first;  // named: Clang 14 cannot capture a structured binding
+      const double shear = target.second;
       CAPTURE(name);
       CAPTURE(normal);
       CAPTURE(shear);
