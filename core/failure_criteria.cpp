@@ -37,44 +37,68 @@ double positive_root(double a, double b) {
   return b > 0 ? 1.0 / b : kNever;
 }
 
-double max_stress(const PlyStress& s, const LaminaStrength& x) {
-  const FailureCriterion c = FailureCriterion::kMaxStress;
-  double factor = kNever;
-  if (s.sigma1 > 0) factor = std::min(factor, needed(x.XT, "XT", c) / s.sigma1);
-  if (s.sigma1 < 0) factor = std::min(factor, needed(x.XC, "XC", c) / -s.sigma1);
-  if (s.sigma2 > 0) factor = std::min(factor, needed(x.YT, "YT", c) / s.sigma2);
-  if (s.sigma2 < 0) factor = std::min(factor, needed(x.YC, "YC", c) / -s.sigma2);
-  if (s.tau12 != 0) factor = std::min(factor, needed(x.S12, "S12", c) / std::abs(s.tau12));
-  return factor;
+PlyFailureMode fibre_mode(const PlyStress& s) {
+  return s.sigma1 >= 0 ? PlyFailureMode::kFibreTension : PlyFailureMode::kFibreCompression;
+}
+PlyFailureMode matrix_mode(const PlyStress& s) {
+  return s.sigma2 >= 0 ? PlyFailureMode::kMatrixTension : PlyFailureMode::kMatrixCompression;
 }
 
-double tsai_hill(const PlyStress& s, const LaminaStrength& x) {
+// The failure of the smaller load factor (the first of the two on a tie).
+PlyFailure first_of(PlyFailure a, PlyFailure b) {
+  return b.load_factor < a.load_factor ? b : a;
+}
+
+// An interactive surface's mode: the larger of its fibre and matrix parts at the load factor.
+PlyFailure interactive(const PlyStress& s, double factor, double fibre_part, double matrix_part) {
+  return {factor, fibre_part >= matrix_part ? fibre_mode(s) : matrix_mode(s), 0.0};
+}
+
+PlyFailure max_stress(const PlyStress& s, const LaminaStrength& x) {
+  const FailureCriterion c = FailureCriterion::kMaxStress;
+  PlyFailure f{kNever, matrix_mode(s), 0.0};
+  if (s.sigma1 > 0) f = first_of(f, {needed(x.XT, "XT", c) / s.sigma1, fibre_mode(s), 0.0});
+  if (s.sigma1 < 0) f = first_of(f, {needed(x.XC, "XC", c) / -s.sigma1, fibre_mode(s), 0.0});
+  if (s.sigma2 > 0) f = first_of(f, {needed(x.YT, "YT", c) / s.sigma2, matrix_mode(s), 0.0});
+  if (s.sigma2 < 0) f = first_of(f, {needed(x.YC, "YC", c) / -s.sigma2, matrix_mode(s), 0.0});
+  if (s.tau12 != 0) {
+    f = first_of(f, {needed(x.S12, "S12", c) / std::abs(s.tau12), matrix_mode(s), 0.0});
+  }
+  return f;
+}
+
+PlyFailure tsai_hill(const PlyStress& s, const LaminaStrength& x) {
   const FailureCriterion c = FailureCriterion::kTsaiHill;
-  double a = 0;
+  double a = 0, fibre = 0, matrix = 0;
   if (s.sigma1 != 0) {
     const double X = s.sigma1 > 0 ? needed(x.XT, "XT", c) : needed(x.XC, "XC", c);
     a += (s.sigma1 * s.sigma1 - s.sigma1 * s.sigma2) / (X * X);
+    fibre = s.sigma1 * s.sigma1 / (X * X);
   }
   if (s.sigma2 != 0) {
     const double Y = s.sigma2 > 0 ? needed(x.YT, "YT", c) : needed(x.YC, "YC", c);
-    a += s.sigma2 * s.sigma2 / (Y * Y);
+    matrix += s.sigma2 * s.sigma2 / (Y * Y);
   }
   if (s.tau12 != 0) {
     const double S = needed(x.S12, "S12", c);
-    a += s.tau12 * s.tau12 / (S * S);
+    matrix += s.tau12 * s.tau12 / (S * S);
   }
-  return positive_root(a, 0.0);
+  // Both parts are quadratic: their order is the same at every load factor.
+  return interactive(s, positive_root(a + matrix, 0.0), fibre, matrix);
 }
 
-double tsai_wu(const PlyStress& s, const LaminaStrength& x) {
+PlyFailure tsai_wu(const PlyStress& s, const LaminaStrength& x) {
   const FailureCriterion c = FailureCriterion::kTsaiWu;
   double a = 0, b = 0;
   double f11 = 0, f22 = 0;
+  double fibre_a = 0, fibre_b = 0;  // the sigma1 terms (for the mode)
   if (s.sigma1 != 0) {
     const double XT = needed(x.XT, "XT", c), XC = needed(x.XC, "XC", c);
     f11 = 1.0 / (XT * XC);
-    a += f11 * s.sigma1 * s.sigma1;
-    b += (1.0 / XT - 1.0 / XC) * s.sigma1;
+    fibre_a = f11 * s.sigma1 * s.sigma1;
+    fibre_b = (1.0 / XT - 1.0 / XC) * s.sigma1;
+    a += fibre_a;
+    b += fibre_b;
   }
   if (s.sigma2 != 0) {
     const double YT = needed(x.YT, "YT", c), YC = needed(x.YC, "YC", c);
@@ -86,35 +110,41 @@ double tsai_wu(const PlyStress& s, const LaminaStrength& x) {
     const double S = needed(x.S12, "S12", c);
     a += s.tau12 * s.tau12 / (S * S);
   }
+  const double matrix_a = a - fibre_a, matrix_b = b - fibre_b;  // the sigma2 and tau12 terms
   // F12 = F12* sqrt(F11 F22) with F12* = -1/2 (its term vanishes unless both normal stresses act).
   a += 2.0 * (-0.5 * std::sqrt(f11 * f22)) * s.sigma1 * s.sigma2;
-  return positive_root(a, b);
+  const double factor = positive_root(a, b);
+  if (!std::isfinite(factor)) return {factor, matrix_mode(s), 0.0};
+  return interactive(s, factor, (fibre_a * factor + fibre_b) * factor,
+                     (matrix_a * factor + matrix_b) * factor);
 }
 
-double hashin(const PlyStress& s, const LaminaStrength& x) {
+PlyFailure hashin(const PlyStress& s, const LaminaStrength& x) {
   const FailureCriterion c = FailureCriterion::kHashin;
   const double shear = s.tau12 != 0 ? s.tau12 / needed(x.S12, "S12", c) : 0.0;
-  double factor = kNever;
+  PlyFailure fibre{0.0, fibre_mode(s), 0.0};
   // Fibre mode: tension (sigma1 >= 0) (s1/XT)^2 + (t/S12)^2 = 1; compression (s1/XC)^2 = 1.
   if (s.sigma1 >= 0) {
     const double r = s.sigma1 > 0 ? s.sigma1 / needed(x.XT, "XT", c) : 0.0;
-    factor = std::min(factor, positive_root(r * r + shear * shear, 0.0));
+    fibre.load_factor = positive_root(r * r + shear * shear, 0.0);
   } else {
-    factor = std::min(factor, needed(x.XC, "XC", c) / -s.sigma1);
+    fibre.load_factor = needed(x.XC, "XC", c) / -s.sigma1;
   }
   // Matrix mode: tension (sigma2 >= 0) (s2/YT)^2 + (t/S12)^2 = 1; compression
   // (s2/(2 S23))^2 + [(YC/(2 S23))^2 - 1] s2/YC + (t/S12)^2 = 1 with S23 = YC/2.
+  PlyFailure matrix{0.0, matrix_mode(s), 0.0};
   if (s.sigma2 >= 0) {
     const double r = s.sigma2 > 0 ? s.sigma2 / needed(x.YT, "YT", c) : 0.0;
-    factor = std::min(factor, positive_root(r * r + shear * shear, 0.0));
+    matrix.load_factor = positive_root(r * r + shear * shear, 0.0);
   } else {
     const double YC = needed(x.YC, "YC", c);
     const double S23 = 0.5 * YC;
     const double r = s.sigma2 / (2.0 * S23);
     const double linear = ((YC / (2.0 * S23)) * (YC / (2.0 * S23)) - 1.0) * s.sigma2 / YC;
-    factor = std::min(factor, positive_root(r * r + shear * shear, linear));
+    matrix.load_factor = positive_root(r * r + shear * shear, linear);
   }
-  return factor;
+  // A tie (pure in-plane shear, which both of Hashin's tension modes hold) is a matrix crack.
+  return first_of(matrix, fibre);
 }
 
 // Puck's plane-stress inter-fibre fracture (Puck & Schuermann 2002, eqs. for modes A, B, C), with
@@ -169,16 +199,16 @@ double puck_matrix_exposure(const PlyStress& s, const PuckEnvelope& e) {
   return 0;
 }
 
-double puck(const PlyStress& s, const LaminaStrength& x) {
+PlyFailure puck(const PlyStress& s, const LaminaStrength& x) {
   const FailureCriterion c = FailureCriterion::kPuck;
-  double factor = kNever;
-  if (s.sigma1 > 0) factor = needed(x.XT, "XT", c) / s.sigma1;
-  if (s.sigma1 < 0) factor = needed(x.XC, "XC", c) / -s.sigma1;
+  PlyFailure f{kNever, fibre_mode(s), 0.0};
+  if (s.sigma1 > 0) f.load_factor = needed(x.XT, "XT", c) / s.sigma1;
+  if (s.sigma1 < 0) f.load_factor = needed(x.XC, "XC", c) / -s.sigma1;
   if (s.sigma2 != 0 || s.tau12 != 0) {
     const double exposure = puck_matrix_exposure(s, puck_envelope(s, x));
-    if (exposure > 0) factor = std::min(factor, 1.0 / exposure);
+    if (exposure > 0) f = first_of(f, {1.0 / exposure, matrix_mode(s), 0.0});
   }
-  return factor;
+  return f;
 }
 
 }  // namespace
@@ -215,10 +245,27 @@ std::vector<FailureCriterion> all_criteria() {
 
 double failure_load_factor(FailureCriterion criterion, const PlyStress& stress,
                            const LaminaStrength& strength) {
-  require(
-      std::isfinite(stress.sigma1) && std::isfinite(stress.sigma2) && std::isfinite(stress.tau12),
-      fmt::format("the {} criterion got a non-finite stress ({}, {}, {}) Pa",
-                  criterion_name(criterion), stress.sigma1, stress.sigma2, stress.tau12));
+  return ply_failure(criterion, stress, strength).load_factor;
+}
+
+const char* failure_mode_name(PlyFailureMode mode) {
+  switch (mode) {
+    case PlyFailureMode::kFibreTension:
+      return "fibre tension";
+    case PlyFailureMode::kFibreCompression:
+      return "fibre compression";
+    case PlyFailureMode::kMatrixTension:
+      return "matrix tension";
+    case PlyFailureMode::kMatrixCompression:
+      return "matrix compression";
+  }
+  return "unknown";
+}
+
+namespace {
+
+PlyFailure criterion_failure(FailureCriterion criterion, const PlyStress& stress,
+                             const LaminaStrength& strength) {
   switch (criterion) {
     case FailureCriterion::kMaxStress:
       return max_stress(stress, strength);
@@ -232,6 +279,21 @@ double failure_load_factor(FailureCriterion criterion, const PlyStress& stress,
       return puck(stress, strength);
   }
   throw Error("unknown failure criterion");
+}
+
+}  // namespace
+
+PlyFailure ply_failure(FailureCriterion criterion, const PlyStress& stress,
+                       const LaminaStrength& strength) {
+  require(
+      std::isfinite(stress.sigma1) && std::isfinite(stress.sigma2) && std::isfinite(stress.tau12),
+      fmt::format("the {} criterion got a non-finite stress ({}, {}, {}) Pa",
+                  criterion_name(criterion), stress.sigma1, stress.sigma2, stress.tau12));
+  PlyFailure f = criterion_failure(criterion, stress, strength);
+  if (f.mode == PlyFailureMode::kMatrixCompression) {
+    f.fracture_angle = puck_fracture_plane(stress, strength).angle;
+  }
+  return f;
 }
 
 PuckFracturePlane puck_fracture_plane(const PlyStress& stress, const LaminaStrength& strength) {

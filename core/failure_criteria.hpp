@@ -59,6 +59,35 @@ PuckFracturePlane puck_fracture_plane(const PlyStress& stress, const LaminaStren
 double failure_load_factor(FailureCriterion criterion, const PlyStress& stress,
                            const LaminaStrength& strength);
 
+/// How a ply fails at a material point: across the fibres (fibre modes, a crack normal to the
+/// fibre) or along them (inter-fibre or matrix modes, a crack parallel to the fibre), in tension
+/// or compression of that direction.
+enum class PlyFailureMode { kFibreTension, kFibreCompression, kMatrixTension, kMatrixCompression };
+
+/// "fibre tension", "fibre compression", "matrix tension", "matrix compression".
+const char* failure_mode_name(PlyFailureMode mode);
+
+/// A ply's failure under a stress: the load factor (failure_load_factor's), the mode that reaches
+/// the surface first, and, for a matrix mode, the inclination of the fracture plane from the ply's
+/// thickness direction [rad] (0 for a fibre mode).
+///  - max-stress: the stress component whose ratio to its strength governs (tau12: the matrix
+///    mode, tension or compression by the sign of sigma2);
+///  - Hashin, Puck: the mode whose own condition governs (fibre or inter-fibre fracture; a tie, as
+///    Hashin's two tension modes make of pure in-plane shear, is the matrix mode);
+///  - Tsai-Wu, Tsai-Hill: one interactive surface with no modes of its own; the mode of the larger
+///    of its fibre part (the sigma1 terms) and its matrix part (the sigma2 and tau12 terms) at
+///    failure, the usual reading (Reddy & Pandey 1987), the sigma1 sigma2 interaction left out.
+/// The fracture angle is Puck's (puck_fracture_plane) whatever the criterion: about 50 degrees in
+/// transverse compression (mode C), 0 otherwise; a criterion without an action plane has no angle
+/// of its own. Throws plydem::Error as failure_load_factor does.
+struct PlyFailure {
+  double load_factor = 0;
+  PlyFailureMode mode = PlyFailureMode::kMatrixTension;
+  double fracture_angle = 0;  ///< [rad]
+};
+PlyFailure ply_failure(FailureCriterion criterion, const PlyStress& stress,
+                       const LaminaStrength& strength);
+
 /// The uniaxial tensile strength sigma_x [Pa] of a coupon of one ply at `ply_angle` [rad] (fibre
 /// from the load axis) under the criterion: failure_load_factor of the unit sigma_x.
 double off_axis_strength(FailureCriterion criterion, const LaminaStrength& strength,

@@ -60,7 +60,7 @@ TEST_CASE("every criterion gives the lamina strengths under uniaxial ply stresse
                {{0, -1, 0}, x.YC}, {{0, 0, 1}, x.S12}, {{0, 0, -1}, x.S12}};
   for (FailureCriterion c : all_criteria()) {
     for (const auto& k : cases) {
-      CAPTURE(criterion_name(c));
+      CAPTURE(std::string(criterion_name(c)));
       CAPTURE(k.unit.sigma1);
       CAPTURE(k.unit.sigma2);
       CAPTURE(k.unit.tau12);
@@ -111,7 +111,7 @@ TEST_CASE("off-axis strengths of the E-glass ply by hand") {
         doctest::Approx(160e6).epsilon(1e-9));  // YT / sin^2(30) = 4 YT
   for (FailureCriterion c : all_criteria()) {
     const double strength = off_axis_strength(c, x, 30 * kDeg);
-    CAPTURE(criterion_name(c));
+    CAPTURE(std::string(criterion_name(c)));
     CHECK(strength >= 105e6);
     CHECK(strength <= 160e6 * (1 + 1e-12));
   }
@@ -258,4 +258,37 @@ TEST_CASE("Puck's fracture plane in transverse compression is inclined by about 
   // Fibre failure: Puck's fibre modes are XT and XC alone.
   CHECK(failure_load_factor(FailureCriterion::kPuck, {1, 0, 0.1}, x) ==
         doctest::Approx(std::min(x.XT, 1.0 / (0.1 / x.S12))).epsilon(1e-12));
+}
+
+TEST_CASE("each criterion names the mode that fails: fibre or matrix, tension or compression") {
+  const LaminaStrength x = plydem::test::eglass().strength;
+  using M = PlyFailureMode;
+  for (FailureCriterion c : all_criteria()) {
+    CAPTURE(std::string(criterion_name(c)));
+    CHECK(ply_failure(c, {1, 0, 0}, x).mode == M::kFibreTension);
+    CHECK(ply_failure(c, {-1, 0, 0}, x).mode == M::kFibreCompression);
+    CHECK(ply_failure(c, {0, 1, 0}, x).mode == M::kMatrixTension);
+    CHECK(ply_failure(c, {0, 0, 1}, x).mode == M::kMatrixTension);
+    const PlyFailure crushed = ply_failure(c, {0, -1, 0}, x);
+    CHECK(crushed.mode == M::kMatrixCompression);
+    // Puck's fracture angle in every criterion's matrix compression (about 50 degrees here).
+    CHECK(crushed.fracture_angle == puck_fracture_plane({0, -1, 0}, x).angle);
+    CHECK(ply_failure(c, {0, 1, 0}, x).fracture_angle == 0);
+    for (const PlyStress& s :
+         {PlyStress{1, 0, 0}, PlyStress{0, -1, 0}, PlyStress{0.3, 0.2, -0.4}}) {
+      CHECK(ply_failure(c, s, x).load_factor == failure_load_factor(c, s, x));
+    }
+  }
+  // Off-axis tension: max-stress's fibre mode gives way to shear at tan(theta) = S12 / XT (3.3 deg
+  // for E-glass/MY750); the interactive Tsai-Wu's fibre part leads only very near 0 deg.
+  const double crossover = std::atan(x.S12 / x.XT);
+  CHECK(ply_failure(FailureCriterion::kMaxStress, to_ply_axes(1, 0, 0, 0.9 * crossover), x).mode ==
+        M::kFibreTension);
+  CHECK(ply_failure(FailureCriterion::kMaxStress, to_ply_axes(1, 0, 0, 1.1 * crossover), x).mode ==
+        M::kMatrixTension);
+  CHECK(ply_failure(FailureCriterion::kTsaiWu, to_ply_axes(1, 0, 0, 0.2 * kDeg), x).mode ==
+        M::kFibreTension);
+  CHECK(ply_failure(FailureCriterion::kTsaiWu, to_ply_axes(1, 0, 0, 30 * kDeg), x).mode ==
+        M::kMatrixTension);
+  CHECK(std::string(failure_mode_name(M::kMatrixCompression)) == "matrix compression");
 }

@@ -1,14 +1,23 @@
 // The site stress of failure at the material point (contacts/bond_kernel.hpp particle_stresses):
 // in a uniform strain state every interior particle's virial stress is the ply's stress, Q-bar
 // times the strain of classical lamination theory written out by hand (tests/support), for two
-// strategies, two fibre angles and two particle sizes, within the calibration's own accuracy.
+// strategies, two fibre angles and two particle sizes, within the calibration's own accuracy. The
+// site failure built on it (contacts/site_failure.hpp): under a uniaxial stress every interior site
+// fails at the closed-form off-axis strength of its criterion, in the criterion's mode, and opens
+// the crack plane that mode gives.
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "contacts/bond_kernel.hpp"
+#include "contacts/site_failure.hpp"
+#include "core/error.hpp"
+#include "core/failure_criteria.hpp"
 #include "core/material.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/registry.hpp"
@@ -105,4 +114,102 @@ TEST_CASE("a particle without volume reads zero, and broken bonds carry no site 
   for (const Eigen::Matrix3d& sigma : particle_stresses(s.model.particles, bonds)) {
     CHECK(sigma.isZero(0.0));
   }
+}
+
+namespace {
+
+// The uniform strain of a uniaxial stress sigma_x = 1 Pa in a ply at `angle`: CLT's compliance
+// (the inverse of Q-bar written out by hand) times (1, 0, 0).
+Eigen::Vector3d uniaxial_strain(double angle) {
+  return test::qbar_by_hand(test::eglass(), angle).inverse() * Eigen::Vector3d(1, 0, 0);
+}
+
+bool interior(const Particles& p, int i, double margin) {
+  const double x = p.reference_position(i, 0), y = p.reference_position(i, 1);
+  return x >= p.reference_position.col(0).minCoeff() + margin &&
+         x <= p.reference_position.col(0).maxCoeff() - margin &&
+         y >= p.reference_position.col(1).minCoeff() + margin &&
+         y <= p.reference_position.col(1).maxCoeff() - margin;
+}
+
+}  // namespace
+
+TEST_CASE("under a uniaxial stress every interior site fails at the off-axis strength") {
+  const LaminaStrength x = test::eglass().strength;
+  for (const char* strategy : {"square", "hex2d"}) {
+    for (double degrees : {0.0, 30.0, 90.0}) {
+      for (double diameter : {0.1e-3, 0.05e-3}) {
+        CAPTURE(std::string(strategy));
+        CAPTURE(degrees);
+        CAPTURE(diameter);
+        // A strain of 1e-3 in the direction of the unit uniaxial stress (scaled: the sites' load
+        // factors are then the strength over the stress the model carries).
+        const Eigen::Vector3d unit = uniaxial_strain(degrees * kDeg);
+        const double scale = 1e-3 / unit.cwiseAbs().maxCoeff();
+        const UniformState s = uniform_state(strategy, degrees * kDeg, diameter, scale * unit);
+        const std::vector<double> angles{degrees * kDeg};
+        for (FailureCriterion c : {FailureCriterion::kMaxStress, FailureCriterion::kTsaiWu,
+                                   FailureCriterion::kHashin, FailureCriterion::kPuck}) {
+          CAPTURE(std::string(criterion_name(c)));
+          const PlyFailure expected = ply_failure(c, to_ply_axes(1, 0, 0, degrees * kDeg), x);
+          const std::vector<SiteFailure> sites =
+              site_failures(s.model.particles, s.model.bonds, angles, c, x);
+          double worst = 0;
+          for (int i = 0; i < s.model.particles.size(); ++i) {
+            if (!interior(s.model.particles, i, 3 * diameter)) continue;
+            const SiteFailure& site = sites[static_cast<std::size_t>(i)];
+            // The strength in sigma_x: load factor times the sigma_x the site carries (scale).
+            worst = std::max(worst,
+                             std::abs(site.failure.load_factor * scale / expected.load_factor - 1));
+            CHECK(site.failure.mode == expected.mode);
+            CHECK((site.crack_normal - crack_normal(expected, degrees * kDeg)).norm() < 1e-12);
+          }
+          MESSAGE(std::string(strategy)
+                  << " " << degrees << " deg, " << diameter * 1e3 << " mm, "
+                  << std::string(criterion_name(c)) << ": strength within " << worst);
+          // Measured: within 5.7e-4 (square 30 deg, max-stress, which tau12 governs there), 3.0e-4
+          // for the other criteria at square 30 deg, 8.3e-5 for hex2d, 2.3e-5 at 0 and 90 deg: the
+          // site stress's own accuracy (above), read relative to the component that governs.
+          CHECK(worst <= 1e-3);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("a crack's plane: across the fibres in a fibre mode, along them in a matrix mode") {
+  const double a = 30 * kDeg;
+  const PlyFailure fibre{1.0, PlyFailureMode::kFibreTension, 0.0};
+  CHECK((crack_normal(fibre, a) - Eigen::Vector3d(std::cos(a), std::sin(a), 0)).norm() < 1e-15);
+  const PlyFailure matrix{1.0, PlyFailureMode::kMatrixTension, 0.0};
+  CHECK((crack_normal(matrix, a) - Eigen::Vector3d(-std::sin(a), std::cos(a), 0)).norm() < 1e-15);
+  // Transverse compression of a 90 deg ply: the plane holds the fibre (y) and leans from the
+  // thickness direction by Puck's fracture angle, so its normal is (-cos phi, 0, sin phi).
+  const LaminaStrength x = test::eglass().strength;
+  const PlyFailure crushed = ply_failure(FailureCriterion::kPuck, {0, -1, 0}, x);
+  REQUIRE(crushed.mode == PlyFailureMode::kMatrixCompression);
+  const double phi = crushed.fracture_angle;
+  CHECK(phi > 45 * kDeg);
+  CHECK(phi < 56 * kDeg);
+  const Eigen::Vector3d n = crack_normal(crushed, 90 * kDeg);
+  CHECK((n - Eigen::Vector3d(-std::cos(phi), 0, std::sin(phi))).norm() < 1e-12);
+  CHECK(n.dot(Eigen::Vector3d::UnitY()) == doctest::Approx(0).epsilon(1e-15));
+}
+
+TEST_CASE("site failure names a ply without an angle, and finds the first site to fail") {
+  const UniformState s = uniform_state("square", 0.0, 0.1e-3, Eigen::Vector3d(1e-3, 0, 0));
+  const LaminaStrength x = test::eglass().strength;
+  const std::vector<double> none;
+  CHECK_THROWS_WITH_AS(
+      site_failures(s.model.particles, s.model.bonds, none, FailureCriterion::kPuck, x),
+      doctest::Contains("is in ply 0, and 0 ply angle(s) were given"), Error);
+  std::vector<SiteFailure> sites(3);
+  for (SiteFailure& site : sites)
+    site.failure.load_factor = std::numeric_limits<double>::infinity();
+  CHECK(first_failing_site(sites) == -1);
+  sites[2].failure.load_factor = 2.0;
+  sites[1].failure.load_factor = 2.0;
+  CHECK(first_failing_site(sites) == 1);
+  sites[0].failure.load_factor = 3.0;
+  CHECK(first_failing_site(sites) == 1);
 }
