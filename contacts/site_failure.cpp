@@ -39,6 +39,37 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
   return sites;
 }
 
+std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bonds, int site,
+                                    const Eigen::Vector3d& normal) {
+  require(site >= 0 && site < particles.size(),
+          fmt::format("a crack at particle {}, of {}", site, particles.size()));
+  require(std::abs(normal.norm() - 1) < 1e-9,
+          fmt::format("a crack's normal must be a unit vector (its length is {})", normal.norm()));
+  std::vector<int> crossing;
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_broken(b) || (bonds.first(b) != site && bonds.second(b) != site)) continue;
+    // The bond's direction from the site: bonds.normal points from the first to the second.
+    const double outward = bonds.first(b) == site ? 1.0 : -1.0;
+    const Eigen::Vector3d direction(bonds.normal(b, 0), bonds.normal(b, 1), bonds.normal(b, 2));
+    if (outward * normal.dot(direction) > 1e-6) crossing.push_back(b);
+  }
+  return crossing;
+}
+
+void open_bonds(Bonds& bonds, std::span<const int> crossing, BondState mode) {
+  require(mode == BondState::kBrokenTension || mode == BondState::kBrokenShear,
+          "a crack's bonds open in tension or in shear");
+  for (int b : crossing) {
+    require(b >= 0 && b < bonds.size(),
+            fmt::format("cannot open bond {}: the model has {} bonds", b, bonds.size()));
+    require(!bonds.is_broken(b), fmt::format("bond {} is broken already", b));
+    bonds.state(b) = static_cast<int>(mode);
+    bonds.damage(b) = 1;
+    bonds.normal_stiffness(b) = bonds.shear_stiffness(b) = 0;
+    bonds.bending_stiffness(b) = bonds.twisting_stiffness(b) = 0;
+  }
+}
+
 int first_failing_site(const std::vector<SiteFailure>& sites) {
   int first = -1;
   for (std::size_t i = 0; i < sites.size(); ++i) {

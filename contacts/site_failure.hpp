@@ -39,6 +39,22 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
                                        std::span<const double> ply_angles,
                                        FailureCriterion criterion, const LaminaStrength& strength);
 
+/// The bonds a crack at particle `site` opens, its plane through the site's cell with unit normal
+/// `normal` (crack_normal): the site's unbroken bonds whose branch vector from the site has a
+/// positive component along the normal (more than 1e-6 of its length), diagonals as much as axial
+/// bonds, in increasing bond index. The crack lies on the normal's side of the site, so that the
+/// sites of one line of cracks, each opening towards the same side, open every bond that crosses
+/// the line once and no other: a crack is traction-free once open. Throws plydem::Error for a
+/// site out of range or a normal that is not a unit vector.
+std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bonds, int site,
+                                    const Eigen::Vector3d& normal);
+
+/// Opens `crossing` (bonds_across_crack's bonds) as every solver keeps a broken bond: state `mode`
+/// (kBrokenTension or kBrokenShear), damage 1 and no stiffness, so that a static solve, the events
+/// solver and the explicit kernels all see the crack. Throws plydem::Error for a bond out of range,
+/// or one broken already.
+void open_bonds(Bonds& bonds, std::span<const int> crossing, BondState mode);
+
 /// The site that fails first as the current state is scaled (the smallest load factor; the lowest
 /// particle index on a tie), or -1 if none can fail.
 int first_failing_site(const std::vector<SiteFailure>& sites);

@@ -69,22 +69,23 @@ PlyFailure max_stress(const PlyStress& s, const LaminaStrength& x) {
 
 PlyFailure tsai_hill(const PlyStress& s, const LaminaStrength& x) {
   const FailureCriterion c = FailureCriterion::kTsaiHill;
-  double a = 0, fibre = 0, matrix = 0;
+  double a = 0, fibre = 0;
   if (s.sigma1 != 0) {
     const double X = s.sigma1 > 0 ? needed(x.XT, "XT", c) : needed(x.XC, "XC", c);
     a += (s.sigma1 * s.sigma1 - s.sigma1 * s.sigma2) / (X * X);
     fibre = s.sigma1 * s.sigma1 / (X * X);
   }
+  const double before_matrix = a;
   if (s.sigma2 != 0) {
     const double Y = s.sigma2 > 0 ? needed(x.YT, "YT", c) : needed(x.YC, "YC", c);
-    matrix += s.sigma2 * s.sigma2 / (Y * Y);
+    a += s.sigma2 * s.sigma2 / (Y * Y);
   }
   if (s.tau12 != 0) {
     const double S = needed(x.S12, "S12", c);
-    matrix += s.tau12 * s.tau12 / (S * S);
+    a += s.tau12 * s.tau12 / (S * S);
   }
   // Both parts are quadratic: their order is the same at every load factor.
-  return interactive(s, positive_root(a + matrix, 0.0), fibre, matrix);
+  return interactive(s, positive_root(a, 0.0), fibre, a - before_matrix);
 }
 
 PlyFailure tsai_wu(const PlyStress& s, const LaminaStrength& x) {

@@ -4,7 +4,9 @@
 // strategies, two fibre angles and two particle sizes, within the calibration's own accuracy. The
 // site failure built on it (contacts/site_failure.hpp): under a uniaxial stress every interior site
 // fails at the closed-form off-axis strength of its criterion, in the criterion's mode, and opens
-// the crack plane that mode gives.
+// the crack plane that mode gives; a line of cracked sites opens every bond across it, diagonals
+// included, and leaves the coupon in two halves that carry nothing (a crack of axial bonds alone
+// does not: the diagonals bridge it).
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
@@ -212,4 +214,105 @@ TEST_CASE("site failure names a ply without an angle, and finds the first site t
   CHECK(first_failing_site(sites) == 1);
   sites[0].failure.load_factor = 3.0;
   CHECK(first_failing_site(sites) == 1);
+}
+
+namespace {
+
+// The strain energy of the built 90 deg lamina stretched between its ends (translations of the
+// particles within 1.5 diameters of each end fixed, two columns, so that each half of a cracked
+// coupon is held against every rigid motion; the right end moved by 1e-6 m along x), after `crack`
+// opened.
+double stretched_energy(const Model& built, const std::vector<int>& crack, double diameter) {
+  Model model = built;
+  open_bonds(model.bonds, crack, BondState::kBrokenTension);
+  const Particles& p = model.particles;
+  const double x0 = p.reference_position.col(0).minCoeff() + 1.5 * diameter;
+  const double x1 = p.reference_position.col(0).maxCoeff() - 1.5 * diameter;
+  DofConstraints c(p.size());
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0);
+    if (x > x0 && x < x1) continue;
+    c.fix(i, Dof::kUx, x <= x0 ? 0.0 : 1e-6);
+    c.fix(i, Dof::kUy, 0.0);
+    c.fix(i, Dof::kUz, 0.0);
+  }
+  solve_static(model, c);
+  return bond_strain_energy(model.particles, model.bonds);
+}
+
+}  // namespace
+
+TEST_CASE("a line of cracked sites opens every bond across it, diagonals too: traction-free") {
+  // A 90 deg E-glass ply under sigma_x fails in matrix tension on planes along its fibres (y):
+  // crack the column of sites nearest the middle, each site's crack from site_failures.
+  for (double diameter : {0.1e-3, 0.05e-3}) {
+    CAPTURE(diameter);
+    const Eigen::Vector3d unit = uniaxial_strain(90 * kDeg);
+    const UniformState s = uniform_state("square", 90 * kDeg, diameter, 1e-3 * unit / unit(0));
+    const Particles& p = s.model.particles;
+    const std::vector<double> angles{90 * kDeg};
+    const LaminaStrength x = test::eglass().strength;
+    const std::vector<SiteFailure> sites =
+        site_failures(p, s.model.bonds, angles, FailureCriterion::kPuck, x);
+    const double middle =
+        0.5 * (p.reference_position.col(0).minCoeff() + p.reference_position.col(0).maxCoeff());
+    double column = 0, nearest = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < p.size(); ++i) {
+      const double d = std::abs(p.reference_position(i, 0) - middle);
+      if (d < nearest) nearest = d, column = p.reference_position(i, 0);
+    }
+    std::vector<int> crack, axial_only;
+    int cracked_sites = 0;
+    for (int i = 0; i < p.size(); ++i) {
+      if (std::abs(p.reference_position(i, 0) - column) > 1e-9) continue;
+      ++cracked_sites;
+      const SiteFailure& site = sites[static_cast<std::size_t>(i)];
+      CHECK(site.failure.mode == PlyFailureMode::kMatrixTension);
+      CHECK(std::abs(site.crack_normal.x()) == doctest::Approx(1).epsilon(1e-12));
+      for (int b : bonds_across_crack(p, s.model.bonds, i, site.crack_normal)) {
+        crack.push_back(b);
+        const double along = std::abs(s.model.bonds.normal(b, 0));
+        if (along > 1 - 1e-9) axial_only.push_back(b);
+      }
+    }
+    REQUIRE(cracked_sites > 5);
+    // Each site opens its axial bond and its two diagonals (one at the coupon's edges).
+    CHECK(crack.size() == static_cast<std::size_t>(3 * cracked_sites - 2));
+    CHECK(axial_only.size() == static_cast<std::size_t>(cracked_sites));
+    const double intact = stretched_energy(s.model, {}, diameter);
+    const double cracked = stretched_energy(s.model, crack, diameter);
+    const double bridged = stretched_energy(s.model, axial_only, diameter);
+    MESSAGE((diameter * 1e3) << " mm: energy cracked / intact " << cracked / intact
+                             << ", axial bonds only " << bridged / intact);
+    CHECK(intact > 0);
+    CHECK(cracked <= 1e-9 * intact);  // both halves move as rigid bodies
+    CHECK(bridged > 0.05 * intact);   // the diagonals bridge a crack of axial bonds alone
+  }
+}
+
+TEST_CASE("a crack names a site out of range and a normal that is not a unit vector") {
+  const UniformState s = uniform_state("square", 0.0, 0.1e-3, Eigen::Vector3d(1e-3, 0, 0));
+  const Particles& p = s.model.particles;
+  CHECK_THROWS_WITH_AS(bonds_across_crack(p, s.model.bonds, p.size(), Eigen::Vector3d::UnitX()),
+                       doctest::Contains("a crack at particle"), Error);
+  CHECK_THROWS_WITH_AS(bonds_across_crack(p, s.model.bonds, 0, Eigen::Vector3d(2, 0, 0)),
+                       doctest::Contains("unit vector"), Error);
+  Bonds bonds = s.model.bonds;
+  const std::vector<int> first{0};
+  open_bonds(bonds, first, BondState::kBrokenTension);
+  CHECK(bonds.is_broken(0));
+  CHECK(bonds.damage(0) == 1);
+  CHECK(bonds.normal_stiffness(0) == 0);
+  CHECK_THROWS_WITH_AS(open_bonds(bonds, first, BondState::kBrokenShear),
+                       doctest::Contains("bond 0 is broken already"), Error);
+  const std::vector<int> outside{bonds.size()};
+  CHECK_THROWS_WITH_AS(open_bonds(bonds, outside, BondState::kBrokenShear),
+                       doctest::Contains("the model has"), Error);
+  CHECK_THROWS_WITH_AS(open_bonds(bonds, {}, BondState::kIntact), doctest::Contains("open in"),
+                       Error);
+  // Broken bonds do not cross a crack: they are open already.
+  const Eigen::Vector3d along(bonds.normal(0, 0), bonds.normal(0, 1), bonds.normal(0, 2));
+  const std::vector<int> around = bonds_across_crack(p, bonds, bonds.first(0), along);
+  CHECK(std::find(around.begin(), around.end(), 0) == around.end());
+  CHECK(!bonds_across_crack(p, s.model.bonds, bonds.first(0), along).empty());
 }
