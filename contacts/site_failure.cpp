@@ -56,20 +56,6 @@ std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bon
   return crossing;
 }
 
-void open_bonds(Bonds& bonds, std::span<const int> crossing, BondState mode) {
-  require(mode == BondState::kBrokenTension || mode == BondState::kBrokenShear,
-          "a crack's bonds open in tension or in shear");
-  for (int b : crossing) {
-    require(b >= 0 && b < bonds.size(),
-            fmt::format("cannot open bond {}: the model has {} bonds", b, bonds.size()));
-    require(!bonds.is_broken(b), fmt::format("bond {} is broken already", b));
-    bonds.state(b) = static_cast<int>(mode);
-    bonds.damage(b) = 1;
-    bonds.normal_stiffness(b) = bonds.shear_stiffness(b) = 0;
-    bonds.bending_stiffness(b) = bonds.twisting_stiffness(b) = 0;
-  }
-}
-
 int first_failing_site(const std::vector<SiteFailure>& sites) {
   int first = -1;
   for (std::size_t i = 0; i < sites.size(); ++i) {

@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "contacts/bond_opening.hpp"  // open_bonds, to open a crack
 #include "core/failure_criteria.hpp"
 #include "core/material.hpp"
 #include "core/model.hpp"
@@ -48,12 +49,6 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
 /// site out of range or a normal that is not a unit vector.
 std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bonds, int site,
                                     const Eigen::Vector3d& normal);
-
-/// Opens `crossing` (bonds_across_crack's bonds) as every solver keeps a broken bond: state `mode`
-/// (kBrokenTension or kBrokenShear), damage 1 and no stiffness, so that a static solve, the events
-/// solver and the explicit kernels all see the crack. Throws plydem::Error for a bond out of range,
-/// or one broken already.
-void open_bonds(Bonds& bonds, std::span<const int> crossing, BondState mode);
 
 /// The site that fails first as the current state is scaled (the smallest load factor; the lowest
 /// particle index on a tie), or -1 if none can fail.

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "contacts/bond_kernel.hpp"
+#include "contacts/bond_opening.hpp"
 #include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
@@ -830,12 +831,7 @@ class EventLoop {
   void break_bond(int b, const EventPoint& point) {
     Bonds& bonds = model_.bonds;
     const BondState mode = state_.mode[b];
-    bonds.normal_stiffness(b) = 0;
-    bonds.shear_stiffness(b) = 0;
-    bonds.bending_stiffness(b) = 0;
-    bonds.twisting_stiffness(b) = 0;
-    bonds.damage(b) = 1;
-    bonds.state(b) = static_cast<int>(mode);
+    open_bond(bonds, b, mode);
     ++broken_;
     BondBreak record;
     record.bond = b;

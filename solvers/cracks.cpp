@@ -10,6 +10,7 @@
 #include <numbers>
 #include <optional>
 
+#include "contacts/bond_opening.hpp"
 #include "contacts/cell_list.hpp"
 #include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
@@ -215,10 +216,7 @@ std::vector<BondBreak> cut_transverse_crack(Model& model, double x, int first_pl
     const int i = bonds.first(b), j = bonds.second(b);
     if (bonds.is_broken(b) || !cracked(i) || !cracked(j)) continue;
     if ((p.reference_position(i, 0) - x) * (p.reference_position(j, 0) - x) >= 0) continue;
-    bonds.normal_stiffness(b) = bonds.shear_stiffness(b) = 0;
-    bonds.bending_stiffness(b) = bonds.twisting_stiffness(b) = 0;
-    bonds.damage(b) = 1;
-    bonds.state(b) = static_cast<int>(BondState::kBrokenTension);
+    open_bond(bonds, b, BondState::kBrokenTension);
     BondBreak cut;
     cut.bond = b;
     cut.position = p.reference_position.row(i).matrix().transpose() +

@@ -9,6 +9,7 @@
 #include <numeric>
 #include <string_view>
 
+#include "contacts/bond_opening.hpp"
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
 
@@ -581,12 +582,7 @@ void ExplicitIntegrator::break_bond(int bond, BondState mode) {
   require(!bonds.is_broken(bond), fmt::format("bond {} is broken already", bond));
   if (!breaking_) start_breaking();
   backend_->clear_bond(bond);
-  bonds.state(bond) = static_cast<int>(mode);
-  bonds.damage(bond) = 1;
-  bonds.normal_stiffness(bond) = 0;
-  bonds.shear_stiffness(bond) = 0;
-  bonds.bending_stiffness(bond) = 0;
-  bonds.twisting_stiffness(bond) = 0;
+  open_bond(bonds, bond, mode);
   if (contacts_) {
     contacts_->add_broken_bond(bond);
     contact_countdown_ = 0;

@@ -308,8 +308,9 @@ TEST_CASE("a crack names a site out of range and a normal that is not a unit vec
   const std::vector<int> outside{bonds.size()};
   CHECK_THROWS_WITH_AS(open_bonds(bonds, outside, BondState::kBrokenShear),
                        doctest::Contains("the model has"), Error);
-  CHECK_THROWS_WITH_AS(open_bonds(bonds, {}, BondState::kIntact), doctest::Contains("open in"),
-                       Error);
+  CHECK_THROWS_WITH_AS(open_bond(bonds, 1, BondState::kIntact),
+                       doctest::Contains("opens in tension or in shear"), Error);
+  CHECK(!bonds.is_broken(1));
   // Broken bonds do not cross a crack: they are open already.
   const Eigen::Vector3d along(bonds.normal(0, 0), bonds.normal(0, 1), bonds.normal(0, 2));
   const std::vector<int> around = bonds_across_crack(p, bonds, bonds.first(0), along);
