@@ -9,7 +9,6 @@
 #include <span>
 #include <vector>
 
-#include "contacts/bond_opening.hpp"  // open_bonds, to open a crack
 #include "core/failure_criteria.hpp"
 #include "core/material.hpp"
 #include "core/model.hpp"
@@ -40,13 +39,13 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
                                        std::span<const double> ply_angles,
                                        FailureCriterion criterion, const LaminaStrength& strength);
 
-/// The bonds a crack at particle `site` opens, its plane through the site's cell with unit normal
-/// `normal` (crack_normal): the site's unbroken bonds whose branch vector from the site has a
-/// positive component along the normal (more than 1e-6 of its length), diagonals as much as axial
-/// bonds, in increasing bond index. The crack lies on the normal's side of the site, so that the
-/// sites of one line of cracks, each opening towards the same side, open every bond that crosses
-/// the line once and no other: a crack is traction-free once open. Throws plydem::Error for a
-/// site out of range or a normal that is not a unit vector.
+/// The bonds a crack at particle `site` opens (contacts/bond_opening.hpp opens them), its plane
+/// through the site's cell with unit normal `normal` (crack_normal): the site's unbroken bonds
+/// whose branch vector from the site has a positive component along the normal (more than 1e-6 of
+/// its length), diagonals as much as axial bonds, in increasing bond index. The crack lies on the
+/// normal's side of the site, so that the sites of one line of cracks, each opening towards the
+/// same side, open every bond that crosses the line once and no other: a crack is traction-free
+/// once open. Throws plydem::Error for a site out of range or a normal that is not a unit vector.
 std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bonds, int site,
                                     const Eigen::Vector3d& normal);
 

@@ -244,11 +244,6 @@ std::vector<FailureCriterion> all_criteria() {
           FailureCriterion::kHashin, FailureCriterion::kPuck};
 }
 
-double failure_load_factor(FailureCriterion criterion, const PlyStress& stress,
-                           const LaminaStrength& strength) {
-  return ply_failure(criterion, stress, strength).load_factor;
-}
-
 const char* failure_mode_name(PlyFailureMode mode) {
   switch (mode) {
     case PlyFailureMode::kFibreTension:
@@ -265,8 +260,13 @@ const char* failure_mode_name(PlyFailureMode mode) {
 
 namespace {
 
+// The criterion's load factor and mode (no fracture angle), for a finite stress.
 PlyFailure criterion_failure(FailureCriterion criterion, const PlyStress& stress,
                              const LaminaStrength& strength) {
+  require(
+      std::isfinite(stress.sigma1) && std::isfinite(stress.sigma2) && std::isfinite(stress.tau12),
+      fmt::format("the {} criterion got a non-finite stress ({}, {}, {}) Pa",
+                  criterion_name(criterion), stress.sigma1, stress.sigma2, stress.tau12));
   switch (criterion) {
     case FailureCriterion::kMaxStress:
       return max_stress(stress, strength);
@@ -284,12 +284,15 @@ PlyFailure criterion_failure(FailureCriterion criterion, const PlyStress& stress
 
 }  // namespace
 
+// The load factor alone needs no fracture angle, whose Puck envelope asks for S12 and YC that a
+// criterion may not need for this stress (max-stress in transverse compression: YC only).
+double failure_load_factor(FailureCriterion criterion, const PlyStress& stress,
+                           const LaminaStrength& strength) {
+  return criterion_failure(criterion, stress, strength).load_factor;
+}
+
 PlyFailure ply_failure(FailureCriterion criterion, const PlyStress& stress,
                        const LaminaStrength& strength) {
-  require(
-      std::isfinite(stress.sigma1) && std::isfinite(stress.sigma2) && std::isfinite(stress.tau12),
-      fmt::format("the {} criterion got a non-finite stress ({}, {}, {}) Pa",
-                  criterion_name(criterion), stress.sigma1, stress.sigma2, stress.tau12));
   PlyFailure f = criterion_failure(criterion, stress, strength);
   if (f.mode == PlyFailureMode::kMatrixCompression) {
     f.fracture_angle = puck_fracture_plane(stress, strength).angle;

@@ -79,7 +79,8 @@ const char* failure_mode_name(PlyFailureMode mode);
 ///    failure, the usual reading (Reddy & Pandey 1987), the sigma1 sigma2 interaction left out.
 /// The fracture angle is Puck's (puck_fracture_plane) whatever the criterion: about 50 degrees in
 /// transverse compression (mode C), 0 otherwise; a criterion without an action plane has no angle
-/// of its own. Throws plydem::Error as failure_load_factor does.
+/// of its own. Throws plydem::Error as failure_load_factor does, and in matrix compression also if
+/// the material lacks S12 or YC (which Puck's angle needs).
 struct PlyFailure {
   double load_factor = 0;
   PlyFailureMode mode = PlyFailureMode::kMatrixTension;

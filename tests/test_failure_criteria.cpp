@@ -291,4 +291,10 @@ TEST_CASE("each criterion names the mode that fails: fibre or matrix, tension or
   CHECK(ply_failure(FailureCriterion::kTsaiWu, to_ply_axes(1, 0, 0, 30 * kDeg), x).mode ==
         M::kMatrixTension);
   CHECK(std::string(failure_mode_name(M::kMatrixCompression)) == "matrix compression");
+  // The load factor needs only the strengths its criterion uses: max-stress in transverse
+  // compression reads YC, without S12 (which Puck's fracture angle of ply_failure also needs).
+  LaminaStrength no_shear = x;
+  no_shear.S12 = 0;
+  CHECK(failure_load_factor(FailureCriterion::kMaxStress, {0, -1, 0}, no_shear) == x.YC);
+  CHECK_THROWS_AS(ply_failure(FailureCriterion::kMaxStress, {0, -1, 0}, no_shear), Error);
 }

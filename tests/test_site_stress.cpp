@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "contacts/bond_kernel.hpp"
+#include "contacts/bond_opening.hpp"
 #include "contacts/site_failure.hpp"
 #include "core/error.hpp"
 #include "core/failure_criteria.hpp"
