@@ -1,9 +1,18 @@
 #pragma once
 /// \file
 /// Failure at the material point (issue 32, ../shared/DAMAGE_NOTES.md §7): each particle's site
-/// stress (particle_stresses, the virial of its bonds over its volume) is read in the axes of its
-/// ply and judged by a lamina criterion (core/failure_criteria.hpp), which gives the load factor
-/// at which the site fails, the mode, and the crack plane that mode opens.
+/// stress is read in the axes of its ply and judged by a lamina criterion
+/// (core/failure_criteria.hpp), which gives the load factor at which the site fails, the mode, and
+/// the crack plane that mode opens.
+///
+/// The site stress is the ply's stiffness times the site's strain (site_strains: the displacement
+/// gradient that fits its intact bonds' relative displacements), not the virial of its bonds
+/// (particle_stresses): both are the ply's stress at an interior site in a uniform state, but at
+/// the free edges and corners, where the bonds are fewer and the edge's own stiffnesses differ,
+/// the virial reads up to about 9% above the stress the coupon carries (tests/test_site_stress.cpp
+/// measures it), and an edge would crack first under a uniform stress. The fit is exact in any
+/// affine displacement field, at edges and corners as inside, and a site beside an open crack
+/// reads the strain of the side it is still bonded to.
 
 #include <Eigen/Dense>
 #include <span>
@@ -29,15 +38,22 @@ struct SiteFailure {
 /// e3 = z (phi = 0: the plane through the thickness, along the fibres).
 Eigen::Vector3d crack_normal(const PlyFailure& failure, double ply_angle);
 
-/// Every particle's site failure at the current state: its in-plane stress (sigma_xx, sigma_yy,
-/// tau_xy of particle_stresses) in the axes of its ply, whose fibre angle is
-/// ply_angles[particles.ply(i)] [rad], judged by `criterion` with one ply material's `strength`.
-/// A site that carries no stress gets an infinite load factor. Throws plydem::Error naming the
-/// particle whose ply has no angle in `ply_angles`, and as failure_load_factor does for a
-/// strength the criterion needs and the material lacks.
+/// Every particle's in-plane strain (eps_xx, eps_yy, gamma_xy) at the current state: the symmetric
+/// part of the in-plane displacement gradient G that fits u_j - u_i = G (x_j - x_i) best (least
+/// squares, in-plane components, reference positions) over the particle's unbroken bonds. Exact
+/// whenever the in-plane displacement is affine in x and y (whatever it does through the
+/// thickness). A particle whose intact bonds do not span the plane reads NaN.
+std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bonds& bonds);
+
+/// Every particle's site failure at the current state: its in-plane stress, Q-bar of its ply
+/// (`material` at the fibre angle ply_angles[particles.ply(i)] [rad]) times its site strain, in
+/// the axes of the ply, judged by `criterion` with the material's strengths. A site that carries
+/// no stress, or whose strain cannot be read (NaN), gets an infinite load factor. Throws
+/// plydem::Error naming the particle whose ply has no angle in `ply_angles`, and as
+/// failure_load_factor does for a strength the criterion needs and the material lacks.
 std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,
                                        std::span<const double> ply_angles,
-                                       FailureCriterion criterion, const LaminaStrength& strength);
+                                       FailureCriterion criterion, const Material& material);
 
 /// The bonds a crack at particle `site` opens (contacts/bond_opening.hpp opens them), its plane
 /// through the site's cell with unit normal `normal` (crack_normal): the site's unbroken bonds

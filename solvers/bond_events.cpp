@@ -39,6 +39,12 @@ void EventSettings::validate() const {
   require(progress_seconds > 0,
           fmt::format("events: progress_seconds is {}, must be positive", progress_seconds));
   plydem::validate(static_settings);
+  if (material_point) {
+    require(!material_point->ply_angles.empty(),
+            "events: failure at the material point needs the fibre angle of every ply");
+    for (double angle : material_point->ply_angles)
+      require(std::isfinite(angle), fmt::format("events: a ply angle is {}", angle));
+  }
   require(static_settings.method != StaticMethod::kIterative,
           "events: the events solver updates a factor of the stiffness, so it needs the direct "
           "method (StaticMethod::kDirect or kAuto), not the conjugate gradient");
@@ -87,12 +93,14 @@ int intact_clusters(const Model& model, std::vector<int>& label) {
   return count;
 }
 
-void check_inputs(const Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs) {
+void check_inputs(const Model& model, const DofConstraints& unit, const DofFlags& reaction_dofs,
+                  bool material_point) {
   model.check_consistency();  // sizes, stiffnesses, and the strength fields of every bond
   const Bonds& bonds = model.bonds;
-  require(bonds.breakable(),
+  require(material_point || bonds.breakable(),
           "events: every bond of the model is unbreakable (infinite tensile strength and "
-          "cohesion): assign strengths before running to failure");
+          "cohesion) and no failure at the material point is set: assign strengths before "
+          "running to failure");
   const int n = model.particles.size();
   require(unit.fixed.rows() == n && unit.value.rows() == n,
           fmt::format("events: the prescribed dofs are for {} particles, the model has {}",
@@ -726,14 +734,23 @@ class EventLoop {
         break;
       }
       const int b = critical_bond(state_);
+      const SiteCrack site = critical_site();
+      if (site.particle >= 0 && (b < 0 || site.load_factor < state_.factor[b])) {
+        // The site's crack opens: every bond across it, in one event.
+        const EventPoint point = critical_state(site.bonds.front(), site.load_factor,
+                                                static_cast<int>(site.bonds.size()));
+        for (int bond : site.bonds) fail(bond, true, point, site.mode);
+        after_event(point);
+        continue;
+      }
       if (b < 0) {
         result_.stop = "no bond loaded";
         break;
       }
       // The bond fails at the critical state: a tooth of stiffness, or all of it.
       const bool breaks = !softening(state_.ductility[b]) || last_tooth(model_.bonds, b, settings_);
-      const EventPoint point = critical_state(b, breaks);
-      fail(b, breaks, point);
+      const EventPoint point = critical_state(b, state_.factor[b], breaks ? 1 : 0);
+      fail(b, breaks, point, state_.mode[b]);
       after_event(point);
     }
     finish();
@@ -758,11 +775,66 @@ class EventLoop {
     return true;
   }
 
-  // The critical state at which bond b fails: logged in the path (and the peak), and shown to
-  // EventSettings::on_event.
-  EventPoint critical_state(int b, bool breaks) {
+  // A site whose crack opens next (material-point failure): the particle (-1: none), its load
+  // factor, the bonds across its crack plane and how they break.
+  struct SiteCrack {
+    int particle = -1;
+    double load_factor = std::numeric_limits<double>::infinity();
+    std::vector<int> bonds;
+    BondState mode = BondState::kBrokenTension;
+  };
+
+  // The site that fails first at the unit-load solution, passing over those whose crack is open
+  // already (ties: the lowest particle index, within kTieTolerance).
+  SiteCrack critical_site() {
+    SiteCrack crack;
+    if (!settings_.material_point) return crack;
+    const MaterialPointFailure& mp = *settings_.material_point;
+    write_state(model_.particles, 1.0, u_, state_.force);
+    std::vector<SiteFailure> sites =
+        site_failures(model_.particles, model_.bonds, mp.ply_angles, mp.criterion, mp.material);
+    // A particle whose translation is prescribed is held by a grip: its site does not fail (a
+    // coupon's grips, like a test's tabs, are not its gauge).
+    const DofFlags& held = solver_.constraints().fixed;
+    for (int i = 0; i < model_.particles.size(); ++i) {
+      if (held(i, static_cast<int>(Dof::kUx)) || held(i, static_cast<int>(Dof::kUy)))
+        sites[static_cast<std::size_t>(i)].failure.load_factor =
+            std::numeric_limits<double>::infinity();
+    }
+    while (true) {
+      const int first = first_failing_site(sites);
+      if (first < 0) return crack;
+      const SiteFailure& site = sites[static_cast<std::size_t>(first)];
+      // A tie within kTieTolerance goes to the lowest index, whatever the round-off.
+      int chosen = first;
+      for (int i = 0; i < first; ++i)
+        if (sites[static_cast<std::size_t>(i)].failure.load_factor <=
+            site.failure.load_factor * (1 + kTieTolerance)) {
+          chosen = i;
+          break;
+        }
+      const SiteFailure& pick = sites[static_cast<std::size_t>(chosen)];
+      std::vector<int> across =
+          bonds_across_crack(model_.particles, model_.bonds, chosen, pick.crack_normal);
+      if (across.empty()) {  // open already: pass it over
+        sites[static_cast<std::size_t>(chosen)].failure.load_factor =
+            std::numeric_limits<double>::infinity();
+        continue;
+      }
+      crack.particle = chosen;
+      crack.load_factor = pick.failure.load_factor;
+      crack.bonds = std::move(across);
+      const bool compression = pick.failure.mode == PlyFailureMode::kFibreCompression ||
+                               pick.failure.mode == PlyFailureMode::kMatrixCompression;
+      crack.mode = compression ? BondState::kBrokenShear : BondState::kBrokenTension;
+      return crack;
+    }
+  }
+
+  // The critical state at load factor lambda at which bond b fails (with `breaking` bonds broken
+  // in the event): logged in the path (and the peak), and shown to EventSettings::on_event.
+  EventPoint critical_state(int b, double lambda, int breaking) {
     ++events_;
-    const double lambda = state_.factor[b];
     EventPoint point;
     point.event = events_;
     point.load_factor = lambda;
@@ -773,7 +845,7 @@ class EventLoop {
     critical_force_ = state_.force;
     critical_lambda_ = lambda;
     previous_energy_ = state_.energy;
-    point.broken = broken_ + (breaks ? 1 : 0);
+    point.broken = broken_ + breaking;
     result_.path.push_back(point);
     const int index = static_cast<int>(result_.path.size()) - 1;
     if (result_.peak < 0 || std::abs(point.reaction) > peak_reaction_) {
@@ -787,8 +859,9 @@ class EventLoop {
     return point;
   }
 
-  // Bond b breaks (all its stiffness) or loses a tooth, and the solver hears of the change.
-  void fail(int b, bool breaks, const EventPoint& point) {
+  // Bond b breaks (all its stiffness, in `mode`) or loses a tooth, and the solver hears of the
+  // change.
+  void fail(int b, bool breaks, const EventPoint& point, BondState mode) {
     Bonds& bonds = model_.bonds;
     const double r = settings_.tooth_stiffness_ratio;
     const BondParameters before = bond_parameters(bonds, b);
@@ -810,7 +883,7 @@ class EventLoop {
     removed.bending_stiffness *= 1 - keep;
     removed.twisting_stiffness *= 1 - keep;
     if (breaks) {
-      break_bond(b, point);
+      break_bond(b, point, mode);
     } else {
       bonds.normal_stiffness(b) *= r;
       bonds.shear_stiffness(b) *= r;
@@ -826,11 +899,10 @@ class EventLoop {
     solver_.change(model_, b, removed, change);
   }
 
-  // Bond b breaks: no stiffness left, logged at its contact point, and the pieces that came loose
-  // are fixed.
-  void break_bond(int b, const EventPoint& point) {
+  // Bond b breaks in `mode`: no stiffness left, logged at its contact point, and the pieces that
+  // came loose are fixed.
+  void break_bond(int b, const EventPoint& point, BondState mode) {
     Bonds& bonds = model_.bonds;
-    const BondState mode = state_.mode[b];
     open_bond(bonds, b, mode);
     ++broken_;
     BondBreak record;
@@ -925,7 +997,7 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
                         const EventSettings& settings, const EventsState* resume) {
   const auto start = Clock::now();
   settings.validate();
-  check_inputs(model, unit, reaction_dofs);
+  check_inputs(model, unit, reaction_dofs, settings.material_point.has_value());
   EventLoop loop(model, unit, reaction_dofs, settings, start);
   if (resume) loop.resume(*resume);
   return loop.run();

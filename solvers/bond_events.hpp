@@ -36,11 +36,22 @@
 ///   lambda^2 (E_1 - E_1'), E_1 and E_1' the strain energies of the unit solutions before and
 ///   after; dissipated_energy sums these, which is the work of the grips along the saw-tooth path
 ///   minus the strain energy at its end.
+/// - Failure at the material point (EventSettings::material_point, issue 32): each equilibrium also
+///   judges every particle's site stress at unit load (contacts/site_failure.hpp) by a lamina
+///   criterion in its ply's axes (a particle whose translation is prescribed, in a grip, is not
+///   judged). When a site's load factor is the smallest (below every bond's),
+///   its crack opens: every intact bond across its crack plane breaks in that one event (tension
+///   modes as kBrokenTension, compression modes as kBrokenShear), brittle for now. A site whose
+///   crack is open already (no intact bond to its normal's side) is passed over. Bonds with a
+///   finite strength (interfaces) still fail by their own law in the same run; bonds given none
+///   (+inf) fail only with their sites.
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "contacts/site_failure.hpp"
 #include "core/bond_failure.hpp"
 #include "core/checkpoint.hpp"
 #include "core/model.hpp"
@@ -67,6 +78,15 @@ struct EventProgress {
 };
 
 struct EventsState;
+
+/// Failure decided at the material point (see the file comment): the lamina criterion, the ply's
+/// material (its stiffness gives each site's stress from its strain, its strengths the criterion's)
+/// and the fibre angle of each ply (by Particles::ply) [rad].
+struct MaterialPointFailure {
+  FailureCriterion criterion = FailureCriterion::kPuck;
+  Material material;
+  std::vector<double> ply_angles;
+};
 
 struct EventSettings {
   long max_events = 200000;
@@ -102,6 +122,8 @@ struct EventSettings {
   /// continues (EventsState). Neither changes the run.
   long checkpoint_every = 0;
   std::function<void(const Model&, const EventsState&)> on_checkpoint;
+  /// Failure at the material point besides the bonds' own (none: bond by bond only).
+  std::optional<MaterialPointFailure> material_point;
   /// Throws plydem::Error naming the first bad setting.
   void validate() const;
 };

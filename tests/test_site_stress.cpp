@@ -24,6 +24,7 @@
 #include "core/material.hpp"
 #include "solvers/static_solver.hpp"
 #include "strategies/registry.hpp"
+#include "support/coupon_fixtures.hpp"
 #include "support/test_support.hpp"
 
 using namespace plydem;
@@ -105,6 +106,60 @@ TEST_CASE("an interior particle's site stress is the ply's stress in a uniform s
   }
 }
 
+TEST_CASE("held only at its grips, a coupon's sites read the ply's stress, edges included") {
+  // The built coupon, its long edges free, between grips that carry a uniaxial stress state of
+  // CLT: each site stress outside the grips (Q-bar times the site strain) against the stress CLT
+  // gives, and the virial of the particle's bonds against it. Where the edges run along lattice
+  // lines (square at 90 deg) the coupon stays uniform and every site, edges and corners too, reads
+  // the stress; where they cut the lattice the edge strips' balance (strategies/boundary_cells.hpp)
+  // is a least-norm fit, and the coupon itself departs from uniform near its edges: the site stress
+  // shows it, and reads far closer than the virial, whose edge cells hold fewer bonds.
+  const Material m = test::eglass();
+  for (const char* strategy : {"square", "hex2d"}) {
+    for (double degrees : {30.0, 90.0}) {
+      for (double diameter : {0.1e-3, 0.05e-3}) {
+        CAPTURE(std::string(strategy));
+        CAPTURE(degrees);
+        CAPTURE(diameter);
+        CouponSpec spec;
+        spec.material = m;
+        spec.ply_angle = degrees * kDeg;
+        spec.length = 2e-3;
+        spec.width = 1e-3;
+        spec.particle_diameter = diameter;
+        Model model = default_registry().create(strategy)->build(spec).model;
+        const Eigen::Matrix3d q_bar = test::qbar_by_hand(m, spec.ply_angle);
+        const Eigen::Vector3d strain = q_bar.inverse() * Eigen::Vector3d(1e6, 0, 0);
+        DofConstraints grips;
+        DofFlags reaction;
+        test::affine_grips(model, diameter, strain, grips, reaction);
+        solve_static(model, grips);
+        const Eigen::Vector3d expected = q_bar * strain;  // (1 MPa, 0, 0) to rounding
+        const std::vector<Eigen::Vector3d> site = site_strains(model.particles, model.bonds);
+        const std::vector<Eigen::Matrix3d> virial = particle_stresses(model.particles, model.bonds);
+        double worst = 0, worst_virial = 0;
+        for (int i = 0; i < model.particles.size(); ++i) {
+          if (grips.fixed(i, static_cast<int>(Dof::kUx))) continue;
+          const auto k = static_cast<std::size_t>(i);
+          const Eigen::Vector3d sigma = q_bar * site[k];
+          worst = std::max(worst, (sigma - expected).cwiseAbs().maxCoeff() / 1e6);
+          const Eigen::Vector3d v(virial[k](0, 0), virial[k](1, 1), virial[k](0, 1));
+          worst_virial = std::max(worst_virial, (v - expected).cwiseAbs().maxCoeff() / 1e6);
+        }
+        MESSAGE(std::string(strategy)
+                << " " << degrees << " deg, " << diameter * 1e3 << " mm: every site within "
+                << worst << " of the stress, the virial within " << worst_virial);
+        // Measured: square 90 deg 2.8e-3 and 2.9e-3 (sigma_yy at the corners beside the grips;
+        // 3.5e-4 elsewhere), the virial 0.090; square 30 deg 0.24 and 0.27, hex2d 0.19 to 0.26 at
+        // the edges beside the grips (0.02 to 0.03 a few diameters from them), the virial 0.58 to
+        // 0.75.
+        if (std::string(strategy) == "square" && degrees == 90) CHECK(worst <= 4e-3);
+        CHECK(worst <= 0.5 * worst_virial);
+      }
+    }
+  }
+}
+
 TEST_CASE("a particle without volume reads zero, and broken bonds carry no site stress") {
   UniformState s = uniform_state("square", 0.0, 0.1e-3, Eigen::Vector3d(1e-3, 0, 0));
   CHECK(!particle_stresses(s.model.particles, s.model.bonds)[0].isZero(0.0));
@@ -156,7 +211,7 @@ TEST_CASE("under a uniaxial stress every interior site fails at the off-axis str
           CAPTURE(std::string(criterion_name(c)));
           const PlyFailure expected = ply_failure(c, to_ply_axes(1, 0, 0, degrees * kDeg), x);
           const std::vector<SiteFailure> sites =
-              site_failures(s.model.particles, s.model.bonds, angles, c, x);
+              site_failures(s.model.particles, s.model.bonds, angles, c, test::eglass());
           double worst = 0;
           for (int i = 0; i < s.model.particles.size(); ++i) {
             if (!interior(s.model.particles, i, 3 * diameter)) continue;
@@ -201,11 +256,10 @@ TEST_CASE("a crack's plane: across the fibres in a fibre mode, along them in a m
 
 TEST_CASE("site failure names a ply without an angle, and finds the first site to fail") {
   const UniformState s = uniform_state("square", 0.0, 0.1e-3, Eigen::Vector3d(1e-3, 0, 0));
-  const LaminaStrength x = test::eglass().strength;
   const std::vector<double> none;
-  CHECK_THROWS_WITH_AS(
-      site_failures(s.model.particles, s.model.bonds, none, FailureCriterion::kPuck, x),
-      doctest::Contains("is in ply 0, and 0 ply angle(s) were given"), Error);
+  CHECK_THROWS_WITH_AS(site_failures(s.model.particles, s.model.bonds, none,
+                                     FailureCriterion::kPuck, test::eglass()),
+                       doctest::Contains("is in ply 0, and 0 ply angle(s) were given"), Error);
   std::vector<SiteFailure> sites(3);
   for (SiteFailure& site : sites)
     site.failure.load_factor = std::numeric_limits<double>::infinity();
@@ -252,9 +306,8 @@ TEST_CASE("a line of cracked sites opens every bond across it, diagonals too: tr
     const UniformState s = uniform_state("square", 90 * kDeg, diameter, 1e-3 * unit / unit(0));
     const Particles& p = s.model.particles;
     const std::vector<double> angles{90 * kDeg};
-    const LaminaStrength x = test::eglass().strength;
     const std::vector<SiteFailure> sites =
-        site_failures(p, s.model.bonds, angles, FailureCriterion::kPuck, x);
+        site_failures(p, s.model.bonds, angles, FailureCriterion::kPuck, test::eglass());
     const double middle =
         0.5 * (p.reference_position.col(0).minCoeff() + p.reference_position.col(0).maxCoeff());
     double column = 0, nearest = std::numeric_limits<double>::infinity();

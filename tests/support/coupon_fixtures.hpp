@@ -74,6 +74,31 @@ inline void grip_constraints(const Model& m, double d, double travel, DofConstra
   }
 }
 
+/// Grips that carry a uniform in-plane strain (eps_xx, eps_yy, gamma_xy) per unit load factor: the
+/// particles within two diameters `d` of each end held at u = eps x (u_z = 0), so that a coupon
+/// whose lattice is uniform under that strain has no grip concentration; `reaction` marks the
+/// right grip's ux. Returns how many particles are held.
+inline int affine_grips(const Model& m, double d, const Eigen::Vector3d& strain,
+                        DofConstraints& unit, DofFlags& reaction) {
+  const Particles& p = m.particles;
+  const double x_min = p.reference_position.col(0).minCoeff();
+  const double x_max = p.reference_position.col(0).maxCoeff();
+  unit = DofConstraints(p.size());
+  reaction = DofFlags::Constant(p.size(), kDofsPerParticle, false);
+  int held = 0;
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0), y = p.reference_position(i, 1);
+    const bool left = x <= x_min + 2 * d, right = x >= x_max - 2 * d;
+    if (!left && !right) continue;
+    ++held;
+    unit.fix(i, Dof::kUx, strain(0) * x + 0.5 * strain(2) * y);
+    unit.fix(i, Dof::kUy, 0.5 * strain(2) * x + strain(1) * y);
+    unit.fix(i, Dof::kUz, 0.0);
+    if (right) reaction(i, static_cast<int>(Dof::kUx)) = true;
+  }
+  return held;
+}
+
 /// The message of the plydem::Error that `f` throws, or "(no error)".
 inline std::string error_message(const std::function<void()>& f) {
   try {
