@@ -20,10 +20,19 @@ Eigen::Vector3d crack_normal(const PlyFailure& failure, double ply_angle) {
   return {-s * std::cos(phi), c * std::cos(phi), std::sin(phi)};
 }
 
-std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bonds& bonds) {
+namespace {
+
+// Each particle's sums over its intact bonds: spread = sum r r^T and moved = sum du r^T, in-plane,
+// r the reference branch vector and du the relative displacement (from either end: both change
+// sign, the products do not).
+struct SiteSums {
+  std::vector<Eigen::Matrix2d> spread, moved;
+};
+
+SiteSums site_sums(const Particles& particles, const Bonds& bonds) {
   const auto n = static_cast<std::size_t>(particles.size());
-  std::vector<Eigen::Matrix2d> spread(n, Eigen::Matrix2d::Zero());  // sum of r r^T
-  std::vector<Eigen::Matrix2d> moved(n, Eigen::Matrix2d::Zero());   // sum of du r^T
+  SiteSums sums{std::vector<Eigen::Matrix2d>(n, Eigen::Matrix2d::Zero()),
+                std::vector<Eigen::Matrix2d>(n, Eigen::Matrix2d::Zero())};
   for (int b = 0; b < bonds.size(); ++b) {
     if (bonds.is_broken(b)) continue;
     const int i = bonds.first(b), j = bonds.second(b);
@@ -33,22 +42,48 @@ std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bond
     const Eigen::Vector2d du =
         (particles.displacement.row(j).head<2>() - particles.displacement.row(i).head<2>())
             .transpose();
-    // The bond seen from either end: r and du both change sign, r r^T and du r^T do not.
     for (int end : {i, j}) {
-      spread[static_cast<std::size_t>(end)] += r * r.transpose();
-      moved[static_cast<std::size_t>(end)] += du * r.transpose();
+      sums.spread[static_cast<std::size_t>(end)] += r * r.transpose();
+      sums.moved[static_cast<std::size_t>(end)] += du * r.transpose();
     }
   }
-  std::vector<Eigen::Vector3d> strain(n);
-  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-  for (std::size_t k = 0; k < n; ++k) {
-    const Eigen::Matrix2d& a = spread[k];
-    // The bonds span the plane unless the spread is singular (relative to its own size).
-    if (!(a.determinant() > 1e-10 * a.trace() * a.trace())) {
-      strain[k] = Eigen::Vector3d::Constant(kNaN);
+  return sums;
+}
+
+// Whether a site's bonds span the plane (the spread is not singular relative to its own size).
+bool spans_plane(const Eigen::Matrix2d& spread) {
+  return spread.determinant() > 1e-10 * spread.trace() * spread.trace();
+}
+
+// The in-plane stress of a site whose bonds all lie along one line d (a strand: the particles a
+// crack left hanging by their bonds along the fibre, say): the uniaxial stress along d that its
+// stretch eps_dd = d^T G d gives, E_d eps_dd with E_d the ply's modulus along d; zero for a site
+// without bonds.
+Eigen::Vector3d strand_stress(const Eigen::Matrix2d& spread, const Eigen::Matrix2d& moved,
+                              const Eigen::Matrix3d& q_bar) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(spread);
+  const double largest = eigen.eigenvalues()(1);
+  if (!(largest > 0)) return Eigen::Vector3d::Zero();
+  const Eigen::Vector2d d = eigen.eigenvectors().col(1);
+  const double stretch = d.dot(moved * d) / largest;
+  // A uniaxial stress s along d is s v in (xx, yy, xy), v = (dx^2, dy^2, dx dy); the stretch along
+  // d is v . (Q-bar^-1 s v), so E_d = 1 / (v . Q-bar^-1 v).
+  const Eigen::Vector3d v(d.x() * d.x(), d.y() * d.y(), d.x() * d.y());
+  const double modulus = 1.0 / v.dot(q_bar.ldlt().solve(v));
+  return modulus * stretch * v;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bonds& bonds) {
+  const SiteSums sums = site_sums(particles, bonds);
+  std::vector<Eigen::Vector3d> strain(sums.spread.size());
+  for (std::size_t k = 0; k < strain.size(); ++k) {
+    if (!spans_plane(sums.spread[k])) {
+      strain[k] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
       continue;
     }
-    const Eigen::Matrix2d g = moved[k] * a.inverse();
+    const Eigen::Matrix2d g = sums.moved[k] * sums.spread[k].inverse();
     strain[k] = Eigen::Vector3d(g(0, 0), g(1, 1), g(0, 1) + g(1, 0));
   }
   return strain;
@@ -57,6 +92,7 @@ std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bond
 std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,
                                        std::span<const double> ply_angles,
                                        FailureCriterion criterion, const Material& material) {
+  const SiteSums sums = site_sums(particles, bonds);
   const std::vector<Eigen::Vector3d> strain = site_strains(particles, bonds);
   const Eigen::Matrix3d q = reduced_stiffness(material);
   std::vector<Eigen::Matrix3d> q_bar(ply_angles.size());
@@ -69,13 +105,12 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
             fmt::format("site failure: particle {} is in ply {}, and {} ply angle(s) were given", i,
                         ply, ply_angles.size()));
     const auto k = static_cast<std::size_t>(i);
-    SiteFailure& site = sites[k];
-    if (!strain[k].allFinite()) {
-      site.failure.load_factor = std::numeric_limits<double>::infinity();
-      continue;
-    }
+    const Eigen::Matrix3d& stiffness = q_bar[static_cast<std::size_t>(ply)];
+    const Eigen::Vector3d sigma = strain[k].allFinite()
+                                      ? Eigen::Vector3d(stiffness * strain[k])
+                                      : strand_stress(sums.spread[k], sums.moved[k], stiffness);
     const double angle = ply_angles[static_cast<std::size_t>(ply)];
-    const Eigen::Vector3d sigma = q_bar[static_cast<std::size_t>(ply)] * strain[k];
+    SiteFailure& site = sites[k];
     site.failure =
         ply_failure(criterion, to_ply_axes(sigma(0), sigma(1), sigma(2), angle), material.strength);
     site.crack_normal = crack_normal(site.failure, angle);

@@ -47,8 +47,10 @@ std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bond
 
 /// Every particle's site failure at the current state: its in-plane stress, Q-bar of its ply
 /// (`material` at the fibre angle ply_angles[particles.ply(i)] [rad]) times its site strain, in
-/// the axes of the ply, judged by `criterion` with the material's strengths. A site that carries
-/// no stress, or whose strain cannot be read (NaN), gets an infinite load factor. Throws
+/// the axes of the ply, judged by `criterion` with the material's strengths. A site whose bonds
+/// all lie along one line (a strand a crack left) carries the uniaxial stress of its stretch along
+/// that line (the ply's modulus in that direction times it). A site that carries no stress (no
+/// bond left) gets an infinite load factor. Throws
 /// plydem::Error naming the particle whose ply has no angle in `ply_angles`, and as
 /// failure_load_factor does for a strength the criterion needs and the material lacks.
 std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,

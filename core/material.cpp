@@ -337,9 +337,8 @@ void require_strengths(const Material& material, const std::string& purpose, boo
           "material " + in_quotes(material.name) + " asks for failure_criterion = " +
               in_quotes(failure_model_name(material.failure_criterion)) + ", but " + purpose +
               " breaks bonds one by one with the parallel-bond law: failure decided at the "
-              "material point is not in the engine yet (set failure_criterion = \"bond\" or "
-              "leave the key out; the lamina criteria are reported beside the model's strengths "
-              "by plydem strength)");
+              "material point is not in the engine yet except in plydem strength (set "
+              "failure_criterion = \"bond\" or leave the key out here)");
   const LaminaStrength& s = material.strength;
   std::string missing;
   auto need = [&](const char* key, double value) {

@@ -81,9 +81,10 @@ struct Material {
 void validate(const Material& material);
 
 /// Throws plydem::Error naming the material and every one of XT, YT, S12 it lacks, and what needs
-/// them (`purpose`, e.g. "plydem strength"); with `softening`, G_fibre and G_matrix too. Also
-/// refuses a material whose failure_criterion is not "bond": failure at the material point is not
-/// in the engine yet, and a breaking run would otherwise break bond by bond without saying so.
+/// them (`purpose`, e.g. "the cross-ply experiment"); with `softening`, G_fibre and G_matrix too.
+/// Also refuses a material whose failure_criterion is not "bond": failure at the material point
+/// runs in plydem strength only (experiments/protocols/strength.hpp require_strength_run), and a
+/// breaking run would otherwise break bond by bond without saying so.
 void require_strengths(const Material& material, const std::string& purpose,
                        bool softening = false);
 

@@ -738,7 +738,7 @@ class EventLoop {
       if (site.particle >= 0 && (b < 0 || site.load_factor < state_.factor[b])) {
         // The site's crack opens: every bond across it, in one event.
         const EventPoint point = critical_state(site.bonds.front(), site.load_factor,
-                                                static_cast<int>(site.bonds.size()));
+                                                static_cast<int>(site.bonds.size()), &site);
         for (int bond : site.bonds) fail(bond, true, point, site.mode);
         after_event(point);
         continue;
@@ -782,6 +782,7 @@ class EventLoop {
     double load_factor = std::numeric_limits<double>::infinity();
     std::vector<int> bonds;
     BondState mode = BondState::kBrokenTension;
+    PlyFailureMode failure_mode = PlyFailureMode::kMatrixTension;
   };
 
   // The site that fails first at the unit-load solution, passing over those whose crack is open
@@ -816,7 +817,12 @@ class EventLoop {
       const SiteFailure& pick = sites[static_cast<std::size_t>(chosen)];
       std::vector<int> across =
           bonds_across_crack(model_.particles, model_.bonds, chosen, pick.crack_normal);
-      if (across.empty()) {  // open already: pass it over
+      // Open on the normal's side already and failing again: its bonds bridge a crack whose other
+      // sites did not open them (a crack that zig-zags through the lattice); its plane opens on
+      // the other side too.
+      if (across.empty())
+        across = bonds_across_crack(model_.particles, model_.bonds, chosen, -pick.crack_normal);
+      if (across.empty()) {  // open on both sides: pass it over
         sites[static_cast<std::size_t>(chosen)].failure.load_factor =
             std::numeric_limits<double>::infinity();
         continue;
@@ -827,15 +833,20 @@ class EventLoop {
       const bool compression = pick.failure.mode == PlyFailureMode::kFibreCompression ||
                                pick.failure.mode == PlyFailureMode::kMatrixCompression;
       crack.mode = compression ? BondState::kBrokenShear : BondState::kBrokenTension;
+      crack.failure_mode = pick.failure.mode;
       return crack;
     }
   }
 
   // The critical state at load factor lambda at which bond b fails (with `breaking` bonds broken
   // in the event): logged in the path (and the peak), and shown to EventSettings::on_event.
-  EventPoint critical_state(int b, double lambda, int breaking) {
+  EventPoint critical_state(int b, double lambda, int breaking, const SiteCrack* site = nullptr) {
     ++events_;
     EventPoint point;
+    if (site) {
+      point.site = site->particle;
+      point.site_mode = site->failure_mode;
+    }
     point.event = events_;
     point.load_factor = lambda;
     point.reaction = lambda * state_.reaction;
@@ -1046,6 +1057,8 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
     out.i64(p.bond);
     out.i64(p.broken);
     out.f64(p.strain_energy);
+    out.i64(p.site);
+    out.i64(static_cast<int>(p.site_mode));
   }
   write_breaks(out, s.result.breaks);
   out.i64(s.result.peak);
@@ -1095,6 +1108,11 @@ EventsState read_events_state(CheckpointReader& in) {
     p.bond = static_cast<int>(in.i64());
     p.broken = static_cast<int>(in.i64());
     p.strain_energy = in.f64();
+    p.site = static_cast<int>(in.i64());
+    const std::int64_t mode = in.i64();
+    if (mode < 0 || mode > static_cast<int>(PlyFailureMode::kMatrixCompression))
+      in.corrupt("an event's site failure mode is out of range");
+    p.site_mode = static_cast<PlyFailureMode>(mode);
     s.result.path.push_back(p);
   }
   s.result.breaks = read_breaks(in);

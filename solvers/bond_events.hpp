@@ -42,7 +42,8 @@
 ///   judged). When a site's load factor is the smallest (below every bond's),
 ///   its crack opens: every intact bond across its crack plane breaks in that one event (tension
 ///   modes as kBrokenTension, compression modes as kBrokenShear), brittle for now. A site whose
-///   crack is open already (no intact bond to its normal's side) is passed over. Bonds with a
+///   crack is open on its normal's side and that fails again opens on the other side; open on
+///   both, it is passed over. Bonds with a
 ///   finite strength (interfaces) still fail by their own law in the same run; bonds given none
 ///   (+inf) fail only with their sites.
 
@@ -67,6 +68,10 @@ struct EventPoint {
   int bond = 0;              ///< the bond that fails (or softens) at this state
   int broken = 0;            ///< bonds broken after this event
   double strain_energy = 0;  ///< at the critical state [J]
+  /// Failure at the material point: the particle whose site cracked at this state (-1: a bond
+  /// failed by its own law) and the mode it failed in.
+  int site = -1;
+  PlyFailureMode site_mode = PlyFailureMode::kMatrixTension;
 };
 
 struct EventProgress {

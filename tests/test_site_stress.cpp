@@ -160,6 +160,42 @@ TEST_CASE("held only at its grips, a coupon's sites read the ply's stress, edges
   }
 }
 
+TEST_CASE("a strand's site carries the uniaxial stress of its stretch along the strand") {
+  // A 0 deg ply stretched by eps_xx: one particle left with its two axial bonds along x only (the
+  // fibre) reads no strain, but fails in fibre tension at eps_xx E1 = XT, as a fibre would.
+  const Material m = test::eglass();
+  UniformState s = uniform_state("square", 0.0, 0.1e-3, Eigen::Vector3d(1e-3, -3e-4, 0));
+  Particles& p = s.model.particles;
+  Bonds& bonds = s.model.bonds;
+  // The particle nearest the coupon's middle.
+  const Eigen::RowVector3d middle =
+      0.5 * (p.reference_position.colwise().minCoeff() + p.reference_position.colwise().maxCoeff())
+                .matrix();
+  int site = 0;
+  for (int i = 0; i < p.size(); ++i) {
+    if ((p.reference_position.row(i).matrix() - middle).norm() <
+        (p.reference_position.row(site).matrix() - middle).norm())
+      site = i;
+  }
+  int kept = 0;
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.first(b) != site && bonds.second(b) != site) continue;
+    if (std::abs(bonds.normal(b, 1)) < 1e-9) {
+      ++kept;
+      continue;
+    }
+    open_bond(bonds, b, BondState::kBrokenTension);
+  }
+  REQUIRE(kept == 2);
+  CHECK(!site_strains(p, bonds)[static_cast<std::size_t>(site)].allFinite());
+  const std::vector<double> angles{0.0};
+  const SiteFailure f = site_failures(p, bonds, angles, FailureCriterion::kMaxStress,
+                                      m)[static_cast<std::size_t>(site)];
+  CHECK(f.failure.mode == PlyFailureMode::kFibreTension);
+  // Max-stress on sigma1 = E1 eps_xx alone: the load factor XT / (E1 eps_xx).
+  CHECK(f.failure.load_factor == doctest::Approx(m.strength.XT / (m.E1 * 1e-3)).epsilon(1e-9));
+}
+
 TEST_CASE("a particle without volume reads zero, and broken bonds carry no site stress") {
   UniformState s = uniform_state("square", 0.0, 0.1e-3, Eigen::Vector3d(1e-3, 0, 0));
   CHECK(!particle_stresses(s.model.particles, s.model.bonds)[0].isZero(0.0));

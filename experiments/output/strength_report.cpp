@@ -177,6 +177,13 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   j["weibull_modulus"] = r.weibull_modulus;
   if (r.weibull_modulus > 0) j["seed"] = r.seed;
   j["stop"] = r.stop;
+  j["failure_criterion"] = failure_model_name(r.failure_criterion);
+  if (r.peak_mode.empty()) {
+    j["peak_mode"] = nullptr;
+  } else {
+    j["peak_mode"] = r.peak_mode;
+  }
+  j["cracked_sites"] = r.cracked_sites;
   j["factorizations"] = r.factorizations;
   j["solves"] = r.solves;
   j["dissipated_energy"] = r.dissipated_energy;

@@ -157,6 +157,18 @@ double StrengthSettings::effective_weibull_modulus() const {
   return weibull_modulus ? *weibull_modulus : coupon.material.strength.weibull_modulus;
 }
 
+PlyFailureModel StrengthSettings::effective_failure_criterion() const {
+  return failure_criterion ? *failure_criterion : coupon.material.failure_criterion;
+}
+
+void StrengthSettings::require_strengths_for(const std::string& purpose) const {
+  // The strength test decides failure at the material point itself (material_point_failure), so
+  // require_strengths checks the strengths only.
+  Material checked = coupon.material;
+  checked.failure_criterion = PlyFailureModel::kBond;
+  require_strengths(checked, purpose, strength_options.softening);
+}
+
 void StrengthSettings::validate() const {
   coupon.validate();
   require(std::isfinite(hole_diameter) && hole_diameter >= 0,
@@ -236,6 +248,7 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
   h.add("seed", fmt::format("{}", s.seed));
   h.add("friction", exact(s.strength_options.friction_coefficient));
   h.add("softening", s.strength_options.softening ? "true" : "false");
+  h.add("failure_criterion", failure_model_name(s.effective_failure_criterion()));
   h.add("strength_particle_diameter", exact(s.strength_options.particle_diameter));
   h.add("edge_band_diameters", exact(s.edge_band_diameters));
   h.add("hole_diameter", exact(s.hole_diameter));
@@ -622,13 +635,76 @@ EventsState restore_strength_run(const std::filesystem::path& restart,
   return resume;
 }
 
+// Failure at the material point (StrengthSettings::failure_criterion other than bond): refuses
+// what it does not do yet, naming it.
+void refuse_what_material_points_lack(const StrengthSettings& s) {
+  const PlyFailureModel model = s.effective_failure_criterion();
+  if (model == PlyFailureModel::kBond) return;
+  const std::string name = failure_model_name(model);
+  auto refuse_unless = [&](bool ok, const std::string& what) {
+    require(ok, fmt::format("failure_criterion = \"{}\" (failure at the material point) {}; use "
+                            "failure_criterion = \"bond\" for it",
+                            name, what));
+  };
+  refuse_unless(!s.strength_options.softening,
+                "has no softening yet: its cracks open brittle (leave --softening out)");
+  refuse_unless(!(s.effective_weibull_modulus() > 0),
+                fmt::format("has no strength scatter yet (the Weibull modulus is {:g}: give "
+                            "--weibull-modulus 0)",
+                            s.effective_weibull_modulus()));
+  refuse_unless(!s.interface_strength.given(),
+                "breaks no interface yet (leave the interface strengths out)");
+}
+
+// The criterion, the material and each ply's angle for the events solver; nullopt for failure
+// bond by bond.
+std::optional<MaterialPointFailure> material_point_failure(const StrengthSettings& s,
+                                                           const std::vector<Ply>& plies) {
+  const PlyFailureModel model = s.effective_failure_criterion();
+  if (model == PlyFailureModel::kBond) return std::nullopt;
+  MaterialPointFailure f;
+  switch (model) {
+    case PlyFailureModel::kHashin:
+      f.criterion = FailureCriterion::kHashin;
+      break;
+    case PlyFailureModel::kPuck:
+      f.criterion = FailureCriterion::kPuck;
+      break;
+    case PlyFailureModel::kMaxStress:
+      f.criterion = FailureCriterion::kMaxStress;
+      break;
+    case PlyFailureModel::kTsaiWu:
+      f.criterion = FailureCriterion::kTsaiWu;
+      break;
+    case PlyFailureModel::kBond:
+      break;
+  }
+  f.material = s.coupon.material;
+  for (const Ply& ply : plies) f.ply_angles.push_back(ply.angle);
+  return f;
+}
+
+// With failure at the material point the in-ply bonds open only with their sites: no strength of
+// their own.
+void open_only_with_sites(Model& model) {
+  Bonds& bonds = model.bonds;
+  const double inf = std::numeric_limits<double>::infinity();
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_interface(b)) continue;
+    bonds.tensile_strength(b) = inf;
+    bonds.cohesion(b) = inf;
+  }
+}
+
 // The events solver from the unit load to failure, each critical state into `curve`, with the
 // checkpoints and restart of s.checkpoint.
 EventsResult run_to_failure(const StrengthSettings& s,
                             const std::function<void(const EventProgress&)>& progress,
                             const StaticSettings& grip_settings, const UnitLoading& loading,
-                            Model& model, StrengthCurve& curve) {
+                            Model& model, StrengthCurve& curve,
+                            std::optional<MaterialPointFailure> material_point) {
   EventSettings events = s.events;
+  events.material_point = std::move(material_point);
   events.static_settings.pin_rigid_modes = grip_settings.pin_rigid_modes;
   events.static_settings.linear_solver = grip_settings.linear_solver;
   events.on_progress = progress;
@@ -672,6 +748,9 @@ void take_events_result(const EventsResult& run, StrengthResult& result) {
   result.factorizations = run.factorizations;
   result.solves = run.solves;
   result.dissipated_energy = run.dissipated_energy;
+  const EventPoint& at_peak = run.path[static_cast<std::size_t>(result.peak)];
+  if (at_peak.site >= 0) result.peak_mode = failure_mode_name(at_peak.site_mode);
+  for (const EventPoint& point : run.path) result.cracked_sites += point.site >= 0 ? 1 : 0;
   const std::size_t peak = static_cast<std::size_t>(result.peak) + 1;
   result.strength = result.stress[peak];
   result.strain_at_peak = result.strain[peak];
@@ -688,9 +767,10 @@ void count_broken_bonds(const Model& model, StrengthResult& result) {
     const bool interface = bonds.is_interface(b);
     const std::string label =
         interface ? fmt::format("interface {}/{}", bonds.family(b), bonds.family(b) + 1)
-                  : family_label(
-                        result.ply_strengths[static_cast<std::size_t>(p.ply(bonds.first(b)))],
-                        bonds.family(b));
+        : result.ply_strengths.empty()  // failure at the material point
+            ? fmt::format("{}", bonds.family(b) + 1)
+            : family_label(result.ply_strengths[static_cast<std::size_t>(p.ply(bonds.first(b)))],
+                           bonds.family(b));
     BrokenBonds& c = counts[{interface, label}];
     c.family = label;
     c.interface = interface;
@@ -714,7 +794,8 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   const StrengthSettings& s = settings_;
   const Material& material = s.coupon.material;
   // Fail before any work on what the run cannot do.
-  require_strengths(material, "plydem strength", s.strength_options.softening);
+  refuse_what_material_points_lack(s);
+  s.require_strengths_for("plydem strength");
   if (s.method == StrengthMethod::kExplicit) {
     throw Error(
         "the strength test has no explicit method yet: its protocol (peak, snapshots, restart) is "
@@ -737,7 +818,10 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   result.seed = s.seed;
 
   const std::vector<Ply> plies = coupon_plies(s, result);
-  result.ply_strengths = calibrate_ply_strengths(builder, s, plies);
+  std::optional<MaterialPointFailure> material_point = material_point_failure(s, plies);
+  result.failure_criterion = s.effective_failure_criterion();
+  // The bonds' strengths are calibrated for failure bond by bond only.
+  if (!material_point) result.ply_strengths = calibrate_ply_strengths(builder, s, plies);
 
   // The coupon, and the strength of every bond.
   Specimen specimen = build_strength_coupon(builder, s, result);
@@ -747,16 +831,22 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
           fmt::format("the coupon was built with {} ply calibrations for {} plies",
                       specimen.ply_calibrations.size(), plies.size()));
   // Without scatter first: the edge consistency below compares the strengths as calibrated.
-  const bool consistent_edges = s.consistent_edges && s.grips == StrengthGrips::kUniform;
+  const bool consistent_edges =
+      s.consistent_edges && s.grips == StrengthGrips::kUniform && !material_point;
   std::vector<bool> scattered_plies(s.scatter_plies.empty() ? 0 : plies.size(), false);
   for (int k : s.scatter_plies) scattered_plies[static_cast<std::size_t>(k)] = true;
-  assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
-                        consistent_edges ? 0.0 : result.weibull_modulus, s.seed, scattered_plies,
-                        s.scatter_per_crack_site);
+  if (material_point) {
+    open_only_with_sites(specimen.model);
+  } else {
+    assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
+                          consistent_edges ? 0.0 : result.weibull_modulus, s.seed, scattered_plies,
+                          s.scatter_per_crack_site);
+  }
 
   // Theory, and the calibrated bulk's own first failure under the same load.
   result.theory = classical_strengths(plies, material.strength);
-  result.model_first_failure = bulk_first_failure(plies, result.ply_strengths);
+  result.model_first_failure = material_point ? std::numeric_limits<double>::quiet_NaN()
+                                              : bulk_first_failure(plies, result.ply_strengths);
 
   const std::vector<Calibration> specimen_calibrations = specimen.ply_calibrations;
   auto model = std::make_shared<Model>(std::move(specimen.model));
@@ -769,7 +859,14 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   }
 
   StrengthCurve curve(result, loading.gauge, s.record_snapshots);
-  const EventsResult run = run_to_failure(s, progress_, grip_settings, loading, *model, curve);
+  const bool at_material_points = material_point.has_value();
+  const EventsResult run = run_to_failure(s, progress_, grip_settings, loading, *model, curve,
+                                          std::move(material_point));
+  require(!at_material_points || run.stop != "no bond loaded",
+          fmt::format("failure at the material point left the coupon carrying load with no site "
+                      "that can crack, after {} events: its peak would not be a strength (use "
+                      "failure_criterion = \"bond\", or another strategy or particle size)",
+                      run.path.size()));
   take_events_result(run, result);
   count_broken_bonds(*model, result);
   if (s.record_snapshots) curve.finish_snapshots(model);

@@ -102,7 +102,13 @@ struct StrengthSettings {
   /// through their band, as a cross-ply's 90° cracks do.
   bool scatter_per_crack_site = false;
   StrengthOptions strength_options;  ///< friction coefficient, softening
-  double grip_length = 0;            ///< [m]; 0 = two particle diameters
+  /// How the ply fails (`--failure-criterion`); unset = the material's failure_criterion. `bond`:
+  /// bond by bond with the parallel-bond law; a lamina criterion: at the material point
+  /// (EventSettings::material_point): each site's stress judged by the criterion in its ply's
+  /// axes, its crack opening every bond across it at once (brittle, without scatter, by the events
+  /// method; the interfaces keep their own strengths).
+  std::optional<PlyFailureModel> failure_criterion;
+  double grip_length = 0;  ///< [m]; 0 = two particle diameters
   /// A central circular hole of this diameter [m] (0 = none), centred in the coupon's extent:
   /// the particles inside it are removed with their bonds and the free edges, the hole's
   /// included, completed as boundary cells after the cut (experiments/protocols/plate_hole.hpp).
@@ -151,6 +157,12 @@ struct StrengthSettings {
 
   /// The Weibull modulus the run uses: weibull_modulus or the material's.
   double effective_weibull_modulus() const;
+  /// The failure criterion the run uses: failure_criterion or the material's.
+  PlyFailureModel effective_failure_criterion() const;
+  /// Throws plydem::Error naming the material and what it lacks for this run (`purpose` names
+  /// the run): XT, YT, S12, and with softening the fracture energies (require_strengths), under
+  /// whichever failure criterion the run uses.
+  void require_strengths_for(const std::string& purpose) const;
   /// Throws plydem::Error naming the first bad setting: the coupon, the hole, the layup, the
   /// interfaces (stiffness and strength; interface strengths without a laminate), a NaN or negative
   /// Weibull modulus, the gauge, the events and explicit settings.
@@ -188,6 +200,13 @@ struct StrengthResult {
   StrengthMethod method = StrengthMethod::kEvents;
   double weibull_modulus = 0;  ///< as used (0 = no scatter)
   std::uint64_t seed = 1;
+
+  /// The failure criterion the run used (StrengthSettings::effective_failure_criterion).
+  PlyFailureModel failure_criterion = PlyFailureModel::kBond;
+  /// At the material point: the mode of the site that cracked at the peak ("matrix tension",
+  /// ...); empty where a bond failed there by its own law.
+  std::string peak_mode;
+  int cracked_sites = 0;  ///< sites whose crack opened (failure at the material point)
 
   double strength = 0;              ///< peak stress [Pa]
   double strain_at_peak = 0;        ///< gauge strain at the peak

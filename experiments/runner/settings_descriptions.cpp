@@ -665,6 +665,22 @@ void add_strength_law(SettingsDescription<StrengthSettings>& d) {
       .with_python("friction")
       .validated(">= 0 (StrengthOptions::validate)")
       .with_help("friction coefficient tan(phi) of the bonds' shear strength c - sigma tan(phi)");
+  d.add(
+       "failure_criterion", SettingType::kText,
+       [](const StrengthSettings& s) -> SettingValue {
+         return std::string(failure_model_name(s.effective_failure_criterion()));
+       },
+       [](StrengthSettings& s, const SettingValue& v, const std::string&) {
+         s.failure_criterion = failure_model_named(std::get<std::string>(v));
+       })
+      .with_flag("--failure-criterion")
+      .with_key("failure_criterion")
+      .with_python("failure_criterion")
+      .with_choices(std::vector<std::string>{"bond", "hashin", "puck", "max-stress", "tsai-wu"})
+      .with_help(
+          "how the ply fails: bond (bond by bond, the parallel-bond law) or a lamina criterion "
+          "decided at the material point, each site's crack opening every bond across it "
+          "(default: the material's failure_criterion)");
   d.boolean(
        "softening", [](auto& s) -> auto& { return s.strength_options.softening; })
       .with_flag("--softening")

@@ -206,8 +206,7 @@ StrengthExperimentSettings parse_strength(const ExperimentConfig& c,
   std::vector<double> angles = c.numbers("angles_deg", {c.number("angle_deg", 0)});
   require(!angles.empty(), fmt::format("{}: angles_deg is empty", origin));
   base.validate();  // a bad setting fails before the first coupon is built
-  require_strengths(base.coupon.material, fmt::format("{} (kind strength)", origin),
-                    base.strength_options.softening);
+  base.require_strengths_for(fmt::format("{} (kind strength)", origin));
   return {c.name(), layup_text, base, angles};
 }
 
