@@ -27,6 +27,8 @@ namespace {
 // sign, the products do not).
 struct SiteSums {
   std::vector<Eigen::Matrix2d> spread, moved;
+  // Site k's in-plane strain (site_strains), NaN where its bonds do not span the plane.
+  Eigen::Vector3d strain(std::size_t k) const;
 };
 
 SiteSums site_sums(const Particles& particles, const Bonds& bonds) {
@@ -73,19 +75,19 @@ Eigen::Vector3d strand_stress(const Eigen::Matrix2d& spread, const Eigen::Matrix
   return modulus * stretch * v;
 }
 
+Eigen::Vector3d SiteSums::strain(std::size_t k) const {
+  if (!spans_plane(spread[k]))
+    return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  const Eigen::Matrix2d g = moved[k] * spread[k].inverse();
+  return {g(0, 0), g(1, 1), g(0, 1) + g(1, 0)};
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bonds& bonds) {
   const SiteSums sums = site_sums(particles, bonds);
   std::vector<Eigen::Vector3d> strain(sums.spread.size());
-  for (std::size_t k = 0; k < strain.size(); ++k) {
-    if (!spans_plane(sums.spread[k])) {
-      strain[k] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-      continue;
-    }
-    const Eigen::Matrix2d g = sums.moved[k] * sums.spread[k].inverse();
-    strain[k] = Eigen::Vector3d(g(0, 0), g(1, 1), g(0, 1) + g(1, 0));
-  }
+  for (std::size_t k = 0; k < strain.size(); ++k) strain[k] = sums.strain(k);
   return strain;
 }
 
@@ -93,12 +95,11 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
                                        std::span<const double> ply_angles,
                                        FailureCriterion criterion, const Material& material) {
   const SiteSums sums = site_sums(particles, bonds);
-  const std::vector<Eigen::Vector3d> strain = site_strains(particles, bonds);
   const Eigen::Matrix3d q = reduced_stiffness(material);
   std::vector<Eigen::Matrix3d> q_bar(ply_angles.size());
   for (std::size_t ply = 0; ply < ply_angles.size(); ++ply)
     q_bar[ply] = rotate_reduced_stiffness(q, ply_angles[ply]);
-  std::vector<SiteFailure> sites(strain.size());
+  std::vector<SiteFailure> sites(sums.spread.size());
   for (int i = 0; i < particles.size(); ++i) {
     const int ply = particles.ply(i);
     require(ply >= 0 && static_cast<std::size_t>(ply) < ply_angles.size(),
@@ -106,8 +107,9 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
                         ply, ply_angles.size()));
     const auto k = static_cast<std::size_t>(i);
     const Eigen::Matrix3d& stiffness = q_bar[static_cast<std::size_t>(ply)];
-    const Eigen::Vector3d sigma = strain[k].allFinite()
-                                      ? Eigen::Vector3d(stiffness * strain[k])
+    const Eigen::Vector3d strain = sums.strain(k);
+    const Eigen::Vector3d sigma = strain.allFinite()
+                                      ? Eigen::Vector3d(stiffness * strain)
                                       : strand_stress(sums.spread[k], sums.moved[k], stiffness);
     const double angle = ply_angles[static_cast<std::size_t>(ply)];
     SiteFailure& site = sites[k];
