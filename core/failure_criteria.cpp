@@ -320,4 +320,10 @@ double off_axis_strength(FailureCriterion criterion, const LaminaStrength& stren
   return failure_load_factor(criterion, to_ply_axes(1.0, 0.0, 0.0, ply_angle), strength);
 }
 
+double off_axis_compressive_strength(FailureCriterion criterion, const LaminaStrength& strength,
+                                     double ply_angle) {
+  require(std::isfinite(ply_angle), "off-axis strength: the ply angle is not finite");
+  return failure_load_factor(criterion, to_ply_axes(-1.0, 0.0, 0.0, ply_angle), strength);
+}
+
 }  // namespace plydem

@@ -93,5 +93,9 @@ PlyFailure ply_failure(FailureCriterion criterion, const PlyStress& stress,
 /// from the load axis) under the criterion: failure_load_factor of the unit sigma_x.
 double off_axis_strength(FailureCriterion criterion, const LaminaStrength& strength,
                          double ply_angle);
+/// The uniaxial compressive strength of the same coupon, a magnitude [Pa]: failure_load_factor of
+/// the unit sigma_x = -1.
+double off_axis_compressive_strength(FailureCriterion criterion, const LaminaStrength& strength,
+                                     double ply_angle);
 
 }  // namespace plydem

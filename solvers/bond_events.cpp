@@ -783,6 +783,7 @@ class EventLoop {
     std::vector<int> bonds;
     BondState mode = BondState::kBrokenTension;
     PlyFailureMode failure_mode = PlyFailureMode::kMatrixTension;
+    double fracture_angle = 0;  // [rad]
   };
 
   // The site that fails first at the unit-load solution, passing over those whose crack is open
@@ -834,6 +835,7 @@ class EventLoop {
                                pick.failure.mode == PlyFailureMode::kMatrixCompression;
       crack.mode = compression ? BondState::kBrokenShear : BondState::kBrokenTension;
       crack.failure_mode = pick.failure.mode;
+      crack.fracture_angle = pick.failure.fracture_angle;
       return crack;
     }
   }
@@ -846,6 +848,7 @@ class EventLoop {
     if (site) {
       point.site = site->particle;
       point.site_mode = site->failure_mode;
+      point.site_fracture_angle = site->fracture_angle;
     }
     point.event = events_;
     point.load_factor = lambda;
@@ -1059,6 +1062,7 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
     out.f64(p.strain_energy);
     out.i64(p.site);
     out.i64(static_cast<int>(p.site_mode));
+    out.f64(p.site_fracture_angle);
   }
   write_breaks(out, s.result.breaks);
   out.i64(s.result.peak);
@@ -1113,6 +1117,7 @@ EventsState read_events_state(CheckpointReader& in) {
     if (mode < 0 || mode > static_cast<int>(PlyFailureMode::kMatrixCompression))
       in.corrupt("an event's site failure mode is out of range");
     p.site_mode = static_cast<PlyFailureMode>(mode);
+    p.site_fracture_angle = in.f64();
     s.result.path.push_back(p);
   }
   s.result.breaks = read_breaks(in);

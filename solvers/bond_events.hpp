@@ -69,9 +69,11 @@ struct EventPoint {
   int broken = 0;            ///< bonds broken after this event
   double strain_energy = 0;  ///< at the critical state [J]
   /// Failure at the material point: the particle whose site cracked at this state (-1: a bond
-  /// failed by its own law) and the mode it failed in.
+  /// failed by its own law), the mode it failed in and its fracture plane's inclination from the
+  /// ply's thickness direction [rad] (PlyFailure::fracture_angle).
   int site = -1;
   PlyFailureMode site_mode = PlyFailureMode::kMatrixTension;
+  double site_fracture_angle = 0;
 };
 
 struct EventProgress {

@@ -61,9 +61,9 @@ const char* criteria_compared_name(const StrengthResult& r) {
 
 std::string format_strength_table(const StrengthResult& r, const StrengthSettings& s) {
   std::string out =
-      fmt::format("plydem strength test: strategy {}, material {}, {}, method {}, grips {}\n",
-                  r.strategy, r.material.name, specimen_text(r), strength_method_name(r.method),
-                  strength_grips_name(s.grips));
+      fmt::format("plydem strength test: strategy {}, material {}, {}, {}, method {}, grips {}\n",
+                  r.strategy, r.material.name, specimen_text(r), strength_load_name(r.load),
+                  strength_method_name(r.method), strength_grips_name(s.grips));
   out += fmt::format(
       "coupon {:g} mm x {:g} mm x {:g} mm{}, particle diameter {:g} mm; {} particles, {} bonds; "
       "{}; {}\n\n",
@@ -71,11 +71,24 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
       r.layup.empty() ? "" : " per ply", s.coupon.particle_diameter * kMmPerMetre, r.particles,
       r.bonds, s.strength_options.softening ? "linear-softening bonds" : "brittle bonds",
       scatter_text(r));
-  out += fmt::format("{:<34} {:>14}\n", "strength (peak stress)", mpa(r.strength));
+  if (r.load == StrengthLoad::kCompression)
+    out += "stresses and strains along the load: positive in compression\n";
+  out += fmt::format("{:<34} {:>14}\n",
+                     r.load == StrengthLoad::kTension ? "strength (peak stress)"
+                                                      : "compressive strength (peak stress)",
+                     mpa(r.strength));
   out += fmt::format("{:<34} {:>13.4f}%\n", "strain at peak", r.strain_at_peak * 100);
   out += fmt::format("{:<34} {:>14}\n", "first-failure stress", mpa(r.first_failure_stress));
-  out += fmt::format("{:<34} {:>14}  (calibrated bulk: no edges, no scatter)\n",
-                     "model's own first failure", mpa(r.model_first_failure));
+  if (!std::isnan(r.model_first_failure)) {  // NaN: failure at the material point
+    out += fmt::format("{:<34} {:>14}  (calibrated bulk: no edges, no scatter)\n",
+                       "model's own first failure", mpa(r.model_first_failure));
+  }
+  if (!r.peak_mode.empty()) {
+    out += fmt::format("{:<34} {:>14}  (criterion {}, {} cracked sites)\n", "mode at the peak",
+                       r.peak_mode, failure_model_name(r.failure_criterion), r.cracked_sites);
+    out += fmt::format("{:<34} {:>9.1f} deg  (from the ply's thickness direction)\n",
+                       "fracture plane at the peak", r.peak_fracture_angle / kDegree);
+  }
   if (r.edge_strengthened_bonds > 0) {
     out += fmt::format(
         "{:<34} {:>14}  (edge and grip bonds raised to fail with the bulk, by up to {:.3f}x)\n",
@@ -166,6 +179,7 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
                                {"bk_exponent", is.bk_exponent}};
   }
   j["method"] = strength_method_name(r.method);
+  j["load"] = strength_load_name(r.load);
   j["grips"] = strength_grips_name(s.grips);
   if (s.grips == StrengthGrips::kUniform) {
     j["uniform_grips"] = {
@@ -183,6 +197,7 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   } else {
     j["peak_mode"] = r.peak_mode;
   }
+  j["peak_fracture_angle_deg"] = finite_or_null(r.peak_fracture_angle / kDegree);
   j["cracked_sites"] = r.cracked_sites;
   j["factorizations"] = r.factorizations;
   j["solves"] = r.solves;

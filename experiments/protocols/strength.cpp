@@ -30,14 +30,20 @@ using Clock = Stopwatch::Clock;
 // linear between events.
 constexpr double kUnitNominalStrain = 1e-3;
 
-// The stress of the coupon's plies under the mean stress sigma_x = 1 Pa (classical lamination
-// theory, A matrix), in each ply's axes.
-std::vector<PlyStress> unit_ply_stresses(const std::vector<Ply>& plies) {
+// +1 in tension, -1 in compression: the sign of the grips' travel and of the stress along x.
+double load_sign(StrengthLoad load) {
+  return load == StrengthLoad::kCompression ? -1.0 : 1.0;
+}
+
+// The stress of the coupon's plies under the mean stress sigma_x = 1 Pa (-1 Pa in compression;
+// classical lamination theory, A matrix), in each ply's axes.
+std::vector<PlyStress> unit_ply_stresses(const std::vector<Ply>& plies,
+                                         StrengthLoad load = StrengthLoad::kTension) {
   require(!plies.empty(), "a laminate needs at least one ply");
   const Eigen::Matrix3d A = laminate_extensional_stiffness(plies);
   double h = 0;
   for (const Ply& ply : plies) h += ply.thickness;
-  const Eigen::Vector3d strain = A.ldlt().solve(Eigen::Vector3d(h, 0, 0));
+  const Eigen::Vector3d strain = A.ldlt().solve(Eigen::Vector3d(load_sign(load) * h, 0, 0));
   std::vector<PlyStress> stresses;
   for (const Ply& ply : plies) {
     const Eigen::Vector3d s =
@@ -143,6 +149,16 @@ StrengthGrips parse_strength_grips(const std::string& name) {
   throw Error(fmt::format("unknown grips '{}' (uniform, free or clamped)", name));
 }
 
+const char* strength_load_name(StrengthLoad load) {
+  return load == StrengthLoad::kTension ? "tension" : "compression";
+}
+
+StrengthLoad parse_strength_load(const std::string& name) {
+  if (name == "tension") return StrengthLoad::kTension;
+  if (name == "compression") return StrengthLoad::kCompression;
+  throw Error(fmt::format("unknown load '{}' (tension or compression)", name));
+}
+
 const char* strength_method_name(StrengthMethod method) {
   return method == StrengthMethod::kEvents ? "events" : "explicit";
 }
@@ -167,6 +183,15 @@ void StrengthSettings::require_strengths_for(const std::string& purpose) const {
   Material checked = coupon.material;
   checked.failure_criterion = PlyFailureModel::kBond;
   require_strengths(checked, purpose, strength_options.softening);
+  if (load != StrengthLoad::kCompression) return;
+  const LaminaStrength& ls = coupon.material.strength;
+  std::string missing;
+  if (!(ls.XC > 0)) missing += "XC";
+  if (!(ls.YC > 0)) missing += missing.empty() ? "YC" : " and YC";
+  require(missing.empty(),
+          fmt::format("{} in compression needs the compressive strengths XC and YC; material '{}' "
+                      "does not give {}",
+                      purpose, coupon.material.name, missing));
 }
 
 void StrengthSettings::validate() const {
@@ -217,6 +242,11 @@ void StrengthSettings::validate() const {
   require(std::isfinite(edge_band_diameters) && edge_band_diameters >= 0,
           "the gauge's edge band must be >= 0 diameters");
   strength_options.validate();
+  require(load == StrengthLoad::kTension || effective_failure_criterion() != PlyFailureModel::kBond,
+          "compression (--load compression) needs failure at the material point "
+          "(--failure-criterion puck, hashin, max-stress or tsai-wu): bonds calibrated by the "
+          "parallel-bond law have no compressive strength, so a coupon of them would not fail at "
+          "XC or YC");
   require(!events.on_progress && !events.on_event,
           "the strength test sets the events solver's callbacks itself (use "
           "StrengthTest::on_progress)");
@@ -253,6 +283,7 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
   h.add("edge_band_diameters", exact(s.edge_band_diameters));
   h.add("hole_diameter", exact(s.hole_diameter));
   h.add("grips", strength_grips_name(s.grips));
+  if (s.load != StrengthLoad::kTension) h.add("load", strength_load_name(s.load));
   h.add("linear_solver", fmt::format("{}", static_cast<int>(s.linear_solver)));
   h.add("edge_strengths", s.consistent_edges ? "bulk" : "weighted");
   const EventSettings& e = s.events;
@@ -270,10 +301,14 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
 }
 
 double first_ply_failure_stress(FailureCriterion criterion, const std::vector<Ply>& plies,
-                                const LaminaStrength& strength) {
-  if (plies.size() == 1) return off_axis_strength(criterion, strength, plies.front().angle);
+                                const LaminaStrength& strength, StrengthLoad load) {
+  if (plies.size() == 1) {
+    return load == StrengthLoad::kTension
+               ? off_axis_strength(criterion, strength, plies.front().angle)
+               : off_axis_compressive_strength(criterion, strength, plies.front().angle);
+  }
   double factor = std::numeric_limits<double>::infinity();
-  for (const PlyStress& s : unit_ply_stresses(plies))
+  for (const PlyStress& s : unit_ply_stresses(plies, load))
     factor = std::min(factor, failure_load_factor(criterion, s, strength));
   return factor;
 }
@@ -368,12 +403,13 @@ Specimen build_strength_coupon(SpecimenBuilder& builder, const StrengthSettings&
 // Each classical criterion's strength of the plies (a criterion needing a strength the material
 // does not give: the reason instead).
 std::vector<CriterionStrength> classical_strengths(const std::vector<Ply>& plies,
-                                                   const LaminaStrength& strength) {
+                                                   const LaminaStrength& strength,
+                                                   StrengthLoad load) {
   std::vector<CriterionStrength> theory;
   for (FailureCriterion criterion : all_criteria()) {
     CriterionStrength t{criterion, std::nullopt, ""};
     try {
-      t.strength = first_ply_failure_stress(criterion, plies, strength);
+      t.strength = first_ply_failure_stress(criterion, plies, strength, load);
     } catch (const Error& e) {
       t.missing = e.what();  // a strength the criterion needs is not given
     }
@@ -406,7 +442,7 @@ struct UnitLoading {
 // (into result.uniform_strain and result.uniform_spin).
 DofConstraints uniform_unit_load(const Strategy& strategy, double thickness,
                                  const std::vector<Calibration>& calibrations, const Particles& p,
-                                 StrengthResult& result) {
+                                 double travel, StrengthResult& result) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   for (const Calibration& c : calibrations) A += c.relaxed;
   Eigen::Vector3d e = A.ldlt().solve(Eigen::Vector3d(1, 0, 0));
@@ -426,8 +462,8 @@ DofConstraints uniform_unit_load(const Strategy& strategy, double thickness,
     result.uniform_spin.push_back(spin);
   }
   std::vector<double> spin = result.uniform_spin;
-  for (double& w : spin) w *= kUnitNominalStrain;
-  return uniform_grip_constraints(p, kUnitNominalStrain * e, spin);
+  for (double& w : spin) w *= travel;
+  return uniform_grip_constraints(p, travel * e, spin);
 }
 
 // Grips, gauge section, the unit loading.
@@ -440,11 +476,13 @@ UnitLoading grip_coupon(const Strategy& strategy, const StrengthSettings& s,
   l.grips = assign_grips(p, grip);
   l.gauge = gauge_section(p, l.grips, s.gauge_fraction, s.edge_band_diameters,
                           s.coupon.particle_diameter);
+  // The grips' nominal strain at load factor 1, signed.
+  const double travel = load_sign(s.load) * kUnitNominalStrain;
   if (s.grips == StrengthGrips::kUniform) {
-    l.unit = uniform_unit_load(strategy, s.coupon.thickness, calibrations, p, result);
+    l.unit = uniform_unit_load(strategy, s.coupon.thickness, calibrations, p, travel, result);
   } else {
     l.unit = grip_constraints(
-        p, 0.0, kUnitNominalStrain * l.grips.span,
+        p, 0.0, travel * l.grips.span,
         s.grips == StrengthGrips::kClamped ? GripCondition::kClamped : GripCondition::kFree);
   }
   l.reaction_dofs = DofFlags::Constant(p.size(), kDofsPerParticle, false);
@@ -493,12 +531,14 @@ void make_edges_consistent(const StrengthSettings& s, const std::vector<Ply>& pl
 // The stress-strain curve as the events solver reports its critical states, the snapshots on
 // the way and the peak's state; all of it goes into checkpoints.
 struct StrengthCurve {
-  StrengthCurve(StrengthResult& run_result, const GaugeSection& section, bool snapshots)
-      : result(run_result), gauge(section), record_snapshots(snapshots) {}
+  StrengthCurve(StrengthResult& run_result, const GaugeSection& section, bool snapshots,
+                StrengthLoad load)
+      : result(run_result), gauge(section), record_snapshots(snapshots), sign(load_sign(load)) {}
 
   StrengthResult& result;
   const GaugeSection& gauge;
   bool record_snapshots = false;
+  double sign = 1;  // stresses and strains along the load: -1 in compression
   double peak_stress = -std::numeric_limits<double>::infinity();
   std::shared_ptr<const Model> peak_state;
   long peak_event = 0;
@@ -511,8 +551,8 @@ struct StrengthCurve {
   }
 
   void on_event(const Model& state, const EventPoint& point) {
-    result.strain.push_back(fit_gauge_strain(state.particles, gauge.particles).exx);
-    result.stress.push_back(point.reaction / gauge.cross_section);
+    result.strain.push_back(sign * fit_gauge_strain(state.particles, gauge.particles).exx);
+    result.stress.push_back(sign * point.reaction / gauge.cross_section);
     result.nominal_strain.push_back(point.load_factor * kUnitNominalStrain);
     if (!record_snapshots) return;
     const long e = point.event;
@@ -749,7 +789,10 @@ void take_events_result(const EventsResult& run, StrengthResult& result) {
   result.solves = run.solves;
   result.dissipated_energy = run.dissipated_energy;
   const EventPoint& at_peak = run.path[static_cast<std::size_t>(result.peak)];
-  if (at_peak.site >= 0) result.peak_mode = failure_mode_name(at_peak.site_mode);
+  if (at_peak.site >= 0) {
+    result.peak_mode = failure_mode_name(at_peak.site_mode);
+    result.peak_fracture_angle = at_peak.site_fracture_angle;
+  }
   for (const EventPoint& point : run.path) result.cracked_sites += point.site >= 0 ? 1 : 0;
   const std::size_t peak = static_cast<std::size_t>(result.peak) + 1;
   result.strength = result.stress[peak];
@@ -814,6 +857,7 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   result.material = material;
   result.ply_angle = s.coupon.ply_angle;
   result.method = s.method;
+  result.load = s.load;
   result.weibull_modulus = s.effective_weibull_modulus();
   result.seed = s.seed;
 
@@ -844,7 +888,7 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   }
 
   // Theory, and the calibrated bulk's own first failure under the same load.
-  result.theory = classical_strengths(plies, material.strength);
+  result.theory = classical_strengths(plies, material.strength, s.load);
   result.model_first_failure = material_point ? std::numeric_limits<double>::quiet_NaN()
                                               : bulk_first_failure(plies, result.ply_strengths);
 
@@ -858,7 +902,7 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
                           grip_settings, *model, result);
   }
 
-  StrengthCurve curve(result, loading.gauge, s.record_snapshots);
+  StrengthCurve curve(result, loading.gauge, s.record_snapshots, s.load);
   const bool at_material_points = material_point.has_value();
   const EventsResult run = run_to_failure(s, progress_, grip_settings, loading, *model, curve,
                                           std::move(material_point));

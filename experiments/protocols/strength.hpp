@@ -39,6 +39,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -71,6 +72,12 @@ enum class StrengthGrips {
 const char* strength_grips_name(StrengthGrips grips);
 /// The inverse; throws plydem::Error naming anything else.
 StrengthGrips parse_strength_grips(const std::string& name);
+/// Which way the grips move: apart (tension) or together (compression).
+enum class StrengthLoad { kTension, kCompression };
+/// "tension" or "compression".
+const char* strength_load_name(StrengthLoad load);
+/// The inverse; throws plydem::Error naming anything else.
+StrengthLoad parse_strength_load(const std::string& name);
 /// "events" or "explicit".
 const char* strength_method_name(StrengthMethod method);
 /// "events" -> kEvents, "explicit" -> kExplicit; throws plydem::Error naming anything else.
@@ -89,6 +96,10 @@ struct StrengthSettings {
   InterfaceStiffness interface;          ///< between the plies of a laminate
   InterfaceStrength interface_strength;  ///< not given: the interfaces do not break
   StrengthMethod method = StrengthMethod::kEvents;
+  /// Tension (the grips move apart) or compression (`--load compression`: together; failure at
+  /// the material point only, with XC and YC given). A compression test's stresses and strains
+  /// are reported along the load, positive in compression, as compression tests report them.
+  StrengthLoad load = StrengthLoad::kTension;
   /// Weibull modulus of the bonds' strength scatter; unset = the material's
   /// (LaminaStrength::weibull_modulus), 0 = no scatter.
   std::optional<double> weibull_modulus;
@@ -161,7 +172,7 @@ struct StrengthSettings {
   PlyFailureModel effective_failure_criterion() const;
   /// Throws plydem::Error naming the material and what it lacks for this run (`purpose` names
   /// the run): XT, YT, S12, and with softening the fracture energies (require_strengths), under
-  /// whichever failure criterion the run uses.
+  /// whichever failure criterion the run uses; in compression also XC and YC.
   void require_strengths_for(const std::string& purpose) const;
   /// Throws plydem::Error naming the first bad setting: the coupon, the hole, the layup, the
   /// interfaces (stiffness and strength; interface strengths without a laminate), a NaN or negative
@@ -198,6 +209,7 @@ struct StrengthResult {
   double ply_angle = 0;       ///< [rad]
   std::vector<double> layup;  ///< ply angles as built [rad]; empty for one ply
   StrengthMethod method = StrengthMethod::kEvents;
+  StrengthLoad load = StrengthLoad::kTension;
   double weibull_modulus = 0;  ///< as used (0 = no scatter)
   std::uint64_t seed = 1;
 
@@ -206,8 +218,13 @@ struct StrengthResult {
   /// At the material point: the mode of the site that cracked at the peak ("matrix tension",
   /// ...); empty where a bond failed there by its own law.
   std::string peak_mode;
+  /// At the material point: the inclination of the peak site's fracture plane from the ply's
+  /// thickness direction [rad] (Puck's, about 50 degrees in transverse compression); NaN where a
+  /// bond failed there by its own law.
+  double peak_fracture_angle = std::numeric_limits<double>::quiet_NaN();
   int cracked_sites = 0;  ///< sites whose crack opened (failure at the material point)
 
+  /// Stresses and strains along the load (StrengthSettings::load): positive in compression.
   double strength = 0;              ///< peak stress [Pa]
   double strain_at_peak = 0;        ///< gauge strain at the peak
   double first_failure_stress = 0;  ///< stress of the first event [Pa]
@@ -287,9 +304,10 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& settings);
 
 /// The mean stress sigma_x [Pa] at which the first ply of `plies` reaches `criterion` under
 /// uniaxial membrane load along x (classical lamination theory: ply stresses Q-bar_k A^-1 N with
-/// N = (sigma_x h, 0, 0)). One ply: its off-axis strength. Throws plydem::Error like
-/// failure_load_factor.
+/// N = (sigma_x h, 0, 0)), in tension or, a magnitude, in compression. One ply: its off-axis
+/// strength. Throws plydem::Error like failure_load_factor.
 double first_ply_failure_stress(FailureCriterion criterion, const std::vector<Ply>& plies,
-                                const LaminaStrength& strength);
+                                const LaminaStrength& strength,
+                                StrengthLoad load = StrengthLoad::kTension);
 
 }  // namespace plydem

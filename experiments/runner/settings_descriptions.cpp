@@ -614,6 +614,24 @@ void add_strength_law(SettingsDescription<StrengthSettings>& d) {
           "events (quasi-static, one bond at a time: sequentially linear analysis) or explicit "
           "(damped dynamics with breaking bonds)");
   d.add(
+       "load", SettingType::kText,
+       [](const StrengthSettings& s) -> SettingValue {
+         return std::string(strength_load_name(s.load));
+       },
+       [](StrengthSettings& s, const SettingValue& v, const std::string&) {
+         s.load = parse_strength_load(std::get<std::string>(v));
+       })
+      .with_flag("--load")
+      .with_key("load")
+      .with_python("load")
+      .with_choices(std::vector<std::string>{"tension", "compression"})
+      .validated(
+          "compression needs a material-point failure criterion "
+          "(StrengthSettings::validate)")
+      .with_help(
+          "tension (the grips move apart) or compression (together; failure at the material "
+          "point, XC and YC given; stresses and strains reported positive in compression)");
+  d.add(
        "weibull_modulus", SettingType::kNumber,
        [](const StrengthSettings& s) -> SettingValue {
          if (s.weibull_modulus) return *s.weibull_modulus;
