@@ -119,7 +119,9 @@ struct StrengthSettings {
   /// axes, its crack opening every bond across it at once (brittle, without scatter, by the events
   /// method; the interfaces keep their own strengths).
   std::optional<PlyFailureModel> failure_criterion;
-  double grip_length = 0;  ///< [m]; 0 = two particle diameters
+  /// [m]; 0 = two particle diameters, at the material point (failure_criterion other than bond)
+  /// the edge strips' depth plus the longest bond (strength.cpp, default_grip_length).
+  double grip_length = 0;
   /// A central circular hole of this diameter [m] (0 = none), centred in the coupon's extent:
   /// the particles inside it are removed with their bonds and the free edges, the hole's
   /// included, completed as boundary cells after the cut (experiments/protocols/plate_hole.hpp).

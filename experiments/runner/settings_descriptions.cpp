@@ -188,7 +188,11 @@ void add_gauge(SettingsDescription<S>& d) {
       .with_quick_key("quick.grip_mm")
       .with_python("grip_length")
       .with_unit(units::millimetres())
-      .with_help("grip length at each end {unit}; 0 = two diameters");
+      .with_help(std::is_same_v<S, StrengthSettings>
+                     ? "grip length at each end {unit}; 0 = two diameters (at the material point, "
+                       "--failure-criterion other than bond: the edge strips' depth plus the "
+                       "longest bond, so that the strips' corners lie in the grips)"
+                     : "grip length at each end {unit}; 0 = two diameters");
   d.number(
        "gauge_fraction", [](auto& s) -> auto& { return s.gauge_fraction; })
       .with_flag("--gauge-fraction")
