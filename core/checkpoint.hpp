@@ -35,7 +35,8 @@ namespace plydem {
 /// The format version this build writes and reads. 2: the bonds' mixed-mode law fields
 /// (mixed_mode_exponent, fracture_energy_ratio, peak_energy_ratio); a version 1 file lacks them
 /// and is refused by its version. 3: each event's cracked site and its mode (failure at the
-/// material point). 4: the cracked site's fracture angle.
+/// material point). 4: the cracked site's fracture angle, and which
+/// of the events solver's changes since its last factorization were applied in one update.
 inline constexpr std::uint32_t kCheckpointVersion = 4;
 
 /// FNV-1a 64 of `bytes`, continuing from `hash`.

@@ -145,6 +145,9 @@ void check_inputs(const Model& model, const DofConstraints& unit, const DofFlags
 ///   u_f = u0 + Z (a + C^-1 (V^T u0 + G a)),   G = V^T Z,   u0 = K0^-1 b0.
 /// Z, G and the Cholesky factor of C grow by the columns of each change (a bordered Cholesky),
 /// so a change costs its few solves with K0's factor and O(rank^2), an equilibrium O(dofs rank).
+/// The bonds of one site's crack change together: their columns share one solve with the factor
+/// (one pass over it instead of one per bond: a 90 deg coupon of 25,600 particles to failure in
+/// 25.5 s instead of 46.7 s).
 ///
 /// Only the dofs the load reaches matter: the stiffness graph of a layer in the x-y plane falls
 /// apart into in-plane and out-of-plane dofs, and the solution is exactly zero on the part that no
@@ -192,9 +195,18 @@ class UnitLoadSolver {
   /// Bond b's stiffness lost `removed` (its BondParameters with the stiffness taken away);
   /// model.bonds holds the new stiffness already.
   void change(const Model& model, int b, const BondParameters& removed, const EventChange& record) {
+    change_together(model, {{b, removed}}, {record});
+  }
+
+  /// Several bonds' changes in one update (a site's crack): their columns share one solve with
+  /// the factor, where a change at a time solves for each bond's few columns apart (a pass over
+  /// the factor each). records[k] is bond k's, its joins_previous set for all but the first.
+  void change_together(const Model& model,
+                       const std::vector<std::pair<int, BondParameters>>& removed,
+                       const std::vector<EventChange>& records) {
     if (stale_) return;
-    history_.push_back(record);
-    change_terms(model, b, removed);
+    history_.insert(history_.end(), records.begin(), records.end());
+    change_terms(model, removed);
     if (stale_) history_.clear();  // the next solve factors the current stiffness
   }
 
@@ -250,15 +262,26 @@ class UnitLoadSolver {
     factor(model);
     allocate(s.capacity);
     capacity_at_factor_ = s.capacity;
+    // The changes again, each group of them (a site's crack) in one update, as they were made.
+    std::vector<std::pair<int, BondParameters>> group;
+    std::vector<EventChange> records;
+    auto apply_group = [&] {
+      if (!group.empty()) change_together(model, group, records);
+      group.clear();
+      records.clear();
+    };
     for (const EventChange& c : s.changes) {
+      if (!c.joins_previous) apply_group();
       BondParameters removed = bond_parameters(bonds, c.bond);
       removed.normal_stiffness = c.removed[0];
       removed.shear_stiffness = c.removed[1];
       removed.bending_stiffness = c.removed[2];
       removed.twisting_stiffness = c.removed[3];
       set(c.bond, c.after);
-      change(model, c.bond, removed, c);
+      group.emplace_back(c.bond, removed);
+      records.push_back(c);
     }
+    apply_group();
     factorizations_ = s.result.factorizations;
   }
 
@@ -274,18 +297,34 @@ class UnitLoadSolver {
     y0_ = Eigen::VectorXd::Zero(c);
   }
 
-  void change_terms(const Model& model, int b, const BondParameters& removed) {
+  void change_terms(const Model& model,
+                    const std::vector<std::pair<int, BondParameters>>& removed) {
     if (refactor_every_change_) {
       stale_ = true;
       return;
     }
-    ChangeColumns change;
-    if (!change_columns(model, b, removed, change)) return;
-    if (rank_ + change.v.cols() > max_rank_) {
+    std::vector<ChangeColumns> changes;
+    Eigen::Index columns = 0;
+    for (const auto& [b, r] : removed) {
+      ChangeColumns change;
+      if (!change_columns(model, b, r, change)) continue;
+      columns += change.v.cols();
+      changes.push_back(std::move(change));
+    }
+    if (changes.empty()) return;
+    if (rank_ + columns > max_rank_) {
       stale_ = true;
       return;
     }
-    if (!append_columns(change, solve_columns(change))) stale_ = true;
+    const Eigen::MatrixXd z = solve_columns(changes, columns);
+    Eigen::Index first = 0;
+    for (const ChangeColumns& change : changes) {
+      if (!append_columns(change, z.middleCols(first, change.v.cols()))) {
+        stale_ = true;
+        return;
+      }
+      first += change.v.cols();
+    }
   }
 
   // One change's part of V, W and the right-hand side (see the class comment), on its active dofs.
@@ -346,14 +385,21 @@ class UnitLoadSolver {
     return true;
   }
 
-  // Z = K0^-1 V for one change's columns, on the active dofs.
-  Eigen::MatrixXd solve_columns(const ChangeColumns& change) const {
-    const Eigen::Index q = change.v.cols();
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(free_count_, q);
-    for (int r = 0; r < change.na; ++r)
-      rhs.row(free_of_dof_[change.dofs[change.local[r]]]) = change.v.row(r);
+  // Z = K0^-1 V for the changes' columns (`columns` of them, change after change), on the active
+  // dofs: one solve.
+  Eigen::MatrixXd solve_columns(const std::vector<ChangeColumns>& changes,
+                                Eigen::Index columns) const {
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(free_count_, columns);
+    Eigen::Index first = 0;
+    for (const ChangeColumns& change : changes) {
+      for (int r = 0; r < change.na; ++r) {
+        rhs.row(free_of_dof_[change.dofs[change.local[r]]]).segment(first, change.v.cols()) =
+            change.v.row(r);
+      }
+      first += change.v.cols();
+    }
     system_->solve_free_in_place(rhs);
-    Eigen::MatrixXd z(active_dofs_.size(), q);
+    Eigen::MatrixXd z(active_dofs_.size(), columns);
     for (std::size_t k2 = 0; k2 < active_dofs_.size(); ++k2)
       z.row(k2) = rhs.row(free_of_active_[k2]);
     return z;
@@ -361,7 +407,7 @@ class UnitLoadSolver {
 
   // Appends one change's columns (Z = K0^-1 V) to Z, G, a, V^T u0 and the Cholesky factor of C;
   // false, leaving them as they were, where the factor would be inaccurate.
-  bool append_columns(const ChangeColumns& change, const Eigen::MatrixXd& z) {
+  bool append_columns(const ChangeColumns& change, const Eigen::Ref<const Eigen::MatrixXd>& z) {
     const int q = static_cast<int>(change.v.cols());
     const Eigen::MatrixXd& v = change.v;
     // G's new columns: V_s^T Z over every earlier change s, and this change's own block.
@@ -739,7 +785,7 @@ class EventLoop {
         // The site's crack opens: every bond across it, in one event.
         const EventPoint point = critical_state(site.bonds.front(), site.load_factor,
                                                 static_cast<int>(site.bonds.size()), &site);
-        for (int bond : site.bonds) fail(bond, true, point, site.mode);
+        open_site(site.bonds, point, site.mode);
         after_event(point);
         continue;
       }
@@ -876,6 +922,29 @@ class EventLoop {
   // Bond b breaks (all its stiffness, in `mode`) or loses a tooth, and the solver hears of the
   // change.
   void fail(int b, bool breaks, const EventPoint& point, BondState mode) {
+    BondParameters removed;
+    const EventChange change = change_bond(b, breaks, point, mode, removed);
+    solver_.change(model_, b, removed, change);
+  }
+
+  // A site's crack: every bond across it breaks in `mode`, the solver updated for all of them at
+  // once.
+  void open_site(const std::vector<int>& across, const EventPoint& point, BondState mode) {
+    std::vector<std::pair<int, BondParameters>> removed;
+    std::vector<EventChange> records;
+    for (int b : across) {
+      BondParameters r;
+      records.push_back(change_bond(b, true, point, mode, r));
+      records.back().joins_previous = records.size() > 1;
+      removed.emplace_back(b, r);
+    }
+    solver_.change_together(model_, removed, records);
+  }
+
+  // Bond b loses a tooth of stiffness or, with `breaks`, all of it (in `mode`): the model's bond
+  // changed, the stiffness taken away into `removed`, and the change's record.
+  EventChange change_bond(int b, bool breaks, const EventPoint& point, BondState mode,
+                          BondParameters& removed) {
     Bonds& bonds = model_.bonds;
     const double r = settings_.tooth_stiffness_ratio;
     const BondParameters before = bond_parameters(bonds, b);
@@ -891,7 +960,7 @@ class EventLoop {
     };
     fields(change.before);
     const double keep = breaks ? 0.0 : r;
-    BondParameters removed = before;
+    removed = before;
     removed.normal_stiffness *= 1 - keep;
     removed.shear_stiffness *= 1 - keep;
     removed.bending_stiffness *= 1 - keep;
@@ -910,7 +979,7 @@ class EventLoop {
     change.removed[1] = removed.shear_stiffness;
     change.removed[2] = removed.bending_stiffness;
     change.removed[3] = removed.twisting_stiffness;
-    solver_.change(model_, b, removed, change);
+    return change;
   }
 
   // Bond b breaks in `mode`: no stiffness left, logged at its contact point, and the pieces that
@@ -1081,6 +1150,7 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
     for (double v : c.before) out.f64(v);
     for (double v : c.after) out.f64(v);
     for (double v : c.removed) out.f64(v);
+    out.boolean(c.joins_previous);
   }
 }
 
@@ -1138,6 +1208,7 @@ EventsState read_events_state(CheckpointReader& in) {
     for (double& v : c.before) v = in.f64();
     for (double& v : c.after) v = in.f64();
     for (double& v : c.removed) v = in.f64();
+    c.joins_previous = in.boolean();
     s.changes.push_back(c);
   }
   if (s.events < 0 || s.capacity < 0 || s.result.path.size() != static_cast<std::size_t>(s.events))

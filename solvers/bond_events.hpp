@@ -159,6 +159,9 @@ struct EventChange {
   double before[6] = {0, 0, 0, 0, 0, 0};  ///< k_n, k_s, k_b, k_t, damage, state before
   double after[6] = {0, 0, 0, 0, 0, 0};   ///< and after the change
   double removed[4] = {0, 0, 0, 0};       ///< the stiffness taken away (k_n, k_s, k_b, k_t)
+  /// Applied in one update with the change before it (the bonds of one site's crack share one
+  /// solve with the factor for all their columns).
+  bool joins_previous = false;
 };
 
 /// An events run between two events (EventSettings::on_checkpoint): with the model's bonds as
