@@ -146,8 +146,8 @@ void check_inputs(const Model& model, const DofConstraints& unit, const DofFlags
 /// Z, G and the Cholesky factor of C grow by the columns of each change (a bordered Cholesky),
 /// so a change costs its few solves with K0's factor and O(rank^2), an equilibrium O(dofs rank).
 /// The bonds of one site's crack change together: their columns share one solve with the factor
-/// (one pass over it instead of one per bond: a 90 deg coupon of 25,600 particles to failure in
-/// 25.5 s instead of 46.7 s).
+/// (one pass over it instead of one per bond; bench/README.md, "Events per crack, not per bond
+/// (`bench/strength_events`)").
 ///
 /// Only the dofs the load reaches matter: the stiffness graph of a layer in the x-y plane falls
 /// apart into in-plane and out-of-plane dofs, and the solution is exactly zero on the part that no
