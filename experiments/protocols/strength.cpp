@@ -129,6 +129,14 @@ void raise_strengths(Bonds& bonds, const std::vector<double>& factors) {
   }
 }
 
+// The hole of `s` stays clear of grips `grip` [m] long.
+void require_hole_clear_of_grips(const StrengthSettings& s, double grip) {
+  require(
+      s.hole_diameter < s.coupon.length - 2.0 * grip,
+      fmt::format("a {:g} mm hole reaches into the grips ({:g} mm each) of a {:g} mm long coupon",
+                  s.hole_diameter * 1e3, grip * 1e3, s.coupon.length * 1e3));
+}
+
 }  // namespace
 
 const char* strength_grips_name(StrengthGrips grips) {
@@ -211,11 +219,9 @@ void StrengthSettings::validate() const {
         fmt::format("a {:g} mm hole is narrower than one particle ({:g} mm): the particles cannot "
                     "resolve it",
                     hole_diameter * 1e3, coupon.particle_diameter * 1e3));
-    const double grip = grip_length > 0 ? grip_length : 2.0 * coupon.particle_diameter;
-    require(
-        hole_diameter < coupon.length - 2.0 * grip,
-        fmt::format("a {:g} mm hole reaches into the grips ({:g} mm each) of a {:g} mm long coupon",
-                    hole_diameter * 1e3, grip * 1e3, coupon.length * 1e3));
+    // The shortest grips a run gives (at the material point run() checks its own again).
+    require_hole_clear_of_grips(*this,
+                                grip_length > 0 ? grip_length : 2.0 * coupon.particle_diameter);
   }
   for (double angle : layup)
     require(std::isfinite(angle), "a ply angle of the layup is not finite");
@@ -489,14 +495,8 @@ UnitLoading grip_coupon(const Strategy& strategy, const StrengthSettings& s,
   Particles& p = model.particles;
   UnitLoading l;
   const double grip = s.grip_length > 0 ? s.grip_length : default_grip_length(s, model);
-  require(!(s.hole_diameter > 0) || s.hole_diameter < s.coupon.length - 2.0 * grip,
-          fmt::format("a {:g} mm hole reaches into the grips ({:g} mm each) of a {:g} mm long "
-                      "coupon",
-                      s.hole_diameter * 1e3, grip * 1e3, s.coupon.length * 1e3));
-  require(s.coupon.length > 2.0 * grip,
-          fmt::format("the grips ({:g} mm each) leave no gauge in a {:g} mm long coupon",
-                      grip * 1e3, s.coupon.length * 1e3));
-  l.grips = assign_grips(p, grip);
+  if (s.hole_diameter > 0) require_hole_clear_of_grips(s, grip);
+  l.grips = assign_grips(p, grip);  // refuses grips that leave no free length
   l.gauge = gauge_section(p, l.grips, s.gauge_fraction, s.edge_band_diameters,
                           s.coupon.particle_diameter);
   // The grips' nominal strain at load factor 1, signed.
