@@ -22,9 +22,9 @@ Eigen::Vector3d crack_normal(const PlyFailure& failure, double ply_angle) {
 
 namespace {
 
-// Each particle's sums over its intact bonds: spread = sum r r^T and moved = sum du r^T, in-plane,
-// r the reference branch vector and du the relative displacement (from either end: both change
-// sign, the products do not).
+// Each particle's sums over its intact, undamaged bonds: spread = sum r r^T and moved = sum du r^T,
+// in-plane, r the reference branch vector and du the relative displacement (from either end: both
+// change sign, the products do not).
 struct SiteSums {
   std::vector<Eigen::Matrix2d> spread, moved;
   // Site k's in-plane strain (site_strains), NaN where its bonds do not span the plane.
@@ -36,7 +36,7 @@ SiteSums site_sums(const Particles& particles, const Bonds& bonds) {
   SiteSums sums{std::vector<Eigen::Matrix2d>(n, Eigen::Matrix2d::Zero()),
                 std::vector<Eigen::Matrix2d>(n, Eigen::Matrix2d::Zero())};
   for (int b = 0; b < bonds.size(); ++b) {
-    if (bonds.is_broken(b)) continue;
+    if (bonds.is_broken(b) || bonds.damage(b) > 0) continue;  // open, or softening in a crack
     const int i = bonds.first(b), j = bonds.second(b);
     const Eigen::Vector2d r = (particles.reference_position.row(j).head<2>() -
                                particles.reference_position.row(i).head<2>())

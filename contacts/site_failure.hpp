@@ -40,7 +40,8 @@ Eigen::Vector3d crack_normal(const PlyFailure& failure, double ply_angle);
 
 /// Every particle's in-plane strain (eps_xx, eps_yy, gamma_xy) at the current state: the symmetric
 /// part of the in-plane displacement gradient G that fits u_j - u_i = G (x_j - x_i) best (least
-/// squares, in-plane components, reference positions) over the particle's unbroken bonds. Exact
+/// squares, in-plane components, reference positions) over the particle's unbroken bonds that
+/// have no damage (a softening crack's bonds open across it: they are not the site's strain). Exact
 /// whenever the in-plane displacement is affine in x and y (whatever it does through the
 /// thickness). A particle whose intact bonds do not span the plane reads NaN.
 std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bonds& bonds);

@@ -161,6 +161,37 @@ PLYDEM_HOST_DEVICE inline double softening_ratio(double damage, double ductility
   return ductility / (1.0 + (1.0 - damage) * (ductility - 1.0));
 }
 
+/// The energy-equivalent saw-tooth (Rots, Belletti & Invernizzi, Eng. Fract. Mech. 75 (2008) 590;
+/// ../shared/DAMAGE_NOTES.md §7). A softening member whose teeth sit on a linear-softening line
+/// of ductility kappa_u' (each keeping `ratio` of the stiffness fraction s_k = ratio^k, tooth k at
+/// kappa_k = softening_ratio(1 - s_k, kappa_u'), until the next would fall below `last_stiffness`:
+/// that last one fails at kappa_u' and breaks) dissipates, under proportional loading,
+///   sum_k kappa_k^2 (s_k - s_k+1) + kappa_u'^2 s_K
+/// times its peak energy, less than the line's kappa_u' (the teeth cut the triangle's corners:
+/// 0.75 of it at ratio 0.5). This is the kappa_u' whose teeth dissipate `ductility` (kappa_u: the
+/// line's own area, G A / W_peak) exactly: the line stretched, so that the first tooth stays at the
+/// strength (kappa = 1), no tooth rises above it, and the saw-tooth dissipates what the softening
+/// law does. 1 for a brittle member (ductility <= 1).
+inline double saw_tooth_ductility(double ductility, double ratio, double last_stiffness) {
+  if (!(ductility > 1)) return 1.0;
+  auto dissipated = [&](double line) {  // the teeth's sum on a line of ductility `line`
+    double sum = 0, s = 1;
+    while (s * ratio >= last_stiffness) {
+      const double kappa = softening_ratio(1 - s, line);
+      sum += kappa * kappa * (s - s * ratio);
+      s *= ratio;
+    }
+    return sum + line * line * s;
+  };
+  double low = ductility, high = ductility;
+  while (dissipated(high) < ductility) high *= 2;
+  for (int k = 0; k < 200 && high - low > 1e-14 * high; ++k) {
+    const double mid = 0.5 * (low + high);
+    (dissipated(mid) < ductility ? low : high) = mid;
+  }
+  return 0.5 * (low + high);
+}
+
 /// kappa_u that makes a softening bond dissipate `fracture_energy` [J/m^2] over `crack_area`
 /// [m^2] when it held `peak_energy` [J] at its peak (proportional loading; see the file comment).
 /// Below 1 (the bond is too large to dissipate so little), brittle: 1.

@@ -36,8 +36,9 @@ namespace plydem {
 /// (mixed_mode_exponent, fracture_energy_ratio, peak_energy_ratio); a version 1 file lacks them
 /// and is refused by its version. 3: each event's cracked site and its mode (failure at the
 /// material point). 4: the cracked site's fracture angle, and which
-/// of the events solver's changes since its last factorization were applied in one update.
-inline constexpr std::uint32_t kCheckpointVersion = 4;
+/// of the events solver's changes since its last factorization were applied in one update. 5: the
+/// sites' softening cracks, each event's tooth and the cracks' energy and area.
+inline constexpr std::uint32_t kCheckpointVersion = 5;
 
 /// FNV-1a 64 of `bytes`, continuing from `hash`.
 std::uint64_t fnv1a64(std::string_view bytes, std::uint64_t hash = 0xcbf29ce484222325ull);

@@ -586,7 +586,8 @@ struct UnitState {
   DofArray force;              // the bonds' generalized forces on each particle (force, torque)
   std::vector<double> factor;  // critical load factor of each bond (+inf: none)
   std::vector<BondState> mode;
-  std::vector<double> ductility;  // kappa_u of each bond at this mix (softening_ductility)
+  std::vector<double> ductility;    // kappa_u of each bond at this mix (softening_ductility)
+  std::vector<double> bond_energy;  // each bond's strain energy at unit load [J]
 };
 
 // Whether a bond of `ductility` (its kappa_u at the unit solution's mix: softening_ductility)
@@ -617,6 +618,7 @@ void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reac
   s.factor.assign(m, std::numeric_limits<double>::infinity());
   s.mode.assign(m, BondState::kIntact);
   s.ductility.assign(m, 1.0);
+  s.bond_energy.assign(m, 0.0);
   for (int b = 0; b < m; ++b) {
     if (bonds.is_broken(b)) continue;
     const int i = bonds.first(b), j = bonds.second(b);
@@ -625,6 +627,7 @@ void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reac
     const Eigen::Vector3d uj = segment(u, j, 0), tj = segment(u, j, 3);
     const BondResponse r = parallel_bond_response(params, ui, ti, uj, tj);
     s.energy += r.energy;
+    s.bond_energy[b] = r.energy;
     for (int c = 0; c < 3; ++c) {
       s.force(i, c) += r.force_on_first(c);
       s.force(j, c) -= r.force_on_first(c);
@@ -749,12 +752,18 @@ class EventLoop {
     result_.peak = r.result.peak;
     result_.solves = r.result.solves;
     result_.dissipated_energy = r.result.dissipated_energy;
+    result_.crack_energy = r.result.crack_energy;
+    result_.crack_area = r.result.crack_area;
+    result_.crack_fracture_energy = r.result.crack_fracture_energy;
+    result_.brittle_sites = r.result.brittle_sites;
+    softening_ = r.softening;
     clusters_ = r.clusters;
     broken_ = r.broken;
     critical_u_ = r.critical_u;
     critical_force_ = r.critical_force;
     critical_lambda_ = r.critical_lambda;
     first_energy_ = r.first_energy;
+    first_reaction_ = r.first_reaction;
     previous_energy_ = r.previous_energy;
     peak_reaction_ = r.peak_reaction;
     pending_stop_ = r.pending_stop;
@@ -774,19 +783,25 @@ class EventLoop {
         result_.stop = pending_stop_;
         break;
       }
-      if (first_energy_ < 0) first_energy_ = state_.energy;
-      if (events_ > 0 && state_.energy <= kCollapsedEnergy * first_energy_) {
+      if (first_energy_ < 0) {
+        first_energy_ = state_.energy;
+        first_reaction_ = std::abs(state_.reaction);
+      }
+      if (events_ > 0 && (state_.energy <= kCollapsedEnergy * first_energy_ ||
+                          std::abs(state_.reaction) <= kCollapsedReaction * first_reaction_)) {
         result_.stop = "failed";
         break;
       }
       const int b = critical_bond(state_);
+      const double bond_factor = b < 0 ? kNever : state_.factor[b];
+      const Tooth tooth = critical_tooth();
       const SiteCrack site = critical_site();
-      if (site.particle >= 0 && (b < 0 || site.load_factor < state_.factor[b])) {
-        // The site's crack opens: every bond across it, in one event.
-        const EventPoint point = critical_state(site.bonds.front(), site.load_factor,
-                                                static_cast<int>(site.bonds.size()), &site);
-        open_site(site.bonds, point, site.mode);
-        after_event(point);
+      if (tooth.crack >= 0 && tooth.load_factor <= std::min(site.load_factor, bond_factor)) {
+        after_event(soften(static_cast<std::size_t>(tooth.crack), tooth.load_factor));
+        continue;
+      }
+      if (site.particle >= 0 && site.load_factor < bond_factor) {
+        after_event(crack(site));
         continue;
       }
       if (b < 0) {
@@ -796,6 +811,8 @@ class EventLoop {
       // The bond fails at the critical state: a tooth of stiffness, or all of it.
       const bool breaks = !softening(state_.ductility[b]) || last_tooth(model_.bonds, b, settings_);
       const EventPoint point = critical_state(b, state_.factor[b], breaks ? 1 : 0);
+      lose_energy(point.load_factor * point.load_factor * state_.bond_energy[b] *
+                  (breaks ? 1.0 : 1.0 - settings_.tooth_stiffness_ratio));
       fail(b, breaks, point, state_.mode[b]);
       after_event(point);
     }
@@ -821,16 +838,175 @@ class EventLoop {
     return true;
   }
 
+  static constexpr double kNever = std::numeric_limits<double>::infinity();
+
   // A site whose crack opens next (material-point failure): the particle (-1: none), its load
-  // factor, the bonds across its crack plane and how they break.
+  // factor, the bonds across its crack plane (normal `normal`) and how they break.
   struct SiteCrack {
     int particle = -1;
-    double load_factor = std::numeric_limits<double>::infinity();
+    double load_factor = kNever;
     std::vector<int> bonds;
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitX();
     BondState mode = BondState::kBrokenTension;
     PlyFailureMode failure_mode = PlyFailureMode::kMatrixTension;
     double fracture_angle = 0;  // [rad]
+    int tooth = 0;              // a softening crack's tooth (EventPoint::site_tooth)
   };
+
+  // The softening crack whose next tooth comes first: its index in softening_ (-1: none) and its
+  // load factor.
+  struct Tooth {
+    int crack = -1;
+    double load_factor = kNever;
+  };
+
+  // A softening crack's stiffness fraction (1 - damage) now and after its next tooth (0: its last,
+  // it breaks).
+  double crack_stiffness(const SofteningCrack& c) const {
+    return std::pow(settings_.tooth_stiffness_ratio, c.teeth);
+  }
+  double next_crack_stiffness(const SofteningCrack& c) const {
+    const double next = crack_stiffness(c) * settings_.tooth_stiffness_ratio;
+    return next < settings_.last_tooth_stiffness ? 0.0 : next;
+  }
+
+  // The strain energy of `bonds` (those not broken) at the unit-load solution [J].
+  double bonds_energy(const std::vector<int>& bonds) const {
+    double e = 0;
+    for (int b : bonds)
+      if (!model_.bonds.is_broken(b)) e += state_.bond_energy[static_cast<std::size_t>(b)];
+    return e;
+  }
+
+  // The next tooth of the softening cracks at the unit-load solution (ties: the lowest site, as
+  // softening_ is ordered). A crack's kappa is sqrt(W / W_peak), W its bonds' energy at intact
+  // stiffness (bond_events.hpp, "Softening sites").
+  Tooth critical_tooth() const {
+    std::vector<double> factor(softening_.size(), kNever);
+    double smallest = kNever;
+    for (std::size_t k = 0; k < softening_.size(); ++k) {
+      const SofteningCrack& c = softening_[k];
+      const double intact = bonds_energy(c.bonds) / crack_stiffness(c);
+      if (!(intact > 0)) continue;
+      const double kappa = next_crack_stiffness(c) == 0
+                               ? c.ductility
+                               : softening_ratio(1 - crack_stiffness(c), c.ductility);
+      factor[k] = kappa * std::sqrt(c.peak_energy / intact);
+      smallest = std::min(smallest, factor[k]);
+    }
+    Tooth tooth;
+    for (std::size_t k = 0; k < factor.size() && tooth.crack < 0; ++k)
+      if (factor[k] <= smallest * (1 + kTieTolerance)) tooth = {static_cast<int>(k), factor[k]};
+    return tooth;
+  }
+
+  // Site `site`'s share of its crack plane (bond_events.hpp, "Softening sites") [m^2].
+  double crack_share(const SiteCrack& site) const {
+    const Particles& p = model_.particles;
+    const Bonds& bonds = model_.bonds;
+    double energy = 0, projected = 0, reach = 0;
+    for (int b : site.bonds) {
+      const int other = bonds.first(b) == site.particle ? bonds.second(b) : bonds.first(b);
+      const double along =
+          std::abs((p.reference_position.row(other) - p.reference_position.row(site.particle))
+                       .matrix()
+                       .dot(site.normal.transpose()));
+      const double e = state_.bond_energy[static_cast<std::size_t>(b)];
+      energy += e;
+      projected += along * e;
+      reach += along;
+    }
+    const double volume = p.volume(site.particle);
+    // Unloaded bonds (no energy to weigh them by): their mean reach along the normal.
+    if (!(projected > 0)) return volume * static_cast<double>(site.bonds.size()) / reach;
+    return volume * energy / projected;
+  }
+
+  // The last event's bonds lost `energy` [J] as they changed (EventPoint::crack_energy).
+  void lose_energy(double energy) {
+    result_.path.back().crack_energy = energy;
+    result_.crack_energy += energy;
+  }
+
+  // The fracture energy of a site's crack in `mode` [J/m^2].
+  double fracture_energy(PlyFailureMode mode) const {
+    const LaminaStrength& strength = settings_.material_point->material.strength;
+    const bool fibre =
+        mode == PlyFailureMode::kFibreTension || mode == PlyFailureMode::kFibreCompression;
+    return fibre ? strength.G_fibre : strength.G_matrix;
+  }
+
+  // The crack of a site that failed: its bonds open together, brittle or (softening) by their
+  // first tooth; returns the event.
+  EventPoint crack(const SiteCrack& site) {
+    const double lambda = site.load_factor;
+    const double energy = lambda * lambda * bonds_energy(site.bonds);  // W_peak
+    const double area = crack_share(site);
+    const double g = fracture_energy(site.failure_mode);
+    const bool softening = settings_.material_point->softening;
+    const double ductility = softening ? g * area / energy : 1.0;  // the line's kappa_u
+    const int breaking = ductility > 1 ? 0 : static_cast<int>(site.bonds.size());
+    const EventPoint point = critical_state(site.bonds.front(), lambda, breaking, &site);
+    if (ductility > 1) {
+      const double kept = settings_.tooth_stiffness_ratio;
+      change_site(site.bonds, false, point, site.mode);
+      lose_energy((1 - kept) * energy);
+      SofteningCrack c;
+      c.site = site.particle;
+      c.bonds = site.bonds;
+      c.normal = site.normal;
+      c.mode = site.failure_mode;
+      c.fracture_angle = site.fracture_angle;
+      c.ductility = saw_tooth_ductility(ductility, settings_.tooth_stiffness_ratio,
+                                        settings_.last_tooth_stiffness);
+      c.peak_energy = energy;
+      c.area = area;
+      c.teeth = 1;
+      const auto at =
+          std::lower_bound(softening_.begin(), softening_.end(), c.site,
+                           [](const SofteningCrack& x, int particle) { return x.site < particle; });
+      softening_.insert(at, std::move(c));
+    } else {
+      if (softening) ++result_.brittle_sites;
+      change_site(site.bonds, true, point, site.mode);
+      lose_energy(energy);
+      result_.crack_area += area;
+      result_.crack_fracture_energy += g * area;
+    }
+    return point;
+  }
+
+  // Softening crack k's next tooth at load factor lambda: its bonds keep tooth_stiffness_ratio of
+  // their stiffness, or break on the last; returns the event.
+  EventPoint soften(std::size_t k, double lambda) {
+    SofteningCrack& c = softening_[k];
+    std::vector<int> bonds;
+    for (int b : c.bonds)
+      if (!model_.bonds.is_broken(b)) bonds.push_back(b);
+    const bool breaks = next_crack_stiffness(c) == 0;
+    SiteCrack site;
+    site.particle = c.site;
+    site.failure_mode = c.mode;
+    site.fracture_angle = c.fracture_angle;
+    site.tooth = c.teeth;
+    const int breaking = breaks ? static_cast<int>(bonds.size()) : 0;
+    const EventPoint point = critical_state(bonds.front(), lambda, breaking, &site);
+    const double energy = lambda * lambda * bonds_energy(bonds);
+    const bool compression =
+        c.mode == PlyFailureMode::kFibreCompression || c.mode == PlyFailureMode::kMatrixCompression;
+    change_site(bonds, breaks, point,
+                compression ? BondState::kBrokenShear : BondState::kBrokenTension);
+    ++c.teeth;
+    if (!breaks) {
+      lose_energy((1 - settings_.tooth_stiffness_ratio) * energy);
+      return point;
+    }
+    lose_energy(energy);
+    result_.crack_area += c.area;
+    result_.crack_fracture_energy += fracture_energy(c.mode) * c.area;
+    softening_.erase(softening_.begin() + static_cast<std::ptrdiff_t>(k));
+    return point;
+  }
 
   // The site that fails first at the unit-load solution, passing over those whose crack is open
   // already (ties: the lowest particle index, within kTieTolerance).
@@ -846,8 +1022,19 @@ class EventLoop {
     const DofFlags& held = solver_.constraints().fixed;
     for (int i = 0; i < model_.particles.size(); ++i) {
       if (held(i, static_cast<int>(Dof::kUx)) || held(i, static_cast<int>(Dof::kUy)))
-        sites[static_cast<std::size_t>(i)].failure.load_factor =
-            std::numeric_limits<double>::infinity();
+        sites[static_cast<std::size_t>(i)].failure.load_factor = kNever;
+    }
+    // A site whose crack softens is not judged again until it has opened, nor are the sites its
+    // crack's bonds reach, on the crack's other face: they read its opening through the bonds
+    // that still bridge it beside them (the diagonals of the next site along the crack), and would
+    // widen the crack into a band.
+    for (const SofteningCrack& c : softening_) {
+      sites[static_cast<std::size_t>(c.site)].failure.load_factor = kNever;
+      for (int b : c.bonds) {
+        const int other =
+            model_.bonds.first(b) == c.site ? model_.bonds.second(b) : model_.bonds.first(b);
+        sites[static_cast<std::size_t>(other)].failure.load_factor = kNever;
+      }
     }
     while (true) {
       const int first = first_failing_site(sites);
@@ -862,13 +1049,22 @@ class EventLoop {
           break;
         }
       const SiteFailure& pick = sites[static_cast<std::size_t>(chosen)];
-      std::vector<int> across =
-          bonds_across_crack(model_.particles, model_.bonds, chosen, pick.crack_normal);
+      Eigen::Vector3d normal = pick.crack_normal;
+      std::vector<int> across = bonds_across_crack(model_.particles, model_.bonds, chosen, normal);
       // Open on the normal's side already and failing again: its bonds bridge a crack whose other
       // sites did not open them (a crack that zig-zags through the lattice); its plane opens on
       // the other side too.
-      if (across.empty())
-        across = bonds_across_crack(model_.particles, model_.bonds, chosen, -pick.crack_normal);
+      if (across.empty()) {
+        normal = -normal;
+        across = bonds_across_crack(model_.particles, model_.bonds, chosen, normal);
+      }
+      // Bonds softening in another site's crack stay that crack's.
+      const auto softening_elsewhere = [&](int b) { return model_.bonds.damage(b) > 0; };
+      if (!across.empty() && std::all_of(across.begin(), across.end(), softening_elsewhere)) {
+        sites[static_cast<std::size_t>(chosen)].failure.load_factor = kNever;
+        continue;
+      }
+      std::erase_if(across, softening_elsewhere);
       if (across.empty()) {  // open on both sides: pass it over
         sites[static_cast<std::size_t>(chosen)].failure.load_factor =
             std::numeric_limits<double>::infinity();
@@ -877,6 +1073,7 @@ class EventLoop {
       crack.particle = chosen;
       crack.load_factor = pick.failure.load_factor;
       crack.bonds = std::move(across);
+      crack.normal = normal;
       const bool compression = pick.failure.mode == PlyFailureMode::kFibreCompression ||
                                pick.failure.mode == PlyFailureMode::kMatrixCompression;
       crack.mode = compression ? BondState::kBrokenShear : BondState::kBrokenTension;
@@ -895,6 +1092,7 @@ class EventLoop {
       point.site = site->particle;
       point.site_mode = site->failure_mode;
       point.site_fracture_angle = site->fracture_angle;
+      point.site_tooth = site->tooth;
     }
     point.event = events_;
     point.load_factor = lambda;
@@ -927,14 +1125,15 @@ class EventLoop {
     solver_.change(model_, b, removed, change);
   }
 
-  // A site's crack: every bond across it breaks in `mode`, the solver updated for all of them at
-  // once.
-  void open_site(const std::vector<int>& across, const EventPoint& point, BondState mode) {
+  // A site's crack: every bond across it breaks in `mode` (or, unless `breaks`, loses a tooth),
+  // the solver updated for all of them at once.
+  void change_site(const std::vector<int>& across, bool breaks, const EventPoint& point,
+                   BondState mode) {
     std::vector<std::pair<int, BondParameters>> removed;
     std::vector<EventChange> records;
     for (int b : across) {
       BondParameters r;
-      records.push_back(change_bond(b, true, point, mode, r));
+      records.push_back(change_bond(b, breaks, point, mode, r));
       records.back().joins_previous = records.size() > 1;
       removed.emplace_back(b, r);
     }
@@ -1029,6 +1228,7 @@ class EventLoop {
     s.critical_force = critical_force_;
     s.critical_lambda = critical_lambda_;
     s.first_energy = first_energy_;
+    s.first_reaction = first_reaction_;
     s.previous_energy = previous_energy_;
     s.peak_reaction = peak_reaction_;
     s.pending_stop = pending_stop_;
@@ -1037,6 +1237,11 @@ class EventLoop {
     s.result.peak = result_.peak;
     s.result.solves = result_.solves;
     s.result.dissipated_energy = result_.dissipated_energy;
+    s.result.crack_energy = result_.crack_energy;
+    s.result.crack_area = result_.crack_area;
+    s.result.crack_fracture_energy = result_.crack_fracture_energy;
+    s.result.brittle_sites = result_.brittle_sites;
+    s.softening = softening_;
     solver_.save(s);
     return s;
   }
@@ -1070,8 +1275,10 @@ class EventLoop {
   Eigen::VectorXd critical_u_;
   DofArray critical_force_;
   double critical_lambda_ = 1, first_energy_ = -1, previous_energy_ = 0, peak_reaction_ = 0;
-  std::string pending_stop_;  // ends the run at the next solve
+  double first_reaction_ = 0;  // |reaction| of the first unit-load solution
+  std::string pending_stop_;   // ends the run at the next solve
   double last_progress_ = 0;
+  std::vector<SofteningCrack> softening_;  // the sites' cracks still softening, by site
 };
 
 }  // namespace
@@ -1118,6 +1325,7 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
   out.doubles({s.critical_force.data(), static_cast<std::size_t>(s.critical_force.size())});
   out.f64(s.critical_lambda);
   out.f64(s.first_energy);
+  out.f64(s.first_reaction);
   out.f64(s.previous_energy);
   out.f64(s.peak_reaction);
   out.str(s.pending_stop);
@@ -1132,12 +1340,18 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
     out.i64(p.site);
     out.i64(static_cast<int>(p.site_mode));
     out.f64(p.site_fracture_angle);
+    out.i64(p.site_tooth);
+    out.f64(p.crack_energy);
   }
   write_breaks(out, s.result.breaks);
   out.i64(s.result.peak);
   out.i64(s.result.solves);
   out.i64(s.result.factorizations);
   out.f64(s.result.dissipated_energy);
+  out.f64(s.result.crack_energy);
+  out.f64(s.result.crack_area);
+  out.f64(s.result.crack_fracture_energy);
+  out.i64(s.result.brittle_sites);
   write_constraints(out, s.constraints);
   out.boolean(s.stale);
   if (!s.stale) write_constraints(out, s.factored_from);
@@ -1151,6 +1365,15 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
     for (double v : c.after) out.f64(v);
     for (double v : c.removed) out.f64(v);
     out.boolean(c.joins_previous);
+  }
+  out.u64(s.softening.size());
+  for (const SofteningCrack& c : s.softening) {
+    out.i64(c.site);
+    out.ints(c.bonds);
+    out.doubles({c.normal.data(), 3});
+    out.i64(static_cast<int>(c.mode));
+    for (double v : {c.fracture_angle, c.ductility, c.peak_energy, c.area}) out.f64(v);
+    out.i64(c.teeth);
   }
 }
 
@@ -1170,6 +1393,7 @@ EventsState read_events_state(CheckpointReader& in) {
   std::copy(force.begin(), force.end(), s.critical_force.data());
   s.critical_lambda = in.f64();
   s.first_energy = in.f64();
+  s.first_reaction = in.f64();
   s.previous_energy = in.f64();
   s.peak_reaction = in.f64();
   s.pending_stop = in.str();
@@ -1188,6 +1412,8 @@ EventsState read_events_state(CheckpointReader& in) {
       in.corrupt("an event's site failure mode is out of range");
     p.site_mode = static_cast<PlyFailureMode>(mode);
     p.site_fracture_angle = in.f64();
+    p.site_tooth = static_cast<int>(in.i64());
+    p.crack_energy = in.f64();
     s.result.path.push_back(p);
   }
   s.result.breaks = read_breaks(in);
@@ -1195,6 +1421,10 @@ EventsState read_events_state(CheckpointReader& in) {
   s.result.solves = in.i64();
   s.result.factorizations = static_cast<int>(in.i64());
   s.result.dissipated_energy = in.f64();
+  s.result.crack_energy = in.f64();
+  s.result.crack_area = in.f64();
+  s.result.crack_fracture_energy = in.f64();
+  s.result.brittle_sites = static_cast<int>(in.i64());
   s.constraints = read_constraints(in);
   s.stale = in.boolean();
   if (!s.stale) s.factored_from = read_constraints(in);
@@ -1210,6 +1440,25 @@ EventsState read_events_state(CheckpointReader& in) {
     for (double& v : c.removed) v = in.f64();
     c.joins_previous = in.boolean();
     s.changes.push_back(c);
+  }
+  const std::uint64_t softening = in.u64();
+  for (std::uint64_t k = 0; k < softening; ++k) {
+    SofteningCrack c;
+    c.site = static_cast<int>(in.i64());
+    c.bonds = in.ints();
+    const std::vector<double> normal = in.doubles();
+    if (normal.size() != 3) in.corrupt("a softening crack's normal is not a 3-vector");
+    c.normal = Eigen::Vector3d(normal[0], normal[1], normal[2]);
+    const std::int64_t mode = in.i64();
+    if (mode < 0 || mode > static_cast<int>(PlyFailureMode::kMatrixCompression))
+      in.corrupt("a softening crack's failure mode is out of range");
+    c.mode = static_cast<PlyFailureMode>(mode);
+    c.fracture_angle = in.f64();
+    c.ductility = in.f64();
+    c.peak_energy = in.f64();
+    c.area = in.f64();
+    c.teeth = static_cast<int>(in.i64());
+    s.softening.push_back(std::move(c));
   }
   if (s.events < 0 || s.capacity < 0 || s.result.path.size() != static_cast<std::size_t>(s.events))
     in.corrupt(

@@ -28,7 +28,8 @@
 ///   other clusters are pinned at zero (rigid_mode_pins on the intact bonds), all of which carries
 ///   no force. The free set changes, so the stiffness is factored afresh.
 /// - Failure. The run stops as "failed" when the strain energy at unit load has fallen to
-///   kCollapsedEnergy of its first value (the grips are no longer connected), when after the peak
+///   kCollapsedEnergy of its first value or the reaction at unit load to kCollapsedReaction of its
+///   first (the grips are no longer connected), when after the peak
 ///   the reaction falls below stop_fraction of the peak, or when a factorization finds a mechanism
 ///   (EventsResult::message says where).
 /// - Breaks are logged with the bond's contact point in the reference configuration.
@@ -41,11 +42,29 @@
 ///   criterion in its ply's axes (a particle whose translation is prescribed, in a grip, is not
 ///   judged). When a site's load factor is the smallest (below every bond's),
 ///   its crack opens: every intact bond across its crack plane breaks in that one event (tension
-///   modes as kBrokenTension, compression modes as kBrokenShear), brittle for now. A site whose
+///   modes as kBrokenTension, compression modes as kBrokenShear). A site whose
 ///   crack is open on its normal's side and that fails again opens on the other side; open on
 ///   both, it is passed over. Bonds with a
 ///   finite strength (interfaces) still fail by their own law in the same run; bonds given none
 ///   (+inf) fail only with their sites.
+/// - Softening sites (MaterialPointFailure::softening): the bonds across a site's crack lose their
+///   stiffness together, tooth by tooth (tooth_stiffness_ratio, last_tooth_stiffness), as a
+///   softening bond's do, with kappa = sqrt(W / W_peak), W the crack's bonds' strain energy at
+///   their intact stiffness and W_peak its value when the site failed. A linear softening of
+///   kappa_u = G A / W_peak would dissipate G (G_fibre in a fibre mode, G_matrix in a matrix mode)
+///   over the crack's area A; the teeth sit on that line stretched so that they dissipate exactly
+///   as much (core/bond_failure_law.hpp saw_tooth_ductility: Rots' energy-equivalent saw-tooth),
+///   the first at the strength and none above it. A site's area
+///   is its share of a crack plane through a lattice of such sites: V sum(e_b) / sum(|l_b . n| e_b)
+///   over its crack's bonds (V the particle's volume, l_b the branch vector from the site, n the
+///   normal, e_b the bond's energy), which is V / a for a lattice of spacing a along the normal. A
+///   site whose kappa_u would be at most 1 (larger than 2 E G / sigma^2 across the crack: it
+///   cannot soften without snap-back) opens brittle, and EventsResult::brittle_sites counts it.
+///   While its crack softens a site is not judged again; the sites beside it read their strain
+///   without the softening bonds (contacts/site_failure.hpp).
+/// - Damage energy. EventsResult::crack_energy sums, over the events, the strain energy that the
+///   bonds changed in each event lose at its critical state (at fixed displacements): the energy
+///   their damage dissipates, whatever the rest of the coupon releases as it re-equilibrates.
 
 #include <functional>
 #include <optional>
@@ -74,6 +93,12 @@ struct EventPoint {
   int site = -1;
   PlyFailureMode site_mode = PlyFailureMode::kMatrixTension;
   double site_fracture_angle = 0;
+  /// A softening site's tooth: 0 when its crack opens (or opens brittle), k for its k-th tooth
+  /// after that.
+  int site_tooth = 0;
+  /// The strain energy the event's bonds lost as they changed at this state (what their damage
+  /// dissipated: EventsResult::crack_energy sums these) [J]; set after EventSettings::on_event.
+  double crack_energy = 0;
 };
 
 struct EventProgress {
@@ -93,6 +118,22 @@ struct MaterialPointFailure {
   FailureCriterion criterion = FailureCriterion::kPuck;
   Material material;
   std::vector<double> ply_angles;
+  /// The sites' cracks soften to dissipate the material's G_fibre or G_matrix per unit area (see
+  /// the file comment); false: they open brittle.
+  bool softening = false;
+};
+
+/// A site's crack while its bonds soften together (see the file comment).
+struct SofteningCrack {
+  int site = -1;
+  std::vector<int> bonds;  ///< across its plane, in increasing index
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitX();
+  PlyFailureMode mode = PlyFailureMode::kMatrixTension;
+  double fracture_angle = 0;  ///< [rad]
+  double ductility = 1;       ///< kappa_u' of its teeth's line (saw_tooth_ductility)
+  double peak_energy = 0;     ///< W_peak: its bonds' strain energy when the site failed [J]
+  double area = 0;            ///< its share of the crack plane [m^2]
+  int teeth = 0;              ///< teeth taken
 };
 
 struct EventSettings {
@@ -140,6 +181,11 @@ inline constexpr double kTieTolerance = 1e-9;
 /// The strain energy at unit load, relative to its first value, below which the grips are taken
 /// as disconnected (the specimen has failed).
 inline constexpr double kCollapsedEnergy = 1e-12;
+/// The |reaction| at unit load, relative to its first value, below which the grips are taken to be
+/// disconnected too: grips that strain the particles they hold (uniform grips) keep a
+/// self-equilibrated strain energy in the pieces after the coupon has come apart, but transmit
+/// nothing.
+inline constexpr double kCollapsedReaction = 1e-9;
 
 struct EventsResult {
   std::vector<EventPoint> path;   ///< the critical states, in order
@@ -150,6 +196,16 @@ struct EventsResult {
   int factorizations = 0;         ///< of the stiffness (the first one included)
   long solves = 0;                ///< equilibrium solutions at unit load
   double dissipated_energy = 0;   ///< energy released by broken and softened bonds [J]
+  /// The energy the changed bonds' damage dissipated (see the file comment, "Damage energy") [J].
+  double crack_energy = 0;
+  /// Failure at the material point: the area of the sites' cracks that are open (brittle, or
+  /// softened to the end), each site's share of its plane (see the file comment) [m^2], and
+  /// G_fibre or G_matrix (by the site's mode) times each one's share: what they should dissipate
+  /// [J].
+  double crack_area = 0;
+  double crack_fracture_energy = 0;
+  /// Sites that opened brittle although softening was asked (too large to soften).
+  int brittle_sites = 0;
   double wall_seconds = 0;
 };
 
@@ -176,6 +232,7 @@ struct EventsState {
   Eigen::VectorXd critical_u;
   DofArray critical_force;
   double critical_lambda = 1, first_energy = -1, previous_energy = 0, peak_reaction = 0;
+  double first_reaction = 0;
   std::string pending_stop;
   /// The path, breaks, peak, solves, factorizations and dissipated energy so far.
   EventsResult result;
@@ -186,7 +243,8 @@ struct EventsState {
   bool active_stale = true;      ///< and finds the active dofs again
   std::vector<int> active_dofs;
   long capacity = 0;  ///< columns of the update's arrays after the last factorization
-  std::vector<EventChange> changes;  ///< since the last factorization (none when stale)
+  std::vector<EventChange> changes;       ///< since the last factorization (none when stale)
+  std::vector<SofteningCrack> softening;  ///< the sites' cracks still softening
 };
 
 void write_events_state(CheckpointWriter& out, const EventsState& state);

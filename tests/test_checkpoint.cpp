@@ -324,7 +324,7 @@ bool same_path(const std::vector<EventPoint>& a, const std::vector<EventPoint>& 
   for (std::size_t k = 0; k < a.size(); ++k)
     if (a[k].event != b[k].event || a[k].load_factor != b[k].load_factor ||
         a[k].reaction != b[k].reaction || a[k].bond != b[k].bond || a[k].broken != b[k].broken ||
-        a[k].strain_energy != b[k].strain_energy)
+        a[k].strain_energy != b[k].strain_energy || a[k].site_tooth != b[k].site_tooth)
       return false;
   return true;
 }
@@ -333,10 +333,11 @@ bool same_path(const std::vector<EventPoint>& a, const std::vector<EventPoint>& 
 
 TEST_CASE("an events run resumed from its checkpoints gives the same events to the bit") {
   // Brittle bonds, softening bonds, and sites that crack at the material point (each crack's
-  // bonds in one update of the factor).
-  for (const double ductility : {1.0, 3.0, 0.0}) {
+  // bonds in one update of the factor), brittle (ductility 0) and softening (-1: the cracks'
+  // teeth and their state in the checkpoint).
+  for (const double ductility : {1.0, 3.0, 0.0, -1.0}) {
     CAPTURE(ductility);
-    const Model built = events_coupon(ductility);
+    const Model built = events_coupon(std::max(ductility, 0.0));
     DofConstraints unit;
     DofFlags reaction;
     grip_constraints(built, 0.1e-3, 1e-6, unit, reaction);
@@ -344,10 +345,13 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
     settings.static_settings.pin_rigid_modes = true;
     settings.max_events = ductility > 1 ? 300 : 2000;
     settings.max_update_rank = 24;  // several refactorizations along the way
-    if (ductility == 0) {
+    if (ductility <= 0) {
       MaterialPointFailure sites;
       sites.criterion = FailureCriterion::kPuck;
       sites.material = load_material("eglass-my750");
+      sites.material.strength.G_fibre = 40e3;
+      sites.material.strength.G_matrix = 300;
+      sites.softening = ductility < 0;
       sites.ply_angles = {std::numbers::pi / 2};
       settings.material_point = sites;
     }
@@ -369,7 +373,8 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
     const EventsResult whole = run_events(whole_model, unit, reaction, settings);
     REQUIRE(whole.path.size() > (ductility > 0 ? 15u : 4u));
     CHECK(whole.factorizations > (ductility > 0 ? 2 : 1));
-    if (ductility == 0) CHECK(whole.path.front().site >= 0);
+    if (ductility <= 0) CHECK(whole.path.front().site >= 0);
+    if (ductility < 0) CHECK(whole.path.back().site_tooth > 0);
     // Resume from a spread of events (all of a short run): right before factorizations (stale),
     // in the middle of update sequences, near the end.
     settings.on_checkpoint = nullptr;
@@ -407,6 +412,8 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
       CHECK(r.solves == whole.solves);
       CHECK(r.factorizations == whole.factorizations);
       CHECK(r.dissipated_energy == whole.dissipated_energy);
+      CHECK(r.crack_energy == whole.crack_energy);
+      CHECK(r.crack_area == whole.crack_area);
       CHECK(same_fields(model.bonds, whole_model.bonds));
       CHECK(same_fields(model.particles, whole_model.particles));
       ++resumed;

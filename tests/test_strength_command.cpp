@@ -451,8 +451,151 @@ TEST_CASE("strength test at the material point off axis: the grips hold the edge
   check_grips_hold_corners(0.1e-3);
 }
 
+namespace {
+
+// A ply with fracture energies (the built-in ones give none): G_fibre 40 kJ/m^2, G_matrix
+// 300 J/m^2, of the order of glass and carbon epoxies' (Pinho et al. 2006).
+Material with_fracture_energies(Material m) {
+  m.strength.G_fibre = 40e3;
+  m.strength.G_matrix = 300;
+  return m;
+}
+
+// `plydem strength --failure-criterion puck --softening`: each site's crack softens so that it
+// dissipates G over its share of the crack plane. The reference is G times the area of the crack
+// measured on the coupon, independent of the sites' shares: the 0 and 90 deg coupons fail in one
+// straight crack across the width w, of area w t; the energy the cracks dissipated is summed over
+// the events by the events solver. Measured (square, 3 x 1 mm): 1.0000 of G w t for E-glass and
+// T300 at 0 and 90 deg, 0.1 and 0.05 mm particles.
+void check_crack_energy(const Material& material, double angle_deg, double diameter) {
+  CAPTURE(material.name);
+  CAPTURE(angle_deg);
+  CAPTURE(diameter);
+  StrengthSettings s = small_coupon(angle_deg);
+  s.coupon.material = with_fracture_energies(material);
+  s.coupon.length = 3e-3;
+  s.coupon.width = 1e-3;
+  s.coupon.particle_diameter = diameter;
+  s.failure_criterion = PlyFailureModel::kPuck;
+  s.strength_options.softening = true;
+  s.events.stop_fraction = 0;  // to the end: the crack open across the whole width
+  const StrengthResult r = StrengthTest(s).run();
+  const nlohmann::json j = strength_json(r, s);
+  const bool fibre = angle_deg == 0;
+  const double area = s.coupon.width * s.coupon.thickness;
+  const LaminaStrength& st = s.coupon.material.strength;
+  const double g = fibre ? st.G_fibre : st.G_matrix;
+  MESSAGE(material.name << " " << angle_deg << " deg, " << (diameter * 1e3)
+                        << " mm: dissipated / (G w t) " << r.crack_energy / (g * area)
+                        << ", crack area / (w t) " << r.crack_area / area << ", peak "
+                        << (r.strength / 1e6) << " MPa, " << r.events << " events, "
+                        << r.cracked_sites << " sites");
+  CHECK(std::abs(r.crack_energy / (g * area) - 1) < 0.02);
+  CHECK(std::abs(r.crack_area / area - 1) < 0.02);
+  CHECK(r.crack_fracture_energy == doctest::Approx(g * r.crack_area).epsilon(1e-12));
+  // One crack, a site per row; the peak at the strength, as brittle (the first tooth's).
+  CHECK(r.cracked_sites == static_cast<int>(std::lround(s.coupon.width / diameter)));
+  CHECK(std::abs(r.strength / (fibre ? st.XT : st.YT) - 1) < 0.02);
+  CHECK(r.brittle_sites == 0);
+  CHECK(j["crack_dissipated_energy"].get<double>() == r.crack_energy);
+  CHECK(j["crack_area"].get<double>() == r.crack_area);
+  CHECK(j["brittle_sites"] == 0);
+}
+
+}  // namespace
+
+namespace {
+
+// The values of the VTU DataArray `name` in `text` (ASCII, as plydem writes it).
+std::vector<double> vtu_array(const std::string& text, const std::string& name) {
+  const std::size_t at = text.find("Name=\"" + name + "\"");
+  if (at == std::string::npos) return {};
+  const std::size_t begin = text.find('>', at) + 1, end = text.find("</DataArray>", begin);
+  std::istringstream in(text.substr(begin, end - begin));
+  std::vector<double> values;
+  for (double v; in >> v;) values.push_back(v);
+  return values;
+}
+
+}  // namespace
+
+TEST_CASE("strength test at the material point: the VTU series shows each site's crack") {
+  StrengthSettings s = small_coupon(90);
+  s.coupon.material = with_fracture_energies(eglass());
+  s.coupon.length = 3e-3;
+  s.coupon.width = 1e-3;
+  s.coupon.particle_diameter = 0.1e-3;
+  s.failure_criterion = PlyFailureModel::kPuck;
+  s.strength_options.softening = true;
+  s.events.stop_fraction = 0;
+  const StrengthResult r = StrengthTest(s).run();
+  const fs::path out = fresh_directory("strength_site_vtu");
+  write_strength_vtu(r, out, "s");
+  const std::string text = read(out / "vtu" / "s_0_particles.vtu");
+  const std::vector<double> mode = vtu_array(text, "crack_mode");
+  const std::vector<double> energy = vtu_array(text, "crack_energy");
+  const std::vector<double> normal = vtu_array(text, "crack_normal");
+  const std::vector<double> teeth = vtu_array(text, "crack_teeth");
+  REQUIRE(mode.size() == static_cast<std::size_t>(r.particles));
+  REQUIRE(energy.size() == mode.size());
+  REQUIRE(teeth.size() == mode.size());
+  REQUIRE(normal.size() == 3 * mode.size());
+  double total = 0;
+  int cracked = 0;
+  for (std::size_t i = 0; i < mode.size(); ++i) {
+    total += energy[i];
+    if (mode[i] < 0) continue;
+    ++cracked;
+    CHECK(mode[i] == static_cast<double>(PlyFailureMode::kMatrixTension));
+    // A 90 deg ply's matrix crack runs along the fibre, y: its normal is x (either sense).
+    CHECK(std::abs(normal[3 * i]) == doctest::Approx(1.0).epsilon(1e-12));
+    CHECK(teeth[i] > 1);
+  }
+  CHECK(cracked == r.cracked_sites);
+  CHECK(total == doctest::Approx(r.crack_energy).epsilon(1e-9));
+}
+
+TEST_CASE("strength test at the material point: softening cracks dissipate G over their area") {
+  for (double angle : {90.0, 0.0}) {
+    check_crack_energy(eglass(), angle, 0.1e-3);
+    check_crack_energy(carbon_ply(), angle, 0.1e-3);
+  }
+  // Brittle, the same crack dissipates what its bonds held at the peak: far less than G w t here
+  // (the characteristic length E2 G / YT^2 is 3 mm, the sites 0.1 mm).
+  StrengthSettings s = small_coupon(90);
+  s.coupon.material = with_fracture_energies(eglass());
+  s.coupon.length = 3e-3;
+  s.coupon.width = 1e-3;
+  s.coupon.particle_diameter = 0.1e-3;
+  s.failure_criterion = PlyFailureModel::kPuck;
+  const StrengthResult brittle = StrengthTest(s).run();
+  CHECK(brittle.crack_energy < 0.1 * brittle.crack_fracture_energy);
+  CHECK(brittle.brittle_sites == 0);  // counted only where softening was asked
+}
+
+TEST_CASE("strength test at the material point: softening sites too large to soften open brittle") {
+  // A fracture energy so small that the sites' characteristic length E2 G / YT^2 (0.003 mm) is
+  // far below the particles' 0.1 mm: they cannot soften without snap-back, open brittle, and the
+  // report says so.
+  StrengthSettings s = small_coupon(90);
+  s.coupon.material = with_fracture_energies(eglass());
+  s.coupon.material.strength.G_matrix = 0.3;
+  s.coupon.particle_diameter = 0.1e-3;
+  s.failure_criterion = PlyFailureModel::kPuck;
+  s.strength_options.softening = true;
+  const StrengthResult r = StrengthTest(s).run();
+  CHECK(r.brittle_sites == r.cracked_sites);
+  CHECK(r.brittle_sites > 0);
+  const std::string table = format_strength_table(r, s);
+  CHECK(table.find("sites that opened brittle") != std::string::npos);
+  CHECK(table.find("too large to soften without snap-back") != std::string::npos);
+}
+
 TEST_CASE("finer particles: at the material point, YT, XC, YC and off axis at 0.05 mm") {
   check_peak_at_yt(0.05e-3);
+  check_crack_energy(eglass(), 90, 0.05e-3);
+  check_crack_energy(eglass(), 0, 0.05e-3);
+  check_crack_energy(carbon_ply(), 90, 0.05e-3);
   // E-glass's 0 deg coupon at 0.1 mm only: at 0.05 mm its splits after the peak take 5 s.
   check_compression_peaks(
       {{eglass(), 90, 0.05e-3}, {carbon_ply(), 0, 0.05e-3}, {carbon_ply(), 90, 0.05e-3}});
@@ -481,17 +624,31 @@ TEST_CASE("strength test in compression: what it cannot do is a clear error") {
 TEST_CASE("strength test at the material point: what it does not do yet is a clear error") {
   StrengthSettings s = small_coupon(90);
   s.failure_criterion = PlyFailureModel::kHashin;
-  s.strength_options.softening = true;
-  CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("has no softening yet"), Error);
-  s.strength_options.softening = false;
   s.weibull_modulus = 10;
   CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("has no strength scatter yet"),
                        Error);
   // The material's own key asks for it the same way.
   StrengthSettings m = small_coupon(90);
   m.coupon.material.failure_criterion = PlyFailureModel::kTsaiWu;
-  m.strength_options.softening = true;
+  m.weibull_modulus = 10;
   CHECK_THROWS_WITH_AS(StrengthTest(m).run(), doctest::Contains("\"tsai-wu\""), Error);
+  // Softening cracks need the fracture energies (the built-in materials give none).
+  StrengthSettings soft = small_coupon(90);
+  soft.failure_criterion = PlyFailureModel::kPuck;
+  soft.strength_options.softening = true;
+  CHECK_THROWS_WITH_AS(StrengthTest(soft).run(), doctest::Contains("G_fibre and G_matrix"), Error);
+  soft.coupon.material.strength.G_fibre = 40e3;
+  soft.coupon.material.strength.G_matrix = -300;
+  CHECK_THROWS_WITH_AS(StrengthTest(soft).run(), doctest::Contains("G_matrix"), Error);
+  // Cracks that would not run along a row of sites: a crack along the square lattice's diagonal
+  // (measured: a band of 181 cracked sites dissipating 1.2 G w t where a row's crack dissipates
+  // G w t), and the hexagonal lattice.
+  soft.coupon.material.strength.G_matrix = 300;
+  soft.strategy_options = {{"fibre_offset", 45}};
+  CHECK_THROWS_WITH_AS(StrengthTest(soft).run(), doctest::Contains("fibre_offset=0"), Error);
+  soft.strategy_options.clear();
+  soft.strategy = "hex2d";
+  CHECK_THROWS_WITH_AS(StrengthTest(soft).run(), doctest::Contains("--strategy square"), Error);
 }
 
 TEST_CASE("tiny run: the kind 'strength' writes its table, rows, figures and VTU series") {

@@ -340,7 +340,10 @@ TEST_CASE("a .pvd series lists each state's particles and bonds files") {
   VtkSeries series((dir.path / "run" / "tension.pvd").string());
   series.add_model(0.0, model);
   model.particles.displacement *= 2;
-  series.add_model(1.0, model, VtkOptions{0.0, false});
+  VtkOptions reference_unforced;
+  reference_unforced.displacement_scale = 0.0;
+  reference_unforced.include_force = false;
+  series.add_model(1.0, model, reference_unforced);
   const std::vector<std::string> files = series.files();
   REQUIRE(files.size() == 4);
   CHECK(files[0] == "tension_0_particles.vtu");
@@ -364,8 +367,15 @@ TEST_CASE("VTK output refuses what it cannot write") {
   TemporaryDirectory dir;
   CHECK_THROWS_WITH_AS(write_particles_vtu(model, (dir.path / "missing" / "a.vtu").string()),
                        doctest::Contains("cannot open"), Error);
-  CHECK_THROWS_WITH_AS(write_bonds_vtu(model, (dir.path / "b.vtu").string(), VtkOptions{NAN, true}),
+  VtkOptions not_finite;
+  not_finite.displacement_scale = NAN;
+  CHECK_THROWS_WITH_AS(write_bonds_vtu(model, (dir.path / "b.vtu").string(), not_finite),
                        doctest::Contains("displacement scale"), Error);
+  // Extra point data must have a value per particle.
+  VtkOptions short_array;
+  short_array.particle_scalars = {{"crack_energy", Eigen::ArrayXd::Zero(1)}};
+  CHECK_THROWS_WITH_AS(write_particles_vtu(model, (dir.path / "c.vtu").string(), short_array),
+                       doctest::Contains("VTK point data 'crack_energy' has 1 values for"), Error);
   model.bonds.normal_stiffness(0) = -1;
   CHECK_THROWS_AS(write_bonds_vtu(model, (dir.path / "c.vtu").string()), Error);
 }

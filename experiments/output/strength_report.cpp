@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "contacts/site_failure.hpp"
 #include "core/units.hpp"
 #include "experiments/output/vtk_output.hpp"
 
@@ -31,6 +32,29 @@ std::string mpa(double pascals) {
 
 nlohmann::json finite_or_null(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+// At the material point: what the cracks dissipated against G times their area, and the sites that
+// could not soften.
+std::string crack_energy_lines(const StrengthResult& r) {
+  std::string out = fmt::format("{:<34} {:>11.4g} m^2\n", "crack area (open sites)", r.crack_area);
+  out += fmt::format("{:<34} {:>11.4g} J", "energy dissipated by the cracks", r.crack_energy);
+  if (r.crack_fracture_energy > 0)
+    out += fmt::format("  ({:.4f} x G x crack area, {:.4g} J)",
+                       r.crack_energy / r.crack_fracture_energy, r.crack_fracture_energy);
+  out += "\n";
+  if (r.brittle_sites > 0) {
+    const Material& m = r.material;
+    const LaminaStrength& s = m.strength;
+    out += fmt::format(
+        "{:<34} {:>14}  (too large to soften without snap-back: a site longer than 2 E G / "
+        "sigma^2 across its crack; E2 G_matrix / YT^2 = {:.3g} mm, E1 G_fibre / XT^2 = {:.3g} mm: "
+        "use smaller particles)\n",
+        "sites that opened brittle", r.brittle_sites,
+        m.E2 * s.G_matrix / (s.YT * s.YT) * kMmPerMetre,
+        m.E1 * s.G_fibre / (s.XT * s.XT) * kMmPerMetre);
+  }
+  return out;
 }
 
 }  // namespace
@@ -88,6 +112,7 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
                        r.peak_mode, failure_model_name(r.failure_criterion), r.cracked_sites);
     out += fmt::format("{:<34} {:>9.1f} deg  (from the ply's thickness direction)\n",
                        "fracture plane at the peak", r.peak_fracture_angle / kDegree);
+    out += crack_energy_lines(r);
   }
   if (r.edge_strengthened_bonds > 0) {
     out += fmt::format(
@@ -199,6 +224,10 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   }
   j["peak_fracture_angle_deg"] = finite_or_null(r.peak_fracture_angle / kDegree);
   j["cracked_sites"] = r.cracked_sites;
+  j["crack_area"] = r.crack_area;
+  j["crack_dissipated_energy"] = r.crack_energy;
+  j["crack_fracture_energy"] = r.crack_fracture_energy;
+  j["brittle_sites"] = r.brittle_sites;
   j["factorizations"] = r.factorizations;
   j["solves"] = r.solves;
   j["dissipated_energy"] = r.dissipated_energy;
@@ -290,15 +319,54 @@ Figure plot_crack_pattern(const StrengthResult& r, const fs::path& out_dir, cons
   return plot_bond_states(model, out_dir, stem, title, x_begin, x_end, labels);
 }
 
+namespace {
+
+// At the material point: each particle's site crack after the events before `event` (the
+// snapshot's state is that event's critical state, before it changes anything), as point data:
+// crack_mode (-1: none; else PlyFailureMode: 0 fibre tension, 1 fibre compression, 2 matrix
+// tension, 3 matrix compression), crack_normal (the plane's unit normal, zero where none),
+// crack_teeth (events of its crack: 1 for a brittle one) and crack_energy (what its bonds
+// dissipated [J]).
+VtkOptions site_crack_fields(const StrengthResult& r, const Model& model, long event) {
+  VtkOptions options;
+  if (r.failure_criterion == PlyFailureModel::kBond) return options;
+  const int n = model.particles.size();
+  Eigen::ArrayXd mode = Eigen::ArrayXd::Constant(n, -1), teeth = Eigen::ArrayXd::Zero(n);
+  Eigen::ArrayXd energy = Eigen::ArrayXd::Zero(n);
+  Vector3Array normal = Vector3Array::Zero(n, 3);
+  for (const EventPoint& point : r.path) {
+    if (point.event >= event) break;
+    const int i = point.site;
+    if (i < 0 || i >= n) continue;
+    const int ply = model.particles.ply(i);
+    const double ply_angle = r.layup.empty() ? r.ply_angle : r.layup[static_cast<std::size_t>(ply)];
+    PlyFailure failure;
+    failure.mode = point.site_mode;
+    failure.fracture_angle = point.site_fracture_angle;
+    mode(i) = static_cast<double>(point.site_mode);
+    normal.row(i) = crack_normal(failure, ply_angle).transpose().array();
+    teeth(i) += 1;
+    energy(i) += point.crack_energy;
+  }
+  options.particle_scalars = {
+      {"crack_mode", mode}, {"crack_teeth", teeth}, {"crack_energy", energy}};
+  options.particle_vectors = {{"crack_normal", normal}};
+  return options;
+}
+
+}  // namespace
+
 std::vector<fs::path> write_strength_vtu(const StrengthResult& r, const fs::path& out_dir,
                                          const std::string& stem) {
   fs::create_directories(out_dir / "vtu");
   VtkSeries series((out_dir / "vtu" / fmt::format("{}.pvd", stem)).string());
   if (r.snapshots.empty()) {
-    series.add_model(static_cast<double>(r.events), *r.model);
+    series.add_model(static_cast<double>(r.events), *r.model,
+                     site_crack_fields(r, *r.model, r.events + 1));
   } else {
     for (const StrengthSnapshot& snapshot : r.snapshots)
-      series.add_model(static_cast<double>(snapshot.event), *snapshot.model);
+      series.add_model(static_cast<double>(snapshot.event), *snapshot.model,
+                       site_crack_fields(r, *snapshot.model, snapshot.event));
   }
   std::vector<fs::path> files{fs::path("vtu") / fmt::format("{}.pvd", stem)};
   for (const std::string& file : series.files()) files.push_back(fs::path("vtu") / file);

@@ -127,6 +127,18 @@ void write_particles_vtu(const Model& model, const std::string& path, const VtkO
     vtu.doubles("force", p.force);
     vtu.doubles("torque", p.torque);
   }
+  auto require_size = [&](const std::string& name, Eigen::Index rows) {
+    require(rows == n,
+            fmt::format("VTK point data '{}' has {} values for {} particles", name, rows, n));
+  };
+  for (const auto& [name, values] : options.particle_scalars) {
+    require_size(name, values.size());
+    vtu.doubles(name, values);
+  }
+  for (const auto& [name, values] : options.particle_vectors) {
+    require_size(name, values.rows());
+    vtu.doubles(name, values);
+  }
   vtu.close("PointData");
   vtu.points(position);
   std::vector<int> connectivity(n);

@@ -6,7 +6,8 @@
 /// A model is written as two files, so that each carries its own cell data:
 ///   - particles: one VTK_VERTEX cell per particle; point data displacement, velocity, rotation
 ///     (3 components each), radius, ply, group (BoundaryGroup), and optionally force and torque
-///     (what Particles::force and ::torque hold: the last evaluation of the kernel or a solver);
+///     (what Particles::force and ::torque hold: the last evaluation of the kernel or a solver),
+///     and the arrays VtkOptions adds (the strength test's cracked sites, say);
 ///   - bonds: one VTK_LINE cell per bond between its two particles; cell data family (the
 ///     packing's bond family of an in-ply bond, -1 - k for an interface bond above ply k), kind
 ///     (BondKind: 0 in-ply, 1 interface), normal_stiffness, shear_stiffness, bending_stiffness,
@@ -24,6 +25,7 @@
 /// particles, "Tube" or plain lines coloured by force for bonds.
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/model.hpp"
@@ -35,6 +37,9 @@ struct VtkOptions {
   double displacement_scale = 1.0;
   /// Also write the particles' force and torque arrays.
   bool include_force = true;
+  /// More point data for the particles' file, by name: one value or one 3-vector per particle.
+  std::vector<std::pair<std::string, Eigen::ArrayXd>> particle_scalars;
+  std::vector<std::pair<std::string, Vector3Array>> particle_vectors;
 };
 
 /// Writes the particles of `model` to `path` (.vtu). Throws plydem::Error if the model is

@@ -18,6 +18,7 @@
 #include "core/homogenizer.hpp"
 #include "core/measurements.hpp"
 #include "core/stopwatch.hpp"
+#include "core/units.hpp"
 #include "strategies/boundary_cells.hpp"
 #include "strategies/registry.hpp"
 
@@ -709,8 +710,6 @@ void refuse_what_material_points_lack(const StrengthSettings& s) {
                             "failure_criterion = \"bond\" for it",
                             name, what));
   };
-  refuse_unless(!s.strength_options.softening,
-                "has no softening yet: its cracks open brittle (leave --softening out)");
   refuse_unless(!(s.effective_weibull_modulus() > 0),
                 fmt::format("has no strength scatter yet (the Weibull modulus is {:g}: give "
                             "--weibull-modulus 0)",
@@ -743,8 +742,34 @@ std::optional<MaterialPointFailure> material_point_failure(const StrengthSetting
       break;
   }
   f.material = s.coupon.material;
+  f.softening = s.strength_options.softening;
   for (const Ply& ply : plies) f.ply_angles.push_back(ply.angle);
   return f;
+}
+
+// Softening cracks at the material point dissipate G per unit area where each crack runs along a
+// row of the square lattice (the lattice along the fibre: matrix cracks along its rows, fibre
+// cracks across them); a crack along a diagonal is bridged by bonds that no site on it owns and
+// widens into a band (tests/test_strength_command.cpp measures both). Refuses the rest by name.
+void require_cracks_along_lattice(const StrengthSettings& s, const std::vector<Ply>& plies,
+                                  const std::vector<Calibration>& calibrations) {
+  const std::string what = fmt::format(
+      "softening cracks at the material point (--softening with failure_criterion = \"{}\")",
+      failure_model_name(s.effective_failure_criterion()));
+  require(s.strategy == "square",
+          fmt::format("{} are made for the square lattice along the fibres, where every crack runs "
+                      "along a row of sites; strategy '{}' has none such (use --strategy square)",
+                      what, s.strategy));
+  for (std::size_t k = 0; k < plies.size() && k < calibrations.size(); ++k) {
+    const double off = std::remainder(plies[k].angle - calibrations[k].lattice_angle, 90 * kDegree);
+    require(std::abs(off) < 1e-9,
+            fmt::format("{} need the square lattice along the fibres: ply {} at {:g} deg has its "
+                        "lattice at {:g} deg, and its cracks along a lattice diagonal would be "
+                        "bridged by bonds that no site on them owns (use --strategy-option "
+                        "fibre_offset=0)",
+                        what, k + 1, plies[k].angle / kDegree,
+                        calibrations[k].lattice_angle / kDegree));
+  }
 }
 
 // With failure at the material point the in-ply bonds open only with their sites: no strength of
@@ -816,7 +841,12 @@ void take_events_result(const EventsResult& run, StrengthResult& result) {
     result.peak_mode = failure_mode_name(at_peak.site_mode);
     result.peak_fracture_angle = at_peak.site_fracture_angle;
   }
-  for (const EventPoint& point : run.path) result.cracked_sites += point.site >= 0 ? 1 : 0;
+  for (const EventPoint& point : run.path)
+    result.cracked_sites += point.site >= 0 && point.site_tooth == 0 ? 1 : 0;
+  result.crack_energy = run.crack_energy;
+  result.crack_area = run.crack_area;
+  result.crack_fracture_energy = run.crack_fracture_energy;
+  result.brittle_sites = run.brittle_sites;
   const std::size_t peak = static_cast<std::size_t>(result.peak) + 1;
   result.strength = result.stress[peak];
   result.strain_at_peak = result.strain[peak];
@@ -903,6 +933,8 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   std::vector<bool> scattered_plies(s.scatter_plies.empty() ? 0 : plies.size(), false);
   for (int k : s.scatter_plies) scattered_plies[static_cast<std::size_t>(k)] = true;
   if (material_point) {
+    if (material_point->softening)
+      require_cracks_along_lattice(s, plies, specimen.ply_calibrations);
     open_only_with_sites(specimen.model);
   } else {
     assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,

@@ -225,6 +225,13 @@ struct StrengthResult {
   /// bond failed there by its own law.
   double peak_fracture_angle = std::numeric_limits<double>::quiet_NaN();
   int cracked_sites = 0;  ///< sites whose crack opened (failure at the material point)
+  /// At the material point (EventsResult): the energy the cracks' bonds dissipated [J], the area
+  /// of the cracks that opened [m^2], G_fibre or G_matrix times each one's area [J], and with
+  /// softening the sites that opened brittle, too large to soften.
+  double crack_energy = 0;
+  double crack_area = 0;
+  double crack_fracture_energy = 0;
+  int brittle_sites = 0;
 
   /// Stresses and strains along the load (StrengthSettings::load): positive in compression.
   double strength = 0;              ///< peak stress [Pa]

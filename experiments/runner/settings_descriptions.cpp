@@ -709,8 +709,8 @@ void add_strength_law(SettingsDescription<StrengthSettings>& d) {
       .with_key("softening")
       .with_python("softening")
       .with_help(
-          "linear-softening bonds dissipating the fracture energies G_fibre, G_matrix (default: "
-          "brittle)");
+          "linear-softening bonds dissipating the fracture energies G_fibre, G_matrix; at the "
+          "material point, each site's crack softens so (default: brittle)");
 }
 
 // The grips, the edges' strengths, a hole, and what the strength test records.
