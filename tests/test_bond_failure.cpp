@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -170,6 +171,40 @@ TEST_CASE("linear softening: the saw-tooth inverse, and the dissipated energy ka
   // The ductility that dissipates G over A_crack; brittle where the bond holds more than that.
   CHECK(plydem::bond_ductility(100.0, 2e-9, 1e-8) == doctest::Approx(20.0));
   CHECK(plydem::bond_ductility(100.0, 2e-9, 1e-6) == 1.0);
+}
+
+TEST_CASE("the energy-equivalent saw-tooth dissipates the softening line's area") {
+  // A member loaded in proportion, tooth by tooth as the events solver takes them: each tooth
+  // loads the secant of stiffness s from 0 to kappa_k (the line's kappa at s, stretched), then
+  // drops to s r at that separation; the last breaks at kappa_u'. The path's area, summed here
+  // from the forces and separations themselves, is kappa_u E_peak (the unstretched line's), and no
+  // tooth carries more than the peak force.
+  for (const double ratio : {0.5, 0.8}) {
+    for (const double ductility : {1.5, 7.5, 60.0}) {
+      CAPTURE(ratio);
+      CAPTURE(ductility);
+      const double floor = 1e-3;
+      const double line = plydem::saw_tooth_ductility(ductility, ratio, floor);
+      CHECK(line > ductility);
+      double area = 0, s = 1, largest = 0, first = -1;
+      while (true) {
+        const bool last = s * ratio < floor;
+        const double kappa = last ? line : plydem::softening_ratio(1 - s, line);
+        const double force = s * kappa;  // in units of the peak force
+        if (first < 0) first = force;
+        largest = std::max(largest, force);
+        // Force-separation triangle of the drop at separation kappa (E_peak = 1/2 in these units).
+        area += 0.5 * kappa * (force - (last ? 0.0 : s * ratio * kappa));
+        if (last) break;
+        s *= ratio;
+      }
+      CHECK(area == doctest::Approx(ductility * 0.5).epsilon(1e-10));
+      CHECK(first == doctest::Approx(1.0).epsilon(1e-14));
+      CHECK(largest <= 1.0 + 1e-12);
+    }
+  }
+  CHECK(plydem::saw_tooth_ductility(1.0, 0.5, 1e-3) == 1.0);
+  CHECK(plydem::saw_tooth_ductility(0.3, 0.5, 1e-3) == 1.0);
 }
 
 TEST_CASE("Bonds: strengths start unbreakable and bad strengths are refused") {
