@@ -1254,6 +1254,7 @@ class EventLoop {
     else
       write_state(model_.particles, 1.0, u_, state_.force);
     result_.factorizations = solver_.factorizations();
+    result_.softening_sites = static_cast<int>(softening_.size());
     result_.wall_seconds = seconds_since(start_);
     if (settings_.on_progress)
       settings_.on_progress(

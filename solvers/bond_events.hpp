@@ -206,6 +206,9 @@ struct EventsResult {
   double crack_fracture_energy = 0;
   /// Sites that opened brittle although softening was asked (too large to soften).
   int brittle_sites = 0;
+  /// Sites whose crack was still softening when the run stopped (their energy so far is in
+  /// crack_energy, their area not in crack_area).
+  int softening_sites = 0;
   double wall_seconds = 0;
 };
 

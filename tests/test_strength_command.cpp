@@ -497,6 +497,7 @@ void check_crack_energy(const Material& material, double angle_deg, double diame
   CHECK(r.cracked_sites == static_cast<int>(std::lround(s.coupon.width / diameter)));
   CHECK(std::abs(r.strength / (fibre ? st.XT : st.YT) - 1) < 0.02);
   CHECK(r.brittle_sites == 0);
+  CHECK(r.softening_sites == 0);
   CHECK(j["crack_dissipated_energy"].get<double>() == r.crack_energy);
   CHECK(j["crack_area"].get<double>() == r.crack_area);
   CHECK(j["brittle_sites"] == 0);

@@ -39,9 +39,15 @@ nlohmann::json finite_or_null(double value) {
 std::string crack_energy_lines(const StrengthResult& r) {
   std::string out = fmt::format("{:<34} {:>11.4g} m^2\n", "crack area (open sites)", r.crack_area);
   out += fmt::format("{:<34} {:>11.4g} J", "energy dissipated by the cracks", r.crack_energy);
-  if (r.crack_fracture_energy > 0)
+  if (r.softening_sites > 0) {
+    out += fmt::format(
+        "  ({} sites still softening at the stop, their energy so far included, their area not: "
+        "--stop-fraction 0 runs until every crack is open)",
+        r.softening_sites);
+  } else if (r.crack_fracture_energy > 0) {
     out += fmt::format("  ({:.4f} x G x crack area, {:.4g} J)",
                        r.crack_energy / r.crack_fracture_energy, r.crack_fracture_energy);
+  }
   out += "\n";
   if (r.brittle_sites > 0) {
     const Material& m = r.material;
@@ -228,6 +234,7 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   j["crack_dissipated_energy"] = r.crack_energy;
   j["crack_fracture_energy"] = r.crack_fracture_energy;
   j["brittle_sites"] = r.brittle_sites;
+  j["softening_sites"] = r.softening_sites;
   j["factorizations"] = r.factorizations;
   j["solves"] = r.solves;
   j["dissipated_energy"] = r.dissipated_energy;

@@ -232,6 +232,7 @@ struct StrengthResult {
   double crack_area = 0;
   double crack_fracture_energy = 0;
   int brittle_sites = 0;
+  int softening_sites = 0;  ///< still softening at the stop (EventsResult::softening_sites)
 
   /// Stresses and strains along the load (StrengthSettings::load): positive in compression.
   double strength = 0;              ///< peak stress [Pa]
