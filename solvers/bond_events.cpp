@@ -596,6 +596,14 @@ bool softening(double ductility) {
   return ductility > 1;
 }
 
+// How the bonds of a site's crack break in a ply failure `mode`: compression modes in shear,
+// tension modes in tension.
+BondState broken_state(PlyFailureMode mode) {
+  const bool compression =
+      mode == PlyFailureMode::kFibreCompression || mode == PlyFailureMode::kMatrixCompression;
+  return compression ? BondState::kBrokenShear : BondState::kBrokenTension;
+}
+
 // Whether a softening bond's current tooth is its last (its next would be below the floor).
 bool last_tooth(const Bonds& bonds, int b, const EventSettings& settings) {
   return (1.0 - bonds.damage(b)) * settings.tooth_stiffness_ratio < settings.last_tooth_stiffness;
@@ -860,14 +868,12 @@ class EventLoop {
     double load_factor = kNever;
   };
 
-  // A softening crack's stiffness fraction (1 - damage) now and after its next tooth (0: its last,
-  // it breaks).
-  double crack_stiffness(const SofteningCrack& c) const {
-    return std::pow(settings_.tooth_stiffness_ratio, c.teeth);
-  }
-  double next_crack_stiffness(const SofteningCrack& c) const {
-    const double next = crack_stiffness(c) * settings_.tooth_stiffness_ratio;
-    return next < settings_.last_tooth_stiffness ? 0.0 : next;
+  // A softening crack's bonds not broken (they share one damage: each tooth changes them all).
+  std::vector<int> unbroken(const SofteningCrack& c) const {
+    std::vector<int> bonds;
+    for (int b : c.bonds)
+      if (!model_.bonds.is_broken(b)) bonds.push_back(b);
+    return bonds;
   }
 
   // The strain energy of `bonds` (those not broken) at the unit-load solution [J].
@@ -880,17 +886,18 @@ class EventLoop {
 
   // The next tooth of the softening cracks at the unit-load solution (ties: the lowest site, as
   // softening_ is ordered). A crack's kappa is sqrt(W / W_peak), W its bonds' energy at intact
-  // stiffness (bond_events.hpp, "Softening sites").
+  // stiffness (bond_events.hpp, "Softening sites"); its next tooth is where a softening bond of
+  // its damage and ductility fails next (failure_kappa).
   Tooth critical_tooth() const {
     std::vector<double> factor(softening_.size(), kNever);
     double smallest = kNever;
     for (std::size_t k = 0; k < softening_.size(); ++k) {
       const SofteningCrack& c = softening_[k];
-      const double intact = bonds_energy(c.bonds) / crack_stiffness(c);
+      const std::vector<int> bonds = unbroken(c);
+      if (bonds.empty()) continue;
+      const double intact = bonds_energy(bonds) / (1 - model_.bonds.damage(bonds.front()));
       if (!(intact > 0)) continue;
-      const double kappa = next_crack_stiffness(c) == 0
-                               ? c.ductility
-                               : softening_ratio(1 - crack_stiffness(c), c.ductility);
+      const double kappa = failure_kappa(model_.bonds, bonds.front(), c.ductility, settings_);
       factor[k] = kappa * std::sqrt(c.peak_energy / intact);
       smallest = std::min(smallest, factor[k]);
     }
@@ -926,6 +933,13 @@ class EventLoop {
   void lose_energy(double energy) {
     result_.path.back().crack_energy = energy;
     result_.crack_energy += energy;
+  }
+
+  // A site's crack of `area` [m^2], failed in `mode`, is open: its area and what it should have
+  // dissipated.
+  void count_open_crack(double area, PlyFailureMode mode) {
+    result_.crack_area += area;
+    result_.crack_fracture_energy += fracture_energy(mode) * area;
   }
 
   // The fracture energy of a site's crack in `mode` [J/m^2].
@@ -970,8 +984,7 @@ class EventLoop {
       if (softening) ++result_.brittle_sites;
       change_site(site.bonds, true, point, site.mode);
       lose_energy(energy);
-      result_.crack_area += area;
-      result_.crack_fracture_energy += g * area;
+      count_open_crack(area, site.failure_mode);
     }
     return point;
   }
@@ -980,10 +993,8 @@ class EventLoop {
   // their stiffness, or break on the last; returns the event.
   EventPoint soften(std::size_t k, double lambda) {
     SofteningCrack& c = softening_[k];
-    std::vector<int> bonds;
-    for (int b : c.bonds)
-      if (!model_.bonds.is_broken(b)) bonds.push_back(b);
-    const bool breaks = next_crack_stiffness(c) == 0;
+    const std::vector<int> bonds = unbroken(c);
+    const bool breaks = last_tooth(model_.bonds, bonds.front(), settings_);
     SiteCrack site;
     site.particle = c.site;
     site.failure_mode = c.mode;
@@ -992,18 +1003,14 @@ class EventLoop {
     const int breaking = breaks ? static_cast<int>(bonds.size()) : 0;
     const EventPoint point = critical_state(bonds.front(), lambda, breaking, &site);
     const double energy = lambda * lambda * bonds_energy(bonds);
-    const bool compression =
-        c.mode == PlyFailureMode::kFibreCompression || c.mode == PlyFailureMode::kMatrixCompression;
-    change_site(bonds, breaks, point,
-                compression ? BondState::kBrokenShear : BondState::kBrokenTension);
+    change_site(bonds, breaks, point, broken_state(c.mode));
     ++c.teeth;
     if (!breaks) {
       lose_energy((1 - settings_.tooth_stiffness_ratio) * energy);
       return point;
     }
     lose_energy(energy);
-    result_.crack_area += c.area;
-    result_.crack_fracture_energy += fracture_energy(c.mode) * c.area;
+    count_open_crack(c.area, c.mode);
     softening_.erase(softening_.begin() + static_cast<std::ptrdiff_t>(k));
     return point;
   }
@@ -1059,24 +1066,16 @@ class EventLoop {
         across = bonds_across_crack(model_.particles, model_.bonds, chosen, normal);
       }
       // Bonds softening in another site's crack stay that crack's.
-      const auto softening_elsewhere = [&](int b) { return model_.bonds.damage(b) > 0; };
-      if (!across.empty() && std::all_of(across.begin(), across.end(), softening_elsewhere)) {
+      std::erase_if(across, [&](int b) { return model_.bonds.damage(b) > 0; });
+      if (across.empty()) {  // open on both sides, or all in other cracks: pass it over
         sites[static_cast<std::size_t>(chosen)].failure.load_factor = kNever;
-        continue;
-      }
-      std::erase_if(across, softening_elsewhere);
-      if (across.empty()) {  // open on both sides: pass it over
-        sites[static_cast<std::size_t>(chosen)].failure.load_factor =
-            std::numeric_limits<double>::infinity();
         continue;
       }
       crack.particle = chosen;
       crack.load_factor = pick.failure.load_factor;
       crack.bonds = std::move(across);
       crack.normal = normal;
-      const bool compression = pick.failure.mode == PlyFailureMode::kFibreCompression ||
-                               pick.failure.mode == PlyFailureMode::kMatrixCompression;
-      crack.mode = compression ? BondState::kBrokenShear : BondState::kBrokenTension;
+      crack.mode = broken_state(pick.failure.mode);
       crack.failure_mode = pick.failure.mode;
       crack.fracture_angle = pick.failure.fracture_angle;
       return crack;

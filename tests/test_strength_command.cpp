@@ -461,6 +461,18 @@ Material with_fracture_energies(Material m) {
   return m;
 }
 
+// The 3 x 1 mm coupon of the crack-energy cases: `material` with fracture energies at
+// `angle_deg`, particles of `diameter`, failure at the material point by Puck's criterion.
+StrengthSettings crack_coupon(const Material& material, double angle_deg, double diameter) {
+  StrengthSettings s = small_coupon(angle_deg);
+  s.coupon.material = with_fracture_energies(material);
+  s.coupon.length = 3e-3;
+  s.coupon.width = 1e-3;
+  s.coupon.particle_diameter = diameter;
+  s.failure_criterion = PlyFailureModel::kPuck;
+  return s;
+}
+
 // `plydem strength --failure-criterion puck --softening`: each site's crack softens so that it
 // dissipates G over its share of the crack plane. The reference is G times the area of the crack
 // measured on the coupon, independent of the sites' shares: the 0 and 90 deg coupons fail in one
@@ -471,12 +483,7 @@ void check_crack_energy(const Material& material, double angle_deg, double diame
   CAPTURE(material.name);
   CAPTURE(angle_deg);
   CAPTURE(diameter);
-  StrengthSettings s = small_coupon(angle_deg);
-  s.coupon.material = with_fracture_energies(material);
-  s.coupon.length = 3e-3;
-  s.coupon.width = 1e-3;
-  s.coupon.particle_diameter = diameter;
-  s.failure_criterion = PlyFailureModel::kPuck;
+  StrengthSettings s = crack_coupon(material, angle_deg, diameter);
   s.strength_options.softening = true;
   s.events.stop_fraction = 0;  // to the end: the crack open across the whole width
   const StrengthResult r = StrengthTest(s).run();
@@ -521,12 +528,7 @@ std::vector<double> vtu_array(const std::string& text, const std::string& name) 
 }  // namespace
 
 TEST_CASE("strength test at the material point: the VTU series shows each site's crack") {
-  StrengthSettings s = small_coupon(90);
-  s.coupon.material = with_fracture_energies(eglass());
-  s.coupon.length = 3e-3;
-  s.coupon.width = 1e-3;
-  s.coupon.particle_diameter = 0.1e-3;
-  s.failure_criterion = PlyFailureModel::kPuck;
+  StrengthSettings s = crack_coupon(eglass(), 90, 0.1e-3);
   s.strength_options.softening = true;
   s.events.stop_fraction = 0;
   const StrengthResult r = StrengthTest(s).run();
@@ -563,12 +565,7 @@ TEST_CASE("strength test at the material point: softening cracks dissipate G ove
   }
   // Brittle, the same crack dissipates what its bonds held at the peak: far less than G w t here
   // (the characteristic length E2 G / YT^2 is 3 mm, the sites 0.1 mm).
-  StrengthSettings s = small_coupon(90);
-  s.coupon.material = with_fracture_energies(eglass());
-  s.coupon.length = 3e-3;
-  s.coupon.width = 1e-3;
-  s.coupon.particle_diameter = 0.1e-3;
-  s.failure_criterion = PlyFailureModel::kPuck;
+  const StrengthSettings s = crack_coupon(eglass(), 90, 0.1e-3);
   const StrengthResult brittle = StrengthTest(s).run();
   CHECK(brittle.crack_energy < 0.1 * brittle.crack_fracture_energy);
   CHECK(brittle.brittle_sites == 0);  // counted only where softening was asked
