@@ -149,4 +149,60 @@ int first_failing_site(const std::vector<SiteFailure>& sites) {
   return first;
 }
 
+BondState crack_bond_state(PlyFailureMode mode) {
+  const bool compression =
+      mode == PlyFailureMode::kFibreCompression || mode == PlyFailureMode::kMatrixCompression;
+  return compression ? BondState::kBrokenShear : BondState::kBrokenTension;
+}
+
+OpeningSite next_opening_site(const Particles& particles, const Bonds& bonds,
+                              std::vector<SiteFailure>& sites, double tie_tolerance) {
+  const double never = std::numeric_limits<double>::infinity();
+  while (true) {
+    const int first = first_failing_site(sites);
+    if (first < 0) return {};
+    const double factor = sites[static_cast<std::size_t>(first)].failure.load_factor;
+    // A tie within tie_tolerance goes to the lowest index, whatever the round-off.
+    int chosen = first;
+    for (int i = 0; i < first; ++i)
+      if (sites[static_cast<std::size_t>(i)].failure.load_factor <= factor * (1 + tie_tolerance)) {
+        chosen = i;
+        break;
+      }
+    OpeningSite opening;
+    opening.particle = chosen;
+    opening.site = sites[static_cast<std::size_t>(chosen)];
+    opening.normal = opening.site.crack_normal;
+    opening.bonds = bonds_across_crack(particles, bonds, chosen, opening.normal);
+    if (opening.bonds.empty()) {
+      opening.normal = -opening.normal;
+      opening.bonds = bonds_across_crack(particles, bonds, chosen, opening.normal);
+    }
+    std::erase_if(opening.bonds, [&](int b) { return bonds.damage(b) > 0; });
+    if (!opening.bonds.empty()) return opening;
+    sites[static_cast<std::size_t>(chosen)].failure.load_factor = never;  // open on both sides
+  }
+}
+
+double crack_share(const Particles& particles, const Bonds& bonds, int site,
+                   std::span<const int> crack, std::span<const double> energy,
+                   const Eigen::Vector3d& normal) {
+  require(crack.size() == energy.size(), "crack_share needs one energy per bond");
+  double weight = 0, projected = 0, reach = 0;
+  for (std::size_t k = 0; k < crack.size(); ++k) {
+    const int b = crack[k];
+    const int other = bonds.first(b) == site ? bonds.second(b) : bonds.first(b);
+    const double along =
+        std::abs((particles.reference_position.row(other) - particles.reference_position.row(site))
+                     .matrix()
+                     .dot(normal.transpose()));
+    weight += energy[k];
+    projected += along * energy[k];
+    reach += along;
+  }
+  const double volume = particles.volume(site);
+  if (!(projected > 0)) return volume * static_cast<double>(crack.size()) / reach;
+  return volume * weight / projected;
+}
+
 }  // namespace plydem

@@ -18,6 +18,7 @@
 #include <span>
 #include <vector>
 
+#include "core/bond_state.hpp"
 #include "core/failure_criteria.hpp"
 #include "core/material.hpp"
 #include "core/model.hpp"
@@ -71,5 +72,38 @@ std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bon
 /// The site that fails first as the current state is scaled (the smallest load factor; the lowest
 /// particle index on a tie), or -1 if none can fail.
 int first_failing_site(const std::vector<SiteFailure>& sites);
+
+/// How the bonds of a site's crack break in a ply failure `mode`: compression modes in shear,
+/// tension modes in tension.
+BondState crack_bond_state(PlyFailureMode mode);
+
+/// A site whose crack opens, and the bonds it opens.
+struct OpeningSite {
+  int particle = -1;  ///< -1: none
+  SiteFailure site;   ///< its failure (load factor, mode, fracture angle)
+  std::vector<int> bonds;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitX();  ///< the side its bonds lie on
+};
+
+/// The site whose crack opens first among `sites` (site_failures at one state; a site whose load
+/// factor is infinite is not judged) with the bonds it opens, shared by the events solver and the
+/// explicit method. The smallest load factor fails first; factors within a relative
+/// `tie_tolerance` of it are a tie, which goes to the lowest particle index. Its bonds are
+/// bonds_across_crack on its normal's side or, open there already and failing again, on the other
+/// side (its bonds bridge a crack whose other sites did not open them: a crack that zig-zags
+/// through the lattice), without bonds that soften in another crack (damage > 0). A site with no
+/// bond left to open is passed over (its factor in `sites` set to infinity) and the next one
+/// judged. particle -1: no site fails.
+OpeningSite next_opening_site(const Particles& particles, const Bonds& bonds,
+                              std::vector<SiteFailure>& sites, double tie_tolerance);
+
+/// Site `site`'s share of its crack plane through a lattice of such sites [m^2]:
+/// V sum(e_b) / sum(|l_b . n| e_b) over the crack's bonds `crack` with their strain energies
+/// `energy` (V the particle's volume, l_b the branch vector from the site in the reference
+/// configuration, n the crack's unit normal), which is V / a for a lattice of spacing a along the
+/// normal; unloaded bonds (no energy to weigh them by) by their mean reach along the normal.
+double crack_share(const Particles& particles, const Bonds& bonds, int site,
+                   std::span<const int> crack, std::span<const double> energy,
+                   const Eigen::Vector3d& normal);
 
 }  // namespace plydem

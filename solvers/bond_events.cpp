@@ -596,14 +596,6 @@ bool softening(double ductility) {
   return ductility > 1;
 }
 
-// How the bonds of a site's crack break in a ply failure `mode`: compression modes in shear,
-// tension modes in tension.
-BondState broken_state(PlyFailureMode mode) {
-  const bool compression =
-      mode == PlyFailureMode::kFibreCompression || mode == PlyFailureMode::kMatrixCompression;
-  return compression ? BondState::kBrokenShear : BondState::kBrokenTension;
-}
-
 // Whether a softening bond's current tooth is its last (its next would be below the floor).
 bool last_tooth(const Bonds& bonds, int b, const EventSettings& settings) {
   return (1.0 - bonds.damage(b)) * settings.tooth_stiffness_ratio < settings.last_tooth_stiffness;
@@ -909,24 +901,10 @@ class EventLoop {
 
   // Site `site`'s share of its crack plane (bond_events.hpp, "Softening sites") [m^2].
   double crack_share(const SiteCrack& site) const {
-    const Particles& p = model_.particles;
-    const Bonds& bonds = model_.bonds;
-    double energy = 0, projected = 0, reach = 0;
-    for (int b : site.bonds) {
-      const int other = bonds.first(b) == site.particle ? bonds.second(b) : bonds.first(b);
-      const double along =
-          std::abs((p.reference_position.row(other) - p.reference_position.row(site.particle))
-                       .matrix()
-                       .dot(site.normal.transpose()));
-      const double e = state_.bond_energy[static_cast<std::size_t>(b)];
-      energy += e;
-      projected += along * e;
-      reach += along;
-    }
-    const double volume = p.volume(site.particle);
-    // Unloaded bonds (no energy to weigh them by): their mean reach along the normal.
-    if (!(projected > 0)) return volume * static_cast<double>(site.bonds.size()) / reach;
-    return volume * energy / projected;
+    std::vector<double> energy;
+    for (int b : site.bonds) energy.push_back(state_.bond_energy[static_cast<std::size_t>(b)]);
+    return plydem::crack_share(model_.particles, model_.bonds, site.particle, site.bonds, energy,
+                               site.normal);
   }
 
   // The last event's bonds lost `energy` [J] as they changed (EventPoint::crack_energy).
@@ -1003,7 +981,7 @@ class EventLoop {
     const int breaking = breaks ? static_cast<int>(bonds.size()) : 0;
     const EventPoint point = critical_state(bonds.front(), lambda, breaking, &site);
     const double energy = lambda * lambda * bonds_energy(bonds);
-    change_site(bonds, breaks, point, broken_state(c.mode));
+    change_site(bonds, breaks, point, crack_bond_state(c.mode));
     ++c.teeth;
     if (!breaks) {
       lose_energy((1 - settings_.tooth_stiffness_ratio) * energy);
@@ -1043,43 +1021,16 @@ class EventLoop {
         sites[static_cast<std::size_t>(other)].failure.load_factor = kNever;
       }
     }
-    while (true) {
-      const int first = first_failing_site(sites);
-      if (first < 0) return crack;
-      const SiteFailure& site = sites[static_cast<std::size_t>(first)];
-      // A tie within kTieTolerance goes to the lowest index, whatever the round-off.
-      int chosen = first;
-      for (int i = 0; i < first; ++i)
-        if (sites[static_cast<std::size_t>(i)].failure.load_factor <=
-            site.failure.load_factor * (1 + kTieTolerance)) {
-          chosen = i;
-          break;
-        }
-      const SiteFailure& pick = sites[static_cast<std::size_t>(chosen)];
-      Eigen::Vector3d normal = pick.crack_normal;
-      std::vector<int> across = bonds_across_crack(model_.particles, model_.bonds, chosen, normal);
-      // Open on the normal's side already and failing again: its bonds bridge a crack whose other
-      // sites did not open them (a crack that zig-zags through the lattice); its plane opens on
-      // the other side too.
-      if (across.empty()) {
-        normal = -normal;
-        across = bonds_across_crack(model_.particles, model_.bonds, chosen, normal);
-      }
-      // Bonds softening in another site's crack stay that crack's.
-      std::erase_if(across, [&](int b) { return model_.bonds.damage(b) > 0; });
-      if (across.empty()) {  // open on both sides, or all in other cracks: pass it over
-        sites[static_cast<std::size_t>(chosen)].failure.load_factor = kNever;
-        continue;
-      }
-      crack.particle = chosen;
-      crack.load_factor = pick.failure.load_factor;
-      crack.bonds = std::move(across);
-      crack.normal = normal;
-      crack.mode = broken_state(pick.failure.mode);
-      crack.failure_mode = pick.failure.mode;
-      crack.fracture_angle = pick.failure.fracture_angle;
-      return crack;
-    }
+    OpeningSite opening = next_opening_site(model_.particles, model_.bonds, sites, kTieTolerance);
+    if (opening.particle < 0) return crack;
+    crack.particle = opening.particle;
+    crack.load_factor = opening.site.failure.load_factor;
+    crack.bonds = std::move(opening.bonds);
+    crack.normal = opening.normal;
+    crack.mode = crack_bond_state(opening.site.failure.mode);
+    crack.failure_mode = opening.site.failure.mode;
+    crack.fracture_angle = opening.site.failure.fracture_angle;
+    return crack;
   }
 
   // The critical state at load factor lambda at which bond b fails (with `breaking` bonds broken

@@ -81,13 +81,14 @@ class BlockLayout {
     }
   }
 
-  // The eight motion classes packed in one word: 0 (all free, the common case) keeps the
+  // The eight motion classes packed in two words: 0 (all free, the common case) keeps the
   // defaults.
   [[gnu::always_inline]] bool load_motion(LaneMotion<Lane>& m) const {
-    std::uint64_t classes;
-    std::memcpy(&classes, a_.motion + first_, sizeof classes);
+    std::uint64_t classes[2];
+    static_assert(sizeof classes == lanes::kCount * sizeof(MotionIndex));
+    std::memcpy(classes, a_.motion + first_, sizeof classes);
     m.counts_free = Mask{} - 1;
-    if (classes == 0) return false;
+    if ((classes[0] | classes[1]) == 0) return false;
     for (int l = 0; l < lanes::kCount; ++l) {
       const MotionClass& motion = a_.classes[a_.motion[first_ + l]];
       for (int c = 0; c < 3; ++c) {

@@ -166,7 +166,7 @@ double cuda_copy_bandwidth(std::size_t bytes);
 /// its motion class, and per slot its type and neighbour (2 x 4 bytes); breaking adds the account's
 /// two sums (read and written) and, softening, each slot's damage.
 inline double streamed_bytes_per_particle(int width, int mode) {
-  double bytes = 8.0 * (12 + 12 + 2) + 1 + 8.0 * width;
+  double bytes = 8.0 * (12 + 12 + 2) + sizeof(MotionIndex) + 8.0 * width;
   if (mode != kElasticMode) bytes += 8.0 * 4;
   if (mode == kSofteningTypes || mode == kSofteningSlots) bytes += 8.0 * width;
   return bytes;

@@ -34,10 +34,13 @@
 
 namespace plydem {
 
-/// Velocities imposed on every particle of a boundary group. A component whose `fix_*` flag is
-/// false stays free.
+/// Velocities imposed on every particle of a boundary group, or on one particle. A component whose
+/// `fix_*` flag is false stays free.
 struct PrescribedMotion {
   BoundaryGroup group = BoundaryGroup::kFree;
+  /// >= 0: this one particle (a model index; `group` is not read), whose motion replaces its
+  /// group's: grips that hold a uniform strain move each particle at its own velocity.
+  int particle = -1;
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
   std::array<bool, 3> fix_velocity{false, false, false};

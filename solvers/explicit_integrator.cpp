@@ -178,11 +178,21 @@ void ExplicitIntegrator::set_prescribed_motions(const std::vector<PrescribedMoti
   t.fixed_angular_velocity.setConstant(n, 3, false);
   t.velocity.setZero(n, 3);
   t.angular_velocity.setZero(n, 3);
+  // A particle's own motion replaces its group's.
+  std::vector<bool> own(static_cast<std::size_t>(n), false);
+  for (const PrescribedMotion& m : motions) {
+    require(m.particle < n,
+            fmt::format("a prescribed motion names particle {} of a model of {}", m.particle, n));
+    if (m.particle >= 0) own[static_cast<std::size_t>(m.particle)] = true;
+  }
   for (const PrescribedMotion& m : motions) {
     require(m.velocity.allFinite() && m.angular_velocity.allFinite(),
             "a prescribed velocity is not finite");
     for (int i = 0; i < n; ++i) {
-      if (p.group(i) != static_cast<int>(m.group)) continue;
+      const bool applies = m.particle >= 0 ? i == m.particle
+                                           : !own[static_cast<std::size_t>(i)] &&
+                                                 p.group(i) == static_cast<int>(m.group);
+      if (!applies) continue;
       for (int c = 0; c < 3; ++c) {
         if (m.fix_velocity[c]) {
           t.fixed_velocity(i, c) = true;

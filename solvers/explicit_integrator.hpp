@@ -211,7 +211,8 @@ class ExplicitIntegrator {
   ~ExplicitIntegrator();
   ExplicitIntegrator(ExplicitIntegrator&&) noexcept;
 
-  /// Replaces the prescribed motions. A particle in a listed group has the given components fixed.
+  /// Replaces the prescribed motions. A particle in a listed group has the given components fixed;
+  /// a motion that names a particle (PrescribedMotion::particle) replaces its group's for it.
   /// Allowed between runs and from a run's check hook (it takes effect from the next cycle).
   void set_prescribed_motions(const std::vector<PrescribedMotion>& motions);
 

@@ -18,8 +18,12 @@
 
 namespace plydem {
 
-/// What a prescribed motion does to a particle of its group: per component, a mask (-1 fixed,
-/// 0 free) and the imposed value.
+/// A particle's motion class (KernelArrays::motion): 0 free, else an index into the classes. A
+/// grip whose particles move each at its own velocity (a uniform strain) has a class per particle.
+using MotionIndex = std::uint16_t;
+
+/// What a prescribed motion does to a particle of its group (or to the one particle it names):
+/// per component, a mask (-1 fixed, 0 free) and the imposed value.
 struct MotionClass {
   std::int64_t fix_velocity[3] = {0, 0, 0};
   std::int64_t fix_angular_velocity[3] = {0, 0, 0};
@@ -115,7 +119,7 @@ struct KernelArrays {
   Store<double> displacement[2][3], rotation[2][3];
   Store<double> velocity[3], angular_velocity[3];
   Store<double> inverse_mass, inverse_inertia;  ///< padding particles: 1, and they never move
-  Store<std::uint8_t> motion;                   ///< class per particle; 0 = free
+  Store<MotionIndex> motion;                    ///< class per particle; 0 = free
   Store<MotionClass> classes;
   Store<std::int32_t> neighbour;  ///< per cell; a broken slot points at its own particle
   Store<std::int32_t> type;       ///< per cell; 0 = empty

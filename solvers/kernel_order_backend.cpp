@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <map>
 
 #include "core/error.hpp"
@@ -93,14 +94,15 @@ std::size_t KernelOrderBackend::bytes() const {
 }
 
 void KernelOrderBackend::set_motions(const MotionTable& table) {
-  // The motions as classes: one per group that a motion names.
+  // The motions as classes: one per group that a motion names, and one per particle that a motion
+  // names alone (key: the group, or -1 - the particle).
   std::vector<MotionClass> classes(1);
-  std::map<int, int> class_of_group;
+  std::map<int, int> class_of;
   for (const PrescribedMotion& m : table.motions) {
-    const auto [it, inserted] =
-        class_of_group.try_emplace(static_cast<int>(m.group), static_cast<int>(classes.size()));
+    const int key = m.particle >= 0 ? -1 - m.particle : static_cast<int>(m.group);
+    const auto [it, inserted] = class_of.try_emplace(key, static_cast<int>(classes.size()));
     if (inserted) classes.emplace_back();
-    MotionClass& cls = classes[it->second];
+    MotionClass& cls = classes[static_cast<std::size_t>(it->second)];
     for (int c = 0; c < 3; ++c) {
       if (m.fix_velocity[c]) {
         cls.fix_velocity[c] = -1;
@@ -113,15 +115,21 @@ void KernelOrderBackend::set_motions(const MotionTable& table) {
       }
     }
   }
-  require(classes.size() <= 256, "more than 255 boundary groups have prescribed motions");
+  constexpr std::size_t kClasses = std::numeric_limits<MotionIndex>::max();
+  require(classes.size() <= kClasses,
+          fmt::format("{} groups and particles have motions of their own: the kernels hold at most "
+                      "{}",
+                      classes.size() - 1, kClasses - 1));
   class_count_ = static_cast<int>(classes.size());
   arrays_.classes.resize(classes.size());
   std::copy(classes.begin(), classes.end(), arrays_.classes.data());
   const Particles& p = model_.particles;
-  std::uint8_t* motion = arrays_.motion.data();
+  MotionIndex* motion = arrays_.motion.data();
   for (int i = 0; i < particles_; ++i) {
-    const auto it = class_of_group.find(p.group(order_[i]));
-    motion[i] = static_cast<std::uint8_t>(it == class_of_group.end() ? 0 : it->second);
+    // A particle's own motion replaces its group's (as ExplicitIntegrator's table has it).
+    auto it = class_of.find(-1 - order_[i]);
+    if (it == class_of.end()) it = class_of.find(p.group(order_[i]));
+    motion[i] = static_cast<MotionIndex>(it == class_of.end() ? 0 : it->second);
   }
 }
 

@@ -105,6 +105,72 @@ TEST_CASE("local damping drains the energy; prescribed velocities are imposed ex
   CHECK(g.particles.velocity(0, 0) == 0.01);
 }
 
+TEST_CASE("a particle's own motion replaces its group's, on every backend") {
+  // The left grip's particles each move at their own velocity (a uniform grip's strain), but one
+  // of them, which keeps its group's; the right grip moves as a group.
+  for (ExplicitBackend backend :
+       {ExplicitBackend::kCpu, ExplicitBackend::kReference, ExplicitBackend::kDeviceEmulation}) {
+    Model m = small_coupon();
+    Particles& p = m.particles;
+    const double x_min = p.reference_position.col(0).minCoeff();
+    const double x_max = p.reference_position.col(0).maxCoeff();
+    for (int i = 0; i < p.size(); ++i) {
+      const double x = p.reference_position(i, 0);
+      p.group(i) = static_cast<int>(x < x_min + 0.1e-3   ? BoundaryGroup::kLeftGrip
+                                    : x > x_max - 0.1e-3 ? BoundaryGroup::kRightGrip
+                                                         : BoundaryGroup::kFree);
+    }
+    std::vector<PrescribedMotion> motions(2);
+    motions[0].group = BoundaryGroup::kLeftGrip;
+    motions[0].velocity = Eigen::Vector3d(-0.01, 0, 0);
+    motions[0].fix_velocity = {true, true, true};
+    motions[1] = motions[0];
+    motions[1].group = BoundaryGroup::kRightGrip;
+    motions[1].velocity = Eigen::Vector3d(0.01, 0, 0);
+    int own = 0, kept = -1;
+    for (int i = 0; i < p.size(); ++i) {
+      if (p.group(i) != static_cast<int>(BoundaryGroup::kLeftGrip)) continue;
+      if (kept < 0) {
+        kept = i;
+        continue;
+      }
+      PrescribedMotion one = motions[0];
+      one.particle = i;
+      one.group = BoundaryGroup::kFree;  // not read
+      one.velocity = Eigen::Vector3d(1e-3 * i, -2e-3 * i, 0);
+      one.angular_velocity = Eigen::Vector3d(0, 0, 0.5 * i);
+      one.fix_angular_velocity = {false, false, true};
+      motions.push_back(one);
+      ++own;
+    }
+    REQUIRE(own > 2);
+    ExplicitSettings settings;
+    settings.backend = backend;
+    ExplicitIntegrator integrator(m, settings);
+    integrator.set_prescribed_motions(motions);
+    integrator.advance(20);
+    const double t = 20 * integrator.time_step();
+    for (int i = 0; i < p.size(); ++i) {
+      CAPTURE(i);
+      if (i == kept) {
+        CHECK(p.displacement(i, 0) == doctest::Approx(-0.01 * t));
+      } else if (p.group(i) == static_cast<int>(BoundaryGroup::kLeftGrip)) {
+        CHECK(p.displacement(i, 0) == doctest::Approx(1e-3 * i * t));
+        CHECK(p.displacement(i, 1) == doctest::Approx(-2e-3 * i * t));
+        CHECK(p.rotation(i, 2) == doctest::Approx(0.5 * i * t));
+      } else if (p.group(i) == static_cast<int>(BoundaryGroup::kRightGrip)) {
+        CHECK(p.displacement(i, 0) == doctest::Approx(0.01 * t));
+      }
+    }
+  }
+  Model m = small_coupon();
+  ExplicitIntegrator integrator(m, ExplicitSettings{});
+  PrescribedMotion outside;
+  outside.particle = m.particles.size();
+  CHECK_THROWS_WITH_AS(integrator.set_prescribed_motions({outside}),
+                       doctest::Contains("names particle"), Error);
+}
+
 TEST_CASE("bad integrator settings are refused") {
   Model m = small_coupon();
   ExplicitSettings s;

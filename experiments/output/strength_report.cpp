@@ -149,9 +149,16 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
   }
   out += fmt::format("{:<28} {:>8} {:>8}\n", "all", r.broken_tension, r.broken_shear);
   if (r.damaged > 0) out += fmt::format("softened, not broken: {}\n", r.damaged);
-  out += fmt::format(
-      "\n{} events (stopped: {}), {} factorizations, {} solves, energy released {:.4g} J\n",
-      r.events, r.stop, r.factorizations, r.solves, r.dissipated_energy);
+  if (r.method == StrengthMethod::kExplicit) {
+    out += fmt::format(
+        "\n{} points of the curve (explicit: checks at which a site cracked, and samples after "
+        "the first; stopped: {}), energy released {:.4g} J\n",
+        r.events, r.stop, r.dissipated_energy);
+  } else {
+    out += fmt::format(
+        "\n{} events (stopped: {}), {} factorizations, {} solves, energy released {:.4g} J\n",
+        r.events, r.stop, r.factorizations, r.solves, r.dissipated_energy);
+  }
   out += fmt::format("building {:.2f} s, wall time {:.2f} s\n", r.build_seconds, r.wall_seconds);
   return out;
 }

@@ -34,8 +34,14 @@
 /// lamination theory (the plies' stresses from the A matrix under the mean stress sigma_x, the
 /// smallest failure_load_factor over the plies).
 ///
-/// Method `explicit` (the damped integrator with bonds that break in the kernel) is not
-/// available in this build: run() refuses it with a plydem::Error.
+/// Method `explicit` (solvers/explicit_failure.hpp): the same grips move from rest at a constant
+/// rate, in proportion to the same unit load, and the damped integrator carries the coupon; bonds
+/// break in the kernels by their own law, and at the material point the sites are judged every
+/// StrengthExplicitLoading::check_cycles cycles, the first to fail opening its crack (brittle).
+/// The rate: the grips reach the classical criteria's smallest strength of the coupon (theory, at
+/// the bulk's modulus along x) after cycles_to_failure cycles; it sets only how fast the coupon is
+/// loaded, not where it fails. Each point of the curve is a check at which something broke, or a
+/// sample after the first; the result's `events` counts these points. No checkpoints.
 
 #include <cstdint>
 #include <functional>
@@ -53,6 +59,7 @@
 #include "experiments/protocols/plate_hole.hpp"
 #include "experiments/protocols/resource_estimate.hpp"
 #include "solvers/bond_events.hpp"
+#include "solvers/explicit_failure.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/strategy.hpp"
@@ -82,6 +89,13 @@ StrengthLoad parse_strength_load(const std::string& name);
 const char* strength_method_name(StrengthMethod method);
 /// "events" -> kEvents, "explicit" -> kExplicit; throws plydem::Error naming anything else.
 StrengthMethod parse_strength_method(const std::string& name);
+
+/// The explicit method's loading (solvers/explicit_failure.hpp; see the file comment).
+struct StrengthExplicitLoading {
+  long cycles_to_failure = 20000;  ///< cycles to the classical first failure (>= 100)
+  long check_cycles = 10;          ///< cycles between the sites' judgements (>= 1)
+  long max_cycles = 2000000;       ///< give up after this many cycles
+};
 
 struct StrengthSettings {
   /// square meets E-glass's XT, YT and S12 at any angle; hex2d's layer cannot give E-glass YT
@@ -142,8 +156,9 @@ struct StrengthSettings {
     e.tooth_stiffness_ratio = 0.8;
     return e;
   }();
-  /// The explicit method's integrator settings (validated; the method itself is refused).
+  /// The explicit method's integrator settings and its loading.
   ExplicitSettings explicit_settings;
+  StrengthExplicitLoading explicit_loading;
   /// Keep copies of the model at selected critical states (StrengthResult::snapshots), for VTU
   /// series.
   bool record_snapshots = false;
@@ -293,7 +308,7 @@ class StrengthTest {
   void on_progress(std::function<void(const EventProgress&)> callback);
   /// Builds, calibrates strengths and runs to failure. Throws plydem::Error: a material without
   /// the strengths (XT, YT, S12), a strategy without a unit cell or a target it cannot reach (the
-  /// strength calibration's errors), the explicit method.
+  /// strength calibration's errors), the explicit method with checkpoints or softening sites.
   StrengthResult run() const;
   /// The same with `builder`'s strategy and stiffness calibrations (shared by several tests).
   StrengthResult run(SpecimenBuilder& builder) const;

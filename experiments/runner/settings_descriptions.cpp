@@ -296,6 +296,35 @@ bool staged(const TensionSettings& s) {
   return s.fixed_cycles == 0;
 }
 
+// The explicit integrator's damping and backend, as the tension and strength tests name them;
+// `applies` says where they do something (`why` where they do not).
+template <class S>
+void add_explicit_dynamics(SettingsDescription<S>& d, const std::string& backend_help,
+                           bool (*applies)(const S&), const char* why) {
+  d.number(
+       "damping", [](auto& s) -> auto& { return s.explicit_settings.local_damping; })
+      .with_flag("--damping")
+      .with_key("explicit.damping")
+      .with_python("damping")
+      .with_help("PFC local damping coefficient")
+      .only_if(applies, why);
+  d.add(
+       "backend", SettingType::kText,
+       [](const S& s) -> SettingValue {
+         return std::string(to_string(s.explicit_settings.backend));
+       },
+       [](S& s, const SettingValue& v, const std::string&) {
+         s.explicit_settings.backend = parse_backend_choice(std::get<std::string>(v));
+       })
+      .with_flag("--backend")
+      .with_key("explicit.backend")
+      .with_python("backend")
+      .with_choices(backend_choices)
+      .parsed_by_setter(false)
+      .with_help(backend_help + backend_choices_help(false))
+      .only_if(applies, why);
+}
+
 // The tension test's loading: strain, stages, the explicit solver's cycles and tolerance.
 void add_tension_loading(SettingsDescription<TensionSettings>& d) {
   d.number(
@@ -350,13 +379,8 @@ void add_tension_loading(SettingsDescription<TensionSettings>& d) {
 
 // The explicit integrator's settings and the solver.
 void add_tension_solver(SettingsDescription<TensionSettings>& d) {
-  d.number(
-       "damping", [](auto& s) -> auto& { return s.explicit_settings.local_damping; })
-      .with_flag("--damping")
-      .with_key("explicit.damping")
-      .with_python("damping")
-      .with_help("PFC local damping coefficient")
-      .only_if(explicit_solver, kExplicitOnly);
+  add_explicit_dynamics(d, "where explicit dynamics run ({solver=explicit}): ", explicit_solver,
+                        kExplicitOnly);
   d.number(
        "safety", [](auto& s) -> auto& { return s.explicit_settings.safety_factor; })
       .with_flag("--safety")
@@ -386,21 +410,6 @@ void add_tension_solver(SettingsDescription<TensionSettings>& d) {
       .with_python("solver")
       .with_choices(std::vector<std::string>{"explicit", "static"})
       .with_help("static (one sparse linear solve) or explicit (damped dynamics to quasi-static)");
-  d.add(
-       "backend", SettingType::kText,
-       [](const TensionSettings& s) -> SettingValue {
-         return std::string(to_string(s.explicit_settings.backend));
-       },
-       [](TensionSettings& s, const SettingValue& v, const std::string&) {
-         s.explicit_settings.backend = parse_backend_choice(std::get<std::string>(v));
-       })
-      .with_flag("--backend")
-      .with_key("explicit.backend")
-      .with_python("backend")
-      .with_choices(backend_choices)
-      .parsed_by_setter(false)
-      .with_help("where explicit dynamics run ({solver=explicit}): " + backend_choices_help(false))
-      .only_if(explicit_solver, kExplicitOnly);
   d.boolean(
        "measure_specimen_stiffness", [](auto& s) -> auto& { return s.measure_specimen_stiffness; })
       .without_flag("the command line always measures Gxy")
@@ -778,6 +787,45 @@ void add_strength_coupon(SettingsDescription<StrengthSettings>& d) {
           "state), not only the last");
 }
 
+constexpr char kExplicitMethodOnly[] =
+    "it is a setting of the explicit method, and the events method ({method=events}, the default) "
+    "has no dynamics (add {method=explicit})";
+
+bool explicit_method(const StrengthSettings& s) {
+  return s.method == StrengthMethod::kExplicit;
+}
+
+// The explicit method: its loading, the integrator's damping and where it runs.
+void add_strength_explicit(SettingsDescription<StrengthSettings>& d) {
+  d.integer(
+       "cycles_to_failure", [](auto& s) -> auto& { return s.explicit_loading.cycles_to_failure; })
+      .with_flag("--cycles-to-failure")
+      .with_key("explicit.cycles_to_failure")
+      .with_python("cycles_to_failure")
+      .at_least(100)
+      .with_help(
+          "the grips move at the rate that reaches the classical criteria's strength of the coupon "
+          "in this many cycles (the loading rate; not where the coupon fails)")
+      .only_if(explicit_method, kExplicitMethodOnly);
+  d.integer(
+       "check_cycles", [](auto& s) -> auto& { return s.explicit_loading.check_cycles; })
+      .with_flag("--check-cycles")
+      .with_key("explicit.check_cycles")
+      .with_python("check_cycles")
+      .at_least(1)
+      .with_help("cycles between the sites' judgements (failure at the material point) and checks")
+      .only_if(explicit_method, kExplicitMethodOnly);
+  d.integer(
+       "explicit_max_cycles", [](auto& s) -> auto& { return s.explicit_loading.max_cycles; })
+      .with_flag("--max-cycles")
+      .with_key("explicit.max_cycles")
+      .with_python("max_cycles")
+      .with_help("give up after this many cycles")
+      .only_if(explicit_method, kExplicitMethodOnly);
+  add_explicit_dynamics(d, "where the explicit method's dynamics run: ", explicit_method,
+                        kExplicitMethodOnly);
+}
+
 SettingsDescription<StrengthSettings> make_strength_settings() {
   SettingsDescription<StrengthSettings> d(default_strength);
   add_strategy(d);
@@ -790,6 +838,7 @@ SettingsDescription<StrengthSettings> make_strength_settings() {
   add_strength_law(d);
   add_interface_strength(d, true);
   add_events(d);
+  add_strength_explicit(d);
   add_checkpoint(d, "events");
   return d;
 }
