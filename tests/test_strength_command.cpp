@@ -558,6 +558,36 @@ TEST_CASE("strength test at the material point: the VTU series shows each site's
   CHECK(total == doctest::Approx(r.crack_energy).epsilon(1e-9));
 }
 
+TEST_CASE("strength test at the material point: the crack picture draws each site's plane") {
+  // A uniform 90 deg coupon: one straight crack across the width, each of its 10 sites a segment
+  // one diameter long along y at the same x, beside the bonds it opened.
+  const StrengthResult r = StrengthTest(crack_coupon(eglass(), 90, 0.1e-3)).run();
+  const fs::path out = fresh_directory("strength_site_png");
+  plot_crack_pattern(r, out, "s_cracks", "90 deg");
+  std::istringstream data(read(out / "plots" / "s_cracks.dat"));
+  std::string line;
+  bool in_block = false;
+  std::vector<Eigen::Vector4d> segments;
+  while (std::getline(data, line)) {
+    if (line.rfind('#', 0) == 0) {
+      in_block = line == "# site cracks, matrix modes";
+      continue;
+    }
+    std::istringstream row(line);
+    Eigen::Vector4d v;
+    if (in_block && (row >> v(0) >> v(1) >> v(2) >> v(3))) segments.push_back(v);
+  }
+  REQUIRE(segments.size() == static_cast<std::size_t>(r.cracked_sites));
+  CHECK(r.cracked_sites == 10);
+  double covered = 0;
+  for (const Eigen::Vector4d& v : segments) {
+    CHECK(v(0) == doctest::Approx(segments.front()(0)));  // one x [mm]
+    CHECK(v(2) == doctest::Approx(0.0));                  // along y
+    covered += std::abs(v(3));
+  }
+  CHECK(covered == doctest::Approx(1.0));  // the whole 1 mm width
+}
+
 TEST_CASE("strength test at the material point: softening cracks dissipate G over their area") {
   for (double angle : {90.0, 0.0}) {
     check_crack_energy(eglass(), angle, 0.1e-3);

@@ -138,9 +138,45 @@ Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, cons
   return draw(out_dir, stem, data, script);
 }
 
+namespace {
+
+// The sites' cracks of plot_bond_states: a data block per mode (fibre, matrix) appended to `data`
+// as gnuplot's blocks `index`, `index` + 1, ... (counted on), and their plot clauses.
+std::string crack_traces(const std::vector<CrackTrace>& cracks, const std::string& stem,
+                         double x_begin, double x_end, double ply_shift, int& index,
+                         std::string& data) {
+  constexpr double mm = kMmPerMetre;
+  std::string blocks[2];
+  int counts[2] = {0, 0};
+  for (const CrackTrace& c : cracks) {
+    if (c.centre.x() < x_begin || c.centre.x() > x_end) continue;
+    const Eigen::Vector2d start = c.centre - 0.5 * c.length * c.along;
+    const int block = c.fibre ? 0 : 1;
+    blocks[block] += fmt::format("{:.6g} {:.6g} {:.6g} {:.6g}\n", start.x() * mm,
+                                 (start.y() + c.ply * ply_shift) * mm, c.length * c.along.x() * mm,
+                                 c.length * c.along.y() * mm);
+    ++counts[block];
+  }
+  static const char* const kNames[2] = {"site cracks, fibre modes", "site cracks, matrix modes"};
+  static const char* const kStyles[2] = {"lw 3.5 lc rgb '#8010a0'", "lw 3.5 lc rgb '#108040'"};
+  std::string plot;
+  for (int block = 0; block < 2; ++block) {
+    if (counts[block] == 0) continue;
+    data += fmt::format("# {}\n{}\n\n", kNames[block], blocks[block]);
+    plot += fmt::format("{}'{}.dat' index {} using 1:2:3:4 with vectors nohead {} title '{} ({})'",
+                        index > 0 ? ", " : "", stem, index, kStyles[block], kNames[block],
+                        counts[block]);
+    ++index;
+  }
+  return plot;
+}
+
+}  // namespace
+
 Figure plot_bond_states(const Model& model, const fs::path& out_dir, const std::string& stem,
                         const std::string& title, double x_begin, double x_end,
-                        const std::vector<std::string>& ply_labels) {
+                        const std::vector<std::string>& ply_labels,
+                        const std::vector<CrackTrace>& cracks) {
   const Particles& p = model.particles;
   const Bonds& b = model.bonds;
   if (p.size() == 0 || b.size() == 0) {
@@ -212,6 +248,7 @@ Figure plot_bond_states(const Model& model, const fs::path& out_dir, const std::
         cross_counts[mode]);
     ++index;
   }
+  plot += crack_traces(cracks, stem, x_begin, x_end, ply_shift, index, data);
   std::string labels;
   for (int k = 0; k < plies && plies > 1; ++k) {
     const std::string label = k < static_cast<int>(ply_labels.size())

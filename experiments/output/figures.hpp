@@ -12,6 +12,7 @@
 /// figure is skipped, not an error: Figure::skipped says why, and the report shows that line.
 /// A gnuplot that runs and fails throws plydem::Error with its messages.
 
+#include <Eigen/Dense>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -38,15 +39,27 @@ Figure plot_bonds_by_stiffness(const Model& model, const std::filesystem::path& 
                                const std::string& stem, const std::string& title, double window = 0,
                                const std::vector<std::string>& ply_labels = {});
 
+/// A site's crack (failure at the material point) on the crack pattern: the trace of its plane
+/// in plan view, a segment through `centre` along `along`.
+struct CrackTrace {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  ///< [m]
+  Eigen::Vector2d along = Eigen::Vector2d::UnitY();  ///< unit direction of the trace
+  double length = 0;                                 ///< [m]
+  int ply = 0;                                       ///< drawn beside that ply's bonds
+  bool fibre = false;                                ///< a fibre mode's crack (else a matrix one)
+};
+
 /// The bonds of `model` in plan view (x-y, mm) by their state (core/model.hpp BondState): intact
 /// bonds thin grey, softened ones (0 < damage < 1) orange, broken in tension red, in shear blue:
 /// the crack pattern. Plies side by side as in plot_bonds_by_stiffness (interface bonds left
 /// out; a broken interface bond is drawn as a cross at its first particle, in its mode's colour).
+/// The sites' cracks (`cracks`) are drawn over them, fibre modes purple, matrix modes green.
 /// Only x_begin <= x <= x_end is drawn (x_end <= x_begin: all). Throws plydem::Error if the model
 /// has no bonds in that window.
 Figure plot_bond_states(const Model& model, const std::filesystem::path& out_dir,
                         const std::string& stem, const std::string& title, double x_begin = 0,
-                        double x_end = 0, const std::vector<std::string>& ply_labels = {});
+                        double x_end = 0, const std::vector<std::string>& ply_labels = {},
+                        const std::vector<CrackTrace>& cracks = {});
 
 /// One curve of plot_curves.
 struct Curve {

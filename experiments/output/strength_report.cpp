@@ -307,6 +307,50 @@ Figure plot_strength_curve(const StrengthResult& r, const fs::path& out_dir,
                      "stress sigma_x [MPa]");
 }
 
+namespace {
+
+// A cracked site's crack plane (failure at the material point), the unit normal its mode gives
+// (contacts/site_failure.hpp crack_normal) in the coupon's axes.
+Eigen::Vector3d site_crack_normal(const StrengthResult& r, const Model& model,
+                                  const EventPoint& point) {
+  const int ply = model.particles.ply(point.site);
+  const double ply_angle = r.layup.empty() ? r.ply_angle : r.layup[static_cast<std::size_t>(ply)];
+  PlyFailure failure;
+  failure.mode = point.site_mode;
+  failure.fracture_angle = point.site_fracture_angle;
+  return crack_normal(failure, ply_angle);
+}
+
+// The cracked sites' planes for the crack pattern: each a particle diameter long, through the
+// middle of the site's bonds on its normal's side (where its crack opens, half a diameter from
+// the site), along the plane's trace in x-y.
+std::vector<CrackTrace> crack_traces(const StrengthResult& r) {
+  std::vector<CrackTrace> traces;
+  if (!r.model) return traces;
+  const Particles& p = r.model->particles;
+  for (const EventPoint& point : r.path) {
+    if (point.site < 0 || point.site >= p.size() || point.site_tooth != 0) continue;
+    const Eigen::Vector3d n = site_crack_normal(r, *r.model, point);
+    Eigen::Vector2d in_plane(n.x(), n.y());
+    if (!(in_plane.norm() > 1e-9)) continue;  // a plane in the ply's plane has no trace
+    in_plane.normalize();
+    CrackTrace t;
+    const double diameter = 2 * p.radius(point.site);
+    t.centre =
+        Eigen::Vector2d(p.reference_position(point.site, 0), p.reference_position(point.site, 1)) +
+        0.5 * diameter * in_plane;
+    t.along = Eigen::Vector2d(-in_plane.y(), in_plane.x());
+    t.length = diameter;
+    t.ply = p.ply(point.site);
+    t.fibre = point.site_mode == PlyFailureMode::kFibreTension ||
+              point.site_mode == PlyFailureMode::kFibreCompression;
+    traces.push_back(t);
+  }
+  return traces;
+}
+
+}  // namespace
+
 Figure plot_crack_pattern(const StrengthResult& r, const fs::path& out_dir, const std::string& stem,
                           const std::string& title) {
   const Model& model = *r.model;
@@ -330,7 +374,7 @@ Figure plot_crack_pattern(const StrengthResult& r, const fs::path& out_dir, cons
   std::vector<std::string> labels;
   for (std::size_t k = 0; k < r.layup.size(); ++k)
     labels.push_back(fmt::format("ply {}: {:g} deg", k, r.layup[k] / kDegree));
-  return plot_bond_states(model, out_dir, stem, title, x_begin, x_end, labels);
+  return plot_bond_states(model, out_dir, stem, title, x_begin, x_end, labels, crack_traces(r));
 }
 
 namespace {
@@ -352,13 +396,8 @@ VtkOptions site_crack_fields(const StrengthResult& r, const Model& model, long e
     if (point.event >= event) break;
     const int i = point.site;
     if (i < 0 || i >= n) continue;
-    const int ply = model.particles.ply(i);
-    const double ply_angle = r.layup.empty() ? r.ply_angle : r.layup[static_cast<std::size_t>(ply)];
-    PlyFailure failure;
-    failure.mode = point.site_mode;
-    failure.fracture_angle = point.site_fracture_angle;
     mode(i) = static_cast<double>(point.site_mode);
-    normal.row(i) = crack_normal(failure, ply_angle).transpose().array();
+    normal.row(i) = site_crack_normal(r, model, point).transpose().array();
     teeth(i) += 1;
     energy(i) += point.crack_energy;
   }
