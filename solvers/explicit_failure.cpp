@@ -35,6 +35,9 @@ void ExplicitFailureSettings::validate() const {
   require(rest_cycles >= check_cycles,
           fmt::format("explicit failure: rest_cycles ({}) is below check_cycles ({})", rest_cycles,
                       check_cycles));
+  require(std::isfinite(past_peak_travel) && past_peak_travel > 1,
+          fmt::format("explicit failure: past_peak_travel is {}, must be above 1",
+                      past_peak_travel));
   require(stop_fraction >= 0 && stop_fraction < 1,
           fmt::format("explicit failure: stop_fraction is {}, must lie in [0, 1)", stop_fraction));
   require(progress_seconds > 0, fmt::format("explicit failure: progress_seconds is {}, must be "
@@ -163,11 +166,17 @@ class ExplicitFailureRun {
     if (event || sample) record(reaction, opening);
     if (opening.particle >= 0) open(opening);
     hold_or_move(event, at_rest);
-    const bool failed = result_.peak >= 0 && peak_reaction_ > 0 &&
-                        static_cast<int>(result_.path.size()) - 1 > result_.peak &&
-                        std::abs(reaction) < settings_.stop_fraction * peak_reaction_;
-    if (failed) result_.stop = "failed";
-    return !failed;
+    const bool past = result_.peak >= 0 && peak_reaction_ > 0 &&
+                      static_cast<int>(result_.path.size()) - 1 > result_.peak;
+    if (past && std::abs(reaction) < settings_.stop_fraction * peak_reaction_) {
+      result_.stop = "failed";
+    } else if (past && std::abs(load_factor_) >
+                           settings_.past_peak_travel *
+                               std::abs(result_.path[static_cast<std::size_t>(result_.peak)]
+                                            .load_factor)) {
+      result_.stop = "past the peak";
+    }
+    return result_.stop.empty();
   }
 
   // After something broke the grips stand still until the coupon is at rest again (the

@@ -30,8 +30,9 @@
 /// (EventPoint): every check at which a site opened or a bond broke, at the state before the
 /// site's bonds opened, and every `sample` after the first of them; load_factor = the prescribed
 /// motion so far over the unit's, reaction = minus the bonds' forces on the reaction dofs. The run
-/// stops "failed" when after the peak the reaction falls below stop_fraction of the peak, and at
-/// `cycle limit` after max_cycles.
+/// stops "failed" when after the peak the reaction falls below stop_fraction of the peak, "past the
+/// peak" when the load factor passes past_peak_travel times the peak's, and at "cycle limit" after
+/// max_cycles.
 
 #include <functional>
 #include <optional>
@@ -56,6 +57,9 @@ struct ExplicitFailureSettings {
   long rest_cycles = 20000;
   /// After the peak, the specimen has failed when the reaction falls below this fraction of it.
   double stop_fraction = 0.02;
+  /// And the run ends "past the peak" when the load factor passes this multiple (> 1) of the
+  /// peak's: a specimen held all round (a shear frame) keeps a residual load that never falls.
+  double past_peak_travel = 2.0;
   /// Failure at the material point besides the bonds' own (none: bond by bond only); brittle.
   std::optional<MaterialPointFailure> material_point;
   /// Called at every point of the path, the model holding that state (its bonds before the

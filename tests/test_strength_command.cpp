@@ -358,13 +358,13 @@ namespace {
 // `plydem strength --load compression --failure-criterion puck`: the grips move together; the 0 deg
 // coupon fails across its fibres at XC, the 90 deg one along them at YC on Puck's inclined plane
 // (about 50 degrees).
-struct CompressionCase {
+struct PeakCase {
   Material material;
   double angle_deg, diameter;
 };
 
-void check_compression_peaks(const std::vector<CompressionCase>& cases) {
-  for (const CompressionCase& c : cases) {
+void check_compression_peaks(const std::vector<PeakCase>& cases) {
+  for (const PeakCase& c : cases) {
     CAPTURE(c.material.name);
     CAPTURE(c.angle_deg);
     CAPTURE(c.diameter);
@@ -619,7 +619,39 @@ TEST_CASE("strength test at the material point: softening sites too large to sof
   CHECK(table.find("too large to soften without snap-back") != std::string::npos);
 }
 
-TEST_CASE("finer particles: at the material point, YT, XC, YC and off axis at 0.05 mm") {
+namespace {
+
+// In-plane shear in the frame (--load shear): the peak of a 0 or 90 deg ply is S12, reached at
+// the gauge's shear strain S12 / G12 (the material's constants, not the model's), and it is the
+// first failure (the frame's coupon only loses load after it). Measured (square, 3 x 1 mm):
+// 1.0000 of S12 for E-glass and T300 at 0 and 90 deg, 0.1 and 0.05 mm particles.
+void check_shear_peaks(const std::vector<PeakCase>& cases) {
+  for (const PeakCase& c : cases) {
+    CAPTURE(c.material.name);
+    CAPTURE(c.angle_deg);
+    CAPTURE(c.diameter);
+    StrengthSettings s = crack_coupon(c.material, c.angle_deg, c.diameter);
+    s.load = StrengthLoad::kShear;
+    const StrengthResult r = StrengthTest(s).run();
+    const Material& m = s.coupon.material;
+    MESSAGE(m.name << " " << c.angle_deg << " deg, " << (c.diameter * 1e3)
+                   << " mm: shear peak / S12 " << (r.strength / m.strength.S12)
+                   << ", strain at peak x G12 / S12 "
+                   << (r.strain_at_peak * m.G12 / m.strength.S12));
+    CHECK(r.strength == doctest::Approx(m.strength.S12).epsilon(0.02));
+    CHECK(r.strain_at_peak * m.G12 == doctest::Approx(m.strength.S12).epsilon(0.02));
+    CHECK(r.first_failure_stress == doctest::Approx(r.strength).epsilon(1e-9));
+    CHECK(r.cracked_sites > 0);
+    for (const CriterionStrength& t : r.theory) {
+      REQUIRE(t.strength);
+      CHECK(*t.strength == doctest::Approx(m.strength.S12).epsilon(1e-12));
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("finer particles: at the material point, YT, XC, YC, S12 and off axis at 0.05 mm") {
   check_peak_at_yt(0.05e-3);
   check_crack_energy(eglass(), 90, 0.05e-3);
   check_crack_energy(eglass(), 0, 0.05e-3);
@@ -628,6 +660,28 @@ TEST_CASE("finer particles: at the material point, YT, XC, YC and off axis at 0.
   check_compression_peaks(
       {{eglass(), 90, 0.05e-3}, {carbon_ply(), 0, 0.05e-3}, {carbon_ply(), 90, 0.05e-3}});
   check_grips_hold_corners(0.05e-3);
+  check_shear_peaks({{eglass(), 0, 0.05e-3}, {carbon_ply(), 90, 0.05e-3}});
+}
+
+TEST_CASE("strength test in shear at the material point: S12 as the peak, at S12 / G12") {
+  check_shear_peaks({{eglass(), 0, 0.1e-3},
+                     {eglass(), 90, 0.1e-3},
+                     {carbon_ply(), 0, 0.1e-3},
+                     {carbon_ply(), 90, 0.1e-3}});
+}
+
+TEST_CASE("strength test in shear: what it cannot do is a clear error") {
+  StrengthSettings s = small_coupon(0);
+  s.load = StrengthLoad::kShear;
+  CHECK_THROWS_WITH_AS(s.validate(), doctest::Contains("shear (--load shear) needs failure at"),
+                       Error);
+  s.failure_criterion = PlyFailureModel::kPuck;
+  s.grips = StrengthGrips::kFree;
+  CHECK_THROWS_WITH_AS(s.validate(), doctest::Contains("--grips free holds only its ends"), Error);
+  s.grips = StrengthGrips::kUniform;
+  s.hole_diameter = 0.2e-3;
+  CHECK_THROWS_WITH_AS(s.validate(), doctest::Contains("with a hole is not modelled"), Error);
+  CHECK(parse_strength_load(strength_load_name(StrengthLoad::kShear)) == StrengthLoad::kShear);
 }
 
 TEST_CASE("strength test in compression: what it cannot do is a clear error") {
@@ -643,8 +697,9 @@ TEST_CASE("strength test in compression: what it cannot do is a clear error") {
   CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("does not give YC"), Error);
   s.coupon.material.strength.XC = 0;
   CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("does not give XC and YC"), Error);
-  CHECK_THROWS_WITH_AS(parse_strength_load("shear"),
-                       doctest::Contains("unknown load 'shear' (tension or compression)"), Error);
+  CHECK_THROWS_WITH_AS(parse_strength_load("torsion"),
+                       doctest::Contains("unknown load 'torsion' (tension, compression or shear)"),
+                       Error);
   CHECK(parse_strength_load(strength_load_name(StrengthLoad::kCompression)) ==
         StrengthLoad::kCompression);
 }

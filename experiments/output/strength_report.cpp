@@ -103,10 +103,12 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
       scatter_text(r));
   if (r.load == StrengthLoad::kCompression)
     out += "stresses and strains along the load: positive in compression\n";
-  out += fmt::format("{:<34} {:>14}\n",
-                     r.load == StrengthLoad::kTension ? "strength (peak stress)"
-                                                      : "compressive strength (peak stress)",
-                     mpa(r.strength));
+  if (r.load == StrengthLoad::kShear)
+    out += "in-plane shear in a frame: stresses tau_xy, strains gamma_xy\n";
+  static const char* const kStrength[] = {"strength (peak stress)",
+                                          "compressive strength (peak stress)",
+                                          "shear strength (peak stress)"};
+  out += fmt::format("{:<34} {:>14}\n", kStrength[static_cast<int>(r.load)], mpa(r.strength));
   out += fmt::format("{:<34} {:>13.4f}%\n", "strain at peak", r.strain_at_peak * 100);
   out += fmt::format("{:<34} {:>14}\n", "first-failure stress", mpa(r.first_failure_stress));
   if (!std::isnan(r.model_first_failure)) {  // NaN: failure at the material point
@@ -303,8 +305,10 @@ Figure plot_strength_curve(const StrengthResult& r, const fs::path& out_dir,
          {*t.strength * kMPaPerPa, *t.strength * kMPaPerPa},
          false});
   }
-  return plot_curves(curves, out_dir, stem, title, "gauge strain eps_x [%]",
-                     "stress sigma_x [MPa]");
+  const bool shear = r.load == StrengthLoad::kShear;
+  return plot_curves(curves, out_dir, stem, title,
+                     shear ? "gauge shear strain gamma_xy [%]" : "gauge strain eps_x [%]",
+                     shear ? "shear stress tau_xy [MPa]" : "stress sigma_x [MPa]");
 }
 
 namespace {

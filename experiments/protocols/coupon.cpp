@@ -65,12 +65,23 @@ DofConstraints grip_constraints(const Particles& p, double left_ux, double right
 
 DofConstraints uniform_grip_constraints(const Particles& p, const Eigen::Vector3d& strain,
                                         const std::vector<double>& ply_spin) {
+  std::vector<bool> held(static_cast<std::size_t>(p.size()));
+  for (int i = 0; i < p.size(); ++i)
+    held[static_cast<std::size_t>(i)] = p.group(i) != static_cast<int>(BoundaryGroup::kFree);
+  return uniform_grip_constraints(p, strain, ply_spin, held);
+}
+
+DofConstraints uniform_grip_constraints(const Particles& p, const Eigen::Vector3d& strain,
+                                        const std::vector<double>& ply_spin,
+                                        const std::vector<bool>& held) {
+  require(held.size() == static_cast<std::size_t>(p.size()),
+          fmt::format("{} held flags for {} particles", held.size(), p.size()));
   const Eigen::Vector3d low = p.reference_position.colwise().minCoeff().transpose();
   const Eigen::Vector3d high = p.reference_position.colwise().maxCoeff().transpose();
   const Eigen::Vector3d centre = 0.5 * (low + high);
   DofConstraints constraints(p.size());
   for (int i = 0; i < p.size(); ++i) {
-    if (p.group(i) == static_cast<int>(BoundaryGroup::kFree)) continue;
+    if (!held[static_cast<std::size_t>(i)]) continue;
     require(p.ply(i) >= 0 && p.ply(i) < static_cast<int>(ply_spin.size()),
             fmt::format("particle {} of ply {} has no spin for its grip ({} plies)", i, p.ply(i),
                         ply_spin.size()));

@@ -53,6 +53,10 @@ DofConstraints grip_constraints(const Particles& particles, double left_ux, doub
 /// particle's ply has no spin.
 DofConstraints uniform_grip_constraints(const Particles& particles, const Eigen::Vector3d& strain,
                                         const std::vector<double>& ply_spin);
+/// The same for the particles flagged in `held` (one flag per particle) instead of the grips.
+DofConstraints uniform_grip_constraints(const Particles& particles, const Eigen::Vector3d& strain,
+                                        const std::vector<double>& ply_spin,
+                                        const std::vector<bool>& held);
 
 /// Settings of the grips' static solves: the rigid modes free grips leave (the y translation) are
 /// pinned; `force` is StaticSettings::force (the user's --force).

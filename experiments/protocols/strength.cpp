@@ -37,15 +37,22 @@ double load_sign(StrengthLoad load) {
   return load == StrengthLoad::kCompression ? -1.0 : 1.0;
 }
 
-// The stress of the coupon's plies under the mean stress sigma_x = 1 Pa (-1 Pa in compression;
-// classical lamination theory, A matrix), in each ply's axes.
+// The mean membrane stress (sigma_x, sigma_y, tau_xy) of a unit load: sigma_x = 1 Pa in tension,
+// -1 Pa in compression, tau_xy = 1 Pa in shear.
+Eigen::Vector3d unit_mean_stress(StrengthLoad load) {
+  return load == StrengthLoad::kShear ? Eigen::Vector3d(0, 0, 1)
+                                      : Eigen::Vector3d(load_sign(load), 0, 0);
+}
+
+// The stress of the coupon's plies under the unit load's mean stress (unit_mean_stress; classical
+// lamination theory, A matrix), in each ply's axes.
 std::vector<PlyStress> unit_ply_stresses(const std::vector<Ply>& plies,
                                          StrengthLoad load = StrengthLoad::kTension) {
   require(!plies.empty(), "a laminate needs at least one ply");
   const Eigen::Matrix3d A = laminate_extensional_stiffness(plies);
   double h = 0;
   for (const Ply& ply : plies) h += ply.thickness;
-  const Eigen::Vector3d strain = A.ldlt().solve(Eigen::Vector3d(load_sign(load) * h, 0, 0));
+  const Eigen::Vector3d strain = A.ldlt().solve(h * unit_mean_stress(load));
   std::vector<PlyStress> stresses;
   for (const Ply& ply : plies) {
     const Eigen::Vector3d s =
@@ -160,13 +167,22 @@ StrengthGrips parse_strength_grips(const std::string& name) {
 }
 
 const char* strength_load_name(StrengthLoad load) {
-  return load == StrengthLoad::kTension ? "tension" : "compression";
+  switch (load) {
+    case StrengthLoad::kTension:
+      return "tension";
+    case StrengthLoad::kCompression:
+      return "compression";
+    case StrengthLoad::kShear:
+      return "shear";
+  }
+  return "?";
 }
 
 StrengthLoad parse_strength_load(const std::string& name) {
   if (name == "tension") return StrengthLoad::kTension;
   if (name == "compression") return StrengthLoad::kCompression;
-  throw Error(fmt::format("unknown load '{}' (tension or compression)", name));
+  if (name == "shear") return StrengthLoad::kShear;
+  throw Error(fmt::format("unknown load '{}' (tension, compression or shear)", name));
 }
 
 const char* strength_method_name(StrengthMethod method) {
@@ -250,11 +266,25 @@ void StrengthSettings::validate() const {
   require(std::isfinite(edge_band_diameters) && edge_band_diameters >= 0,
           "the gauge's edge band must be >= 0 diameters");
   strength_options.validate();
-  require(load == StrengthLoad::kTension || effective_failure_criterion() != PlyFailureModel::kBond,
-          "compression (--load compression) needs failure at the material point "
-          "(--failure-criterion puck, hashin, max-stress or tsai-wu): bonds calibrated by the "
-          "parallel-bond law have no compressive strength, so a coupon of them would not fail at "
-          "XC or YC");
+  require(
+      load != StrengthLoad::kCompression || effective_failure_criterion() != PlyFailureModel::kBond,
+      "compression (--load compression) needs failure at the material point "
+      "(--failure-criterion puck, hashin, max-stress or tsai-wu): bonds calibrated by the "
+      "parallel-bond law have no compressive strength, so a coupon of them would not fail at "
+      "XC or YC");
+  if (load == StrengthLoad::kShear) {
+    require(effective_failure_criterion() != PlyFailureModel::kBond,
+            "shear (--load shear) needs failure at the material point (--failure-criterion puck, "
+            "hashin, max-stress or tsai-wu): the shear frame is made for sites judged by a lamina "
+            "criterion");
+    require(grips == StrengthGrips::kUniform,
+            fmt::format("shear (--load shear) holds the coupon in a frame at the uniform state "
+                        "(--grips uniform); --grips {} holds only its ends along x",
+                        strength_grips_name(grips)));
+    require(!(hole_diameter > 0),
+            "shear (--load shear) of a coupon with a hole is not modelled (the frame's y bands "
+            "would have to clear the hole): leave out --hole-diameter-mm");
+  }
   require(!events.on_progress && !events.on_event,
           "the strength test sets the events solver's callbacks itself (use "
           "StrengthTest::on_progress)");
@@ -330,7 +360,7 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
 
 double first_ply_failure_stress(FailureCriterion criterion, const std::vector<Ply>& plies,
                                 const LaminaStrength& strength, StrengthLoad load) {
-  if (plies.size() == 1) {
+  if (plies.size() == 1 && load != StrengthLoad::kShear) {
     return load == StrengthLoad::kTension
                ? off_axis_strength(criterion, strength, plies.front().angle)
                : off_axis_compressive_strength(criterion, strength, plies.front().angle);
@@ -466,17 +496,54 @@ struct UnitLoading {
   DofFlags reaction_dofs;
 };
 
-// Uniform grips: the relaxed bulk's uniform state under sigma_x, the plies' relaxed stiffness
-// summed as CLT sums Q-bar, its strain per unit eps_xx, and each ply's spin under that strain
-// (into result.uniform_strain and result.uniform_spin).
+// The particles uniform grips hold: those of the grips, and in shear also those within the
+// grips' depth of the y edges (the frame: StrengthSettings::load).
+std::vector<bool> shear_frame(const Particles& p, StrengthLoad load) {
+  std::vector<bool> held(static_cast<std::size_t>(p.size()));
+  double depth = 0;  // the grips' depth along x, as assign_grips left it
+  const double x_min = p.reference_position.col(0).minCoeff();
+  for (int i = 0; i < p.size(); ++i) {
+    held[static_cast<std::size_t>(i)] = p.group(i) != static_cast<int>(BoundaryGroup::kFree);
+    if (p.group(i) == static_cast<int>(BoundaryGroup::kLeftGrip))
+      depth = std::max(depth, p.reference_position(i, 0) - x_min);
+  }
+  if (load != StrengthLoad::kShear) return held;
+  const double y_min = p.reference_position.col(1).minCoeff();
+  const double y_max = p.reference_position.col(1).maxCoeff();
+  for (int i = 0; i < p.size(); ++i) {
+    const double y = p.reference_position(i, 1);
+    if (y <= y_min + depth || y >= y_max - depth) held[static_cast<std::size_t>(i)] = true;
+  }
+  return held;
+}
+
+// A shear frame's bonds between two held particles go: they would carry the frame's own uniform
+// shear for ever and add it to the right grip's reaction, which then never falls when the gauge
+// cracks through; the free particles' equilibrium, which every solve finds, does not see them. A
+// picture-frame test's arms, likewise, are hinged at the corners and carry nothing between them.
+void drop_frame_bonds(Model& model, const std::vector<bool>& held) {
+  std::vector<int> kept;
+  const Bonds& bonds = model.bonds;
+  for (int b = 0; b < bonds.size(); ++b)
+    if (!held[static_cast<std::size_t>(bonds.first(b))] ||
+        !held[static_cast<std::size_t>(bonds.second(b))])
+      kept.push_back(b);
+  model.bonds = bonds.select(kept);
+}
+
+// Uniform grips: the relaxed bulk's uniform state under sigma_x (in shear: tau_xy), the plies'
+// relaxed stiffness summed as CLT sums Q-bar, its strain per unit eps_xx, and each ply's spin under
+// that strain (into result.uniform_strain and result.uniform_spin).
 DofConstraints uniform_unit_load(const Strategy& strategy, double thickness,
                                  const std::vector<Calibration>& calibrations, const Particles& p,
-                                 double travel, StrengthResult& result) {
+                                 double travel, StrengthLoad load, StrengthResult& result) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   for (const Calibration& c : calibrations) A += c.relaxed;
-  Eigen::Vector3d e = A.ldlt().solve(Eigen::Vector3d(1, 0, 0));
-  require(e(0) > 0, "the coupon's relaxed stiffness gives no positive strain under sigma_x");
-  e /= e(0);
+  // Per unit eps_xx under sigma_x, per unit gamma_xy under tau_xy.
+  const int along = load == StrengthLoad::kShear ? 2 : 0;
+  Eigen::Vector3d e = A.ldlt().solve(Eigen::Vector3d::Unit(along));
+  require(e(along) > 0, "the coupon's relaxed stiffness gives no positive strain under the load");
+  e /= e(along);
   result.uniform_strain = e;
   for (const Calibration& c : calibrations) {
     const std::optional<UnitCell> cell = strategy.unit_cell(c, thickness);
@@ -492,7 +559,7 @@ DofConstraints uniform_unit_load(const Strategy& strategy, double thickness,
   }
   std::vector<double> spin = result.uniform_spin;
   for (double& w : spin) w *= travel;
-  return uniform_grip_constraints(p, travel * e, spin);
+  return uniform_grip_constraints(p, travel * e, spin, shear_frame(p, load));
 }
 
 // The grips' length when StrengthSettings::grip_length is 0: two diameters bond by bond (the
@@ -503,7 +570,9 @@ DofConstraints uniform_unit_load(const Strategy& strategy, double thickness,
 // particles, Puck: 0.88 of the criterion at 30 deg, 0.90 at 60 and 75 deg; 0.97-0.98 so.
 double default_grip_length(const StrengthSettings& s, const Model& model) {
   const double two_diameters = 2.0 * s.coupon.particle_diameter;
-  if (s.effective_failure_criterion() == PlyFailureModel::kBond) return two_diameters;
+  // A shear frame leaves no free edge: no edge strips to hold.
+  if (s.effective_failure_criterion() == PlyFailureModel::kBond || s.load == StrengthLoad::kShear)
+    return two_diameters;
   double reach = 0;
   for (int b = 0; b < model.bonds.size(); ++b)
     if (!model.bonds.is_interface(b)) reach = std::max(reach, model.bonds.length(b));
@@ -519,21 +588,28 @@ UnitLoading grip_coupon(const Strategy& strategy, const StrengthSettings& s,
   const double grip = s.grip_length > 0 ? s.grip_length : default_grip_length(s, model);
   if (s.hole_diameter > 0) require_hole_clear_of_grips(s, grip);
   l.grips = assign_grips(p, grip);  // refuses grips that leave no free length
-  l.gauge = gauge_section(p, l.grips, s.gauge_fraction, s.edge_band_diameters,
-                          s.coupon.particle_diameter);
+  // In shear the gauge keeps clear of the frame's y bands by a diameter.
+  const double band = s.load == StrengthLoad::kShear
+                          ? std::max(s.edge_band_diameters, grip / s.coupon.particle_diameter + 1)
+                          : s.edge_band_diameters;
+  l.gauge = gauge_section(p, l.grips, s.gauge_fraction, band, s.coupon.particle_diameter);
   // The grips' nominal strain at load factor 1, signed.
   const double travel = load_sign(s.load) * kUnitNominalStrain;
   if (s.grips == StrengthGrips::kUniform) {
-    l.unit = uniform_unit_load(strategy, s.coupon.thickness, calibrations, p, travel, result);
+    l.unit =
+        uniform_unit_load(strategy, s.coupon.thickness, calibrations, p, travel, s.load, result);
   } else {
     l.unit = grip_constraints(
         p, 0.0, travel * l.grips.span,
         s.grips == StrengthGrips::kClamped ? GripCondition::kClamped : GripCondition::kFree);
   }
+  if (s.load == StrengthLoad::kShear) drop_frame_bonds(model, shear_frame(p, s.load));
+  // The load: the right grip's x reactions, in shear its y reactions (tau_xy times the section).
+  const Dof load_dof = s.load == StrengthLoad::kShear ? Dof::kUy : Dof::kUx;
   l.reaction_dofs = DofFlags::Constant(p.size(), kDofsPerParticle, false);
   for (int i = 0; i < p.size(); ++i) {
     if (p.group(i) == static_cast<int>(BoundaryGroup::kRightGrip))
-      l.reaction_dofs(i, static_cast<int>(Dof::kUx)) = true;
+      l.reaction_dofs(i, static_cast<int>(load_dof)) = true;
   }
   result.particles = p.size();
   result.bonds = model.bonds.size();
@@ -578,15 +654,35 @@ void make_edges_consistent(const StrengthSettings& s, const std::vector<Ply>& pl
 struct StrengthCurve {
   StrengthCurve(StrengthResult& run_result, const GaugeSection& section, bool snapshots,
                 StrengthLoad load)
-      : result(run_result), gauge(section), record_snapshots(snapshots), sign(load_sign(load)) {}
+      : result(run_result),
+        gauge(section),
+        record_snapshots(snapshots),
+        sign(load_sign(load)),
+        shear(load == StrengthLoad::kShear) {}
 
   StrengthResult& result;
   const GaugeSection& gauge;
   bool record_snapshots = false;
-  double sign = 1;  // stresses and strains along the load: -1 in compression
+  double sign = 1;     // stresses and strains along the load: -1 in compression
+  bool shear = false;  // tau_xy against gamma_xy
   double peak_stress = -std::numeric_limits<double>::infinity();
   std::shared_ptr<const Model> peak_state;
   long peak_event = 0;
+
+  // In shear: the gauge particles' mean virial tau_xy (volume-weighted), the stress the gauge
+  // carries. The frame's right grip takes its y reaction over an edge whose height a row of bonds
+  // to the frame blurs (half a row at either side, on square), and the virial is exact in the
+  // uniform state at every gauge site.
+  double gauge_shear_stress(const Model& state) const {
+    const std::vector<Eigen::Matrix3d> stress = particle_stresses(state.particles, state.bonds);
+    double weighted = 0, volume = 0;
+    for (int i : gauge.particles) {
+      const double v = state.particles.volume(i);
+      weighted += v * stress[static_cast<std::size_t>(i)](0, 1);
+      volume += v;
+    }
+    return weighted / volume;
+  }
 
   // The unloaded origin.
   void start() {
@@ -596,8 +692,10 @@ struct StrengthCurve {
   }
 
   void on_event(const Model& state, const EventPoint& point) {
-    result.strain.push_back(sign * fit_gauge_strain(state.particles, gauge.particles).exx);
-    result.stress.push_back(sign * point.reaction / gauge.cross_section);
+    const GaugeStrain fit = fit_gauge_strain(state.particles, gauge.particles);
+    result.strain.push_back(sign * (shear ? fit.gamma_xy : fit.exx));
+    result.stress.push_back(shear ? gauge_shear_stress(state)
+                                  : sign * point.reaction / gauge.cross_section);
     result.nominal_strain.push_back(point.load_factor * kUnitNominalStrain);
     if (!record_snapshots) return;
     const long e = point.event;
@@ -842,15 +940,16 @@ EventsResult run_to_failure(const StrengthSettings& s,
 }
 
 // The explicit method's estimate of the coupon's first failure, which sets its loading rate: the
-// load factor at which the bulk's stress along x (the plies' relaxed stiffness, summed as CLT sums
-// it, at the unit load's nominal strain) reaches the smallest of the classical criteria's
-// strengths.
+// load factor at which the bulk's stress along the load (sigma_x, in shear tau_xy; the plies'
+// relaxed stiffness, summed as CLT sums it, at the unit load's nominal strain) reaches the smallest
+// of the classical criteria's strengths.
 double failure_load_factor(const std::vector<Calibration>& calibrations,
                            const StrengthResult& result) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   for (const Calibration& c : calibrations)
     A += c.relaxed / static_cast<double>(calibrations.size());
-  const double modulus = 1.0 / A.inverse()(0, 0);
+  const int along = result.load == StrengthLoad::kShear ? 2 : 0;  // sigma_x, or tau_xy
+  const double modulus = 1.0 / A.inverse()(along, along);
   double strength = std::numeric_limits<double>::infinity();
   for (const CriterionStrength& c : result.theory)
     if (c.strength) strength = std::min(strength, std::abs(*c.strength));
@@ -897,6 +996,12 @@ void take_events_result(const EventsResult& run, StrengthResult& result) {
   result.path = run.path;
   result.breaks = run.breaks;
   result.peak = run.peak >= 0 ? run.peak : 0;
+  // In shear the stress is the gauge's own (StrengthCurve), not the reaction the run's peak
+  // follows.
+  if (result.load == StrengthLoad::kShear) {
+    const auto top = std::max_element(result.stress.begin() + 1, result.stress.end());
+    result.peak = static_cast<int>(top - result.stress.begin()) - 1;
+  }
   result.events = static_cast<long>(run.path.size());
   result.stop = run.stop;
   result.factorizations = run.factorizations;

@@ -79,9 +79,10 @@ enum class StrengthGrips {
 const char* strength_grips_name(StrengthGrips grips);
 /// The inverse; throws plydem::Error naming anything else.
 StrengthGrips parse_strength_grips(const std::string& name);
-/// Which way the grips move: apart (tension) or together (compression).
-enum class StrengthLoad { kTension, kCompression };
-/// "tension" or "compression".
+/// Which way the grips move: apart (tension), together (compression), or (shear) in in-plane
+/// shear with a frame (see StrengthSettings::load).
+enum class StrengthLoad { kTension, kCompression, kShear };
+/// "tension", "compression" or "shear".
 const char* strength_load_name(StrengthLoad load);
 /// The inverse; throws plydem::Error naming anything else.
 StrengthLoad parse_strength_load(const std::string& name);
@@ -113,6 +114,11 @@ struct StrengthSettings {
   /// Tension (the grips move apart) or compression (`--load compression`: together; failure at
   /// the material point only, with XC and YC given). A compression test's stresses and strains
   /// are reported along the load, positive in compression, as compression tests report them.
+  /// Shear (`--load shear`: failure at the material point, uniform grips, no hole): a frame holds
+  /// the coupon at the relaxed bulk's uniform state under tau_xy alone, the grips along x and
+  /// bands of the grips' depth (two diameters by default) along the y edges, so that no edge is
+  /// free; the stress is the right grip's y reaction over the cross-section (tau_xy), the strain
+  /// the gauge's gamma_xy. A 0 deg ply's peak is its in-plane shear strength S12.
   StrengthLoad load = StrengthLoad::kTension;
   /// Weibull modulus of the bonds' strength scatter; unset = the material's
   /// (LaminaStrength::weibull_modulus), 0 = no scatter.
@@ -329,8 +335,9 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& settings);
 
 /// The mean stress sigma_x [Pa] at which the first ply of `plies` reaches `criterion` under
 /// uniaxial membrane load along x (classical lamination theory: ply stresses Q-bar_k A^-1 N with
-/// N = (sigma_x h, 0, 0)), in tension or, a magnitude, in compression. One ply: its off-axis
-/// strength. Throws plydem::Error like failure_load_factor.
+/// N = (sigma_x h, 0, 0)), in tension or, a magnitude, in compression; in shear the mean tau_xy
+/// under N = (0, 0, tau_xy h). One ply in tension or compression: its off-axis strength. Throws
+/// plydem::Error like failure_load_factor.
 double first_ply_failure_stress(FailureCriterion criterion, const std::vector<Ply>& plies,
                                 const LaminaStrength& strength,
                                 StrengthLoad load = StrengthLoad::kTension);

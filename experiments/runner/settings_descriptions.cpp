@@ -637,13 +637,15 @@ void add_strength_law(SettingsDescription<StrengthSettings>& d) {
       .with_flag("--load")
       .with_key("load")
       .with_python("load")
-      .with_choices(std::vector<std::string>{"tension", "compression"})
+      .with_choices(std::vector<std::string>{"tension", "compression", "shear"})
       .validated(
-          "compression needs a material-point failure criterion "
+          "compression and shear need a material-point failure criterion "
           "(StrengthSettings::validate)")
       .with_help(
-          "tension (the grips move apart) or compression (together; failure at the material "
-          "point, XC and YC given; stresses and strains reported positive in compression)");
+          "tension (the grips move apart), compression (together; failure at the material "
+          "point, XC and YC given; stresses and strains reported positive in compression) or "
+          "shear (in-plane, the coupon held in a frame at the uniform state under tau_xy; failure "
+          "at the material point; tau_xy against gamma_xy)");
   d.add(
        "weibull_modulus", SettingType::kNumber,
        [](const StrengthSettings& s) -> SettingValue {
