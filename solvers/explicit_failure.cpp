@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <limits>
 #include <numeric>
+#include <utility>
 #include <vector>
 
 #include "contacts/bond_kernel.hpp"
@@ -35,9 +36,9 @@ void ExplicitFailureSettings::validate() const {
   require(rest_cycles >= check_cycles,
           fmt::format("explicit failure: rest_cycles ({}) is below check_cycles ({})", rest_cycles,
                       check_cycles));
-  require(std::isfinite(past_peak_travel) && past_peak_travel > 1,
-          fmt::format("explicit failure: past_peak_travel is {}, must be above 1",
-                      past_peak_travel));
+  require(
+      std::isfinite(past_peak_travel) && past_peak_travel > 1,
+      fmt::format("explicit failure: past_peak_travel is {}, must be above 1", past_peak_travel));
   require(stop_fraction >= 0 && stop_fraction < 1,
           fmt::format("explicit failure: stop_fraction is {}, must lie in [0, 1)", stop_fraction));
   require(progress_seconds > 0, fmt::format("explicit failure: progress_seconds is {}, must be "
@@ -67,7 +68,8 @@ class ExplicitFailureRun {
         reaction_dofs_(reaction_dofs),
         settings_(settings),
         integrator_(model, settings.integrator),
-        shown_(model) {
+        shown_(model),
+        before_(model.particles) {
     const int n = model.particles.size();
     require(unit.fixed.rows() == n && unit.value.rows() == n && reaction_dofs.rows() == n,
             fmt::format("explicit failure: the constraints are for {} particles, the model has {}",
@@ -140,16 +142,23 @@ class ExplicitFailureRun {
   }
 
   bool on_check(const RunCheck& check) {
+    std::swap(before_, shown_.particles);
+    before_reaction_ = reaction_;
+    before_load_factor_ = load_factor_;
     Particles& p = shown_.particles;
     integrator_.gather(all_, p, StateAt::kForces);
     load_factor_ = dof(p, reference_.first, reference_.second) /
                    unit_.value(reference_.first, reference_.second);
-    double reaction = 0;
+    reaction_ = 0;
     for (int i = 0; i < p.size(); ++i)
       for (int d = 0; d < kDofsPerParticle; ++d)
-        if (reaction_dofs_(i, d)) reaction -= d < 3 ? p.force(i, d) : p.torque(i, d - 3);
+        if (reaction_dofs_(i, d)) reaction_ -= d < 3 ? p.force(i, d) : p.torque(i, d - 3);
+    const double reaction = reaction_;
     // The kernels' breaks since the last check belong to this point.
     const bool kernel_breaks = integrator_.breaks().size() > logged_breaks_;
+    // The kernels break within a check interval, a whole uniform coupon at once: the last check's
+    // state, before them, is the critical state (the peak of a brittle coupon).
+    if (kernel_breaks && !recorded_last_) record_before();
     if (kernel_breaks) {
       log_kernel_breaks(static_cast<double>(result_.path.size() + 1));
       shown_.bonds = model_.bonds;
@@ -163,17 +172,18 @@ class ExplicitFailureRun {
     const bool event = opening.particle >= 0 || kernel_breaks;
     started_ = started_ || event;
     const bool sample = started_ && integrator_.cycles() % sample_cycles_ == 0;
-    if (event || sample) record(reaction, opening);
+    recorded_last_ = event || sample;
+    if (recorded_last_) record(reaction, opening);
     if (opening.particle >= 0) open(opening);
     hold_or_move(event, at_rest);
     const bool past = result_.peak >= 0 && peak_reaction_ > 0 &&
                       static_cast<int>(result_.path.size()) - 1 > result_.peak;
     if (past && std::abs(reaction) < settings_.stop_fraction * peak_reaction_) {
       result_.stop = "failed";
-    } else if (past && std::abs(load_factor_) >
-                           settings_.past_peak_travel *
-                               std::abs(result_.path[static_cast<std::size_t>(result_.peak)]
-                                            .load_factor)) {
+    } else if (past &&
+               std::abs(load_factor_) >
+                   settings_.past_peak_travel *
+                       std::abs(result_.path[static_cast<std::size_t>(result_.peak)].load_factor)) {
       result_.stop = "past the peak";
     }
     return result_.stop.empty();
@@ -192,6 +202,15 @@ class ExplicitFailureRun {
       integrator_.set_prescribed_motions(motions_);
       held_now_ = false;
     }
+  }
+
+  // A point at the last check's state (the bonds as they were then).
+  void record_before() {
+    std::swap(before_, shown_.particles);
+    std::swap(before_load_factor_, load_factor_);
+    record(before_reaction_, OpeningSite{});
+    std::swap(before_load_factor_, load_factor_);
+    std::swap(before_, shown_.particles);
   }
 
   // The site that opens at this check (particle -1: none): the first to fail, if it fails at a
@@ -286,7 +305,10 @@ class ExplicitFailureRun {
   const DofFlags& reaction_dofs_;
   const ExplicitFailureSettings& settings_;
   ExplicitIntegrator integrator_;
-  Model shown_;  // the state at the checks (particles gathered from the kernel), for on_point
+  Model shown_;       // the state at the checks (particles gathered from the kernel), for on_point
+  Particles before_;  // the last check's
+  double reaction_ = 0, before_reaction_ = 0, before_load_factor_ = 0;
+  bool recorded_last_ = false;  // the last check is a point of the path
   std::vector<int> all_;
   std::vector<PrescribedMotion> motions_, held_;  // the grips moving, and standing still
   bool held_now_ = false;
