@@ -93,7 +93,12 @@ std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bond
 
 std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,
                                        std::span<const double> ply_angles,
-                                       FailureCriterion criterion, const Material& material) {
+                                       FailureCriterion criterion, const Material& material,
+                                       std::span<const double> strength_factors) {
+  require(strength_factors.empty() ||
+              strength_factors.size() == static_cast<std::size_t>(particles.size()),
+          fmt::format("site failure: {} strength factors for {} particles", strength_factors.size(),
+                      particles.size()));
   const SiteSums sums = site_sums(particles, bonds);
   const Eigen::Matrix3d q = reduced_stiffness(material);
   std::vector<Eigen::Matrix3d> q_bar(ply_angles.size());
@@ -113,8 +118,16 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
                                       : strand_stress(sums.spread[k], sums.moved[k], stiffness);
     const double angle = ply_angles[static_cast<std::size_t>(ply)];
     SiteFailure& site = sites[k];
+    LaminaStrength strength = material.strength;
+    if (!strength_factors.empty()) {
+      const double f = strength_factors[k];
+      require(std::isfinite(f) && f > 0,
+              fmt::format("site failure: particle {} has strength factor {}", i, f));
+      for (double* s : {&strength.XT, &strength.XC, &strength.YT, &strength.YC, &strength.S12})
+        *s *= f;
+    }
     site.failure =
-        ply_failure(criterion, to_ply_axes(sigma(0), sigma(1), sigma(2), angle), material.strength);
+        ply_failure(criterion, to_ply_axes(sigma(0), sigma(1), sigma(2), angle), strength);
     site.crack_normal = crack_normal(site.failure, angle);
   }
   return sites;

@@ -52,12 +52,15 @@ std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bond
 /// the axes of the ply, judged by `criterion` with the material's strengths. A site whose bonds
 /// all lie along one line (a strand a crack left) carries the uniaxial stress of its stretch along
 /// that line (the ply's modulus in that direction times it). A site that carries no stress (no
-/// bond left) gets an infinite load factor. Throws
-/// plydem::Error naming the particle whose ply has no angle in `ply_angles`, and as
-/// failure_load_factor does for a strength the criterion needs and the material lacks.
+/// bond left) gets an infinite load factor. `strength_factors` (one per particle, or empty: 1)
+/// scales each site's strengths XT, XC, YT, YC and S12 (strength scatter). Throws
+/// plydem::Error naming the particle whose ply has no angle in `ply_angles`, for factors of
+/// another size or not positive, and as failure_load_factor does for a strength the criterion
+/// needs and the material lacks.
 std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,
                                        std::span<const double> ply_angles,
-                                       FailureCriterion criterion, const Material& material);
+                                       FailureCriterion criterion, const Material& material,
+                                       std::span<const double> strength_factors = {});
 
 /// The bonds a crack at particle `site` opens (contacts/bond_opening.hpp opens them), its plane
 /// through the site's cell with unit normal `normal` (crack_normal): the site's unbroken bonds

@@ -1000,8 +1000,8 @@ class EventLoop {
     if (!settings_.material_point) return crack;
     const MaterialPointFailure& mp = *settings_.material_point;
     write_state(model_.particles, 1.0, u_, state_.force);
-    std::vector<SiteFailure> sites =
-        site_failures(model_.particles, model_.bonds, mp.ply_angles, mp.criterion, mp.material);
+    std::vector<SiteFailure> sites = site_failures(model_.particles, model_.bonds, mp.ply_angles,
+                                                   mp.criterion, mp.material, mp.strength_factors);
     // A particle whose translation is prescribed is held by a grip: its site does not fail (a
     // coupon's grips, like a test's tabs, are not its gauge).
     const DofFlags& held = solver_.constraints().fixed;

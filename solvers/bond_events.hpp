@@ -121,6 +121,8 @@ struct MaterialPointFailure {
   /// The sites' cracks soften to dissipate the material's G_fibre or G_matrix per unit area (see
   /// the file comment); false: they open brittle.
   bool softening = false;
+  /// Each site's strengths times its factor (by particle; empty: 1): strength scatter.
+  std::vector<double> strength_factors = {};
 };
 
 /// A site's crack while its bonds soften together (see the file comment).

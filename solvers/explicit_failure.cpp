@@ -217,8 +217,8 @@ class ExplicitFailureRun {
   // load factor of at most 1.
   OpeningSite judge_sites() {
     const MaterialPointFailure& mp = *settings_.material_point;
-    std::vector<SiteFailure> sites =
-        site_failures(shown_.particles, model_.bonds, mp.ply_angles, mp.criterion, mp.material);
+    std::vector<SiteFailure> sites = site_failures(shown_.particles, model_.bonds, mp.ply_angles,
+                                                   mp.criterion, mp.material, mp.strength_factors);
     for (int i = 0; i < shown_.particles.size(); ++i) {
       if (unit_.fixed(i, static_cast<int>(Dof::kUx)) || unit_.fixed(i, static_cast<int>(Dof::kUy)))
         sites[static_cast<std::size_t>(i)].failure.load_factor = kNever;

@@ -11,6 +11,7 @@
 #include <map>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <string_view>
 
 #include "contacts/bond_kernel.hpp"
@@ -831,12 +832,31 @@ void refuse_what_material_points_lack(const StrengthSettings& s) {
                             "failure_criterion = \"bond\" for it",
                             name, what));
   };
-  refuse_unless(!(s.effective_weibull_modulus() > 0),
-                fmt::format("has no strength scatter yet (the Weibull modulus is {:g}: give "
-                            "--weibull-modulus 0)",
-                            s.effective_weibull_modulus()));
+  refuse_unless(!(s.effective_weibull_modulus() > 0 && s.scatter_per_crack_site),
+                "draws its strength scatter per site (per particle), not per crack band (leave "
+                "out --scatter-per site)");
   refuse_unless(!s.interface_strength.given(),
                 "breaks no interface yet (leave the interface strengths out)");
+}
+
+// Strength scatter at the material point: each site's strengths times a Weibull factor of
+// modulus m and mean 1, draw k of std::mt19937_64(seed) for particle k (every particle draws, so
+// that a site's factor depends on its index and the seed only), U = (draw / 2^11 + 1/2) / 2^53,
+// f = (-ln U)^(1/m) / Gamma(1 + 1/m); sites of plies outside `scattered_plies` (when given) keep 1.
+std::vector<double> site_strength_factors(const Particles& p, double weibull_modulus,
+                                          std::uint64_t seed,
+                                          const std::vector<bool>& scattered_plies) {
+  std::vector<double> factors(static_cast<std::size_t>(p.size()), 1.0);
+  std::mt19937_64 random(seed);
+  const double mean = std::tgamma(1.0 + 1.0 / weibull_modulus);
+  for (int i = 0; i < p.size(); ++i) {
+    const double u = (static_cast<double>(random() >> 11) + 0.5) * 0x1.0p-53;
+    const auto ply = static_cast<std::size_t>(p.ply(i));
+    if (!scattered_plies.empty() && !(ply < scattered_plies.size() && scattered_plies[ply]))
+      continue;
+    factors[static_cast<std::size_t>(i)] = std::pow(-std::log(u), 1.0 / weibull_modulus) / mean;
+  }
+  return factors;
 }
 
 // The criterion, the material and each ply's angle for the events solver; nullopt for failure
@@ -1104,6 +1124,9 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
     if (material_point->softening)
       require_cracks_along_lattice(s, plies, specimen.ply_calibrations);
     open_only_with_sites(specimen.model);
+    if (result.weibull_modulus > 0)
+      material_point->strength_factors = site_strength_factors(
+          specimen.model.particles, result.weibull_modulus, s.seed, scattered_plies);
   } else {
     assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
                           consistent_edges ? 0.0 : result.weibull_modulus, s.seed, scattered_plies,
