@@ -142,6 +142,7 @@ std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bon
   std::vector<int> crossing;
   for (int b = 0; b < bonds.size(); ++b) {
     if (bonds.is_broken(b) || (bonds.first(b) != site && bonds.second(b) != site)) continue;
+    if (bonds.is_interface(b)) continue;  // a ply's crack stays in its ply
     // The bond's direction from the site: bonds.normal points from the first to the second.
     const double outward = bonds.first(b) == site ? 1.0 : -1.0;
     const Eigen::Vector3d direction(bonds.normal(b, 0), bonds.normal(b, 1), bonds.normal(b, 2));

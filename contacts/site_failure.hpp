@@ -66,7 +66,9 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
 /// through the site's cell with unit normal `normal` (crack_normal): the site's unbroken bonds
 /// whose branch vector from the site has a positive component along the normal (more than 1e-6 of
 /// its length), diagonals as much as axial bonds, in increasing bond index. The crack lies on the
-/// normal's side of the site, so that the sites of one line of cracks, each opening towards the
+/// normal's side of the site (in-ply bonds only: an inclined crack's plane crosses the interface
+/// bonds to the next ply, which delaminate by their own law), so that the sites of one line of
+/// cracks, each opening towards the
 /// same side, open every bond that crosses the line once and no other: a crack is traction-free
 /// once open. Throws plydem::Error for a site out of range or a normal that is not a unit vector.
 std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bonds, int site,

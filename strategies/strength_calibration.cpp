@@ -682,6 +682,17 @@ std::uint64_t mix64(std::uint64_t z) {
 
 }  // namespace
 
+double crack_band_factor(double weibull_modulus, std::uint64_t seed, int ply, long band) {
+  require(std::isfinite(weibull_modulus) && weibull_modulus > 0,
+          fmt::format("a crack band's strength factor needs a Weibull modulus > 0, got {}",
+                      weibull_modulus));
+  const std::uint64_t h =
+      mix64(seed ^ mix64(static_cast<std::uint64_t>(ply) * 0x9e3779b97f4a7c15ULL +
+                         static_cast<std::uint64_t>(band)));
+  const double u = (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;
+  return std::pow(-std::log(u), 1.0 / weibull_modulus) / std::tgamma(1.0 + 1.0 / weibull_modulus);
+}
+
 namespace {
 
 void check_strength_inputs(const Specimen& specimen, const std::vector<StrengthCalibration>& plies,
@@ -709,11 +720,10 @@ void check_strength_inputs(const Specimen& specimen, const std::vector<StrengthC
 class CrackSiteScatter {
  public:
   CrackSiteScatter(const Particles& p, const std::vector<StrengthCalibration>& plies,
-                   double weibull_modulus, double weibull_mean, std::uint64_t seed, bool active)
+                   double weibull_modulus, std::uint64_t seed, bool active)
       : p_(p),
         plies_(plies),
         weibull_modulus_(weibull_modulus),
-        weibull_mean_(weibull_mean),
         seed_(seed),
         across_origin_(plies.size(), std::numeric_limits<double>::infinity()) {
     const int ply_count = static_cast<int>(plies.size());
@@ -731,11 +741,7 @@ class CrackSiteScatter {
                                        p_.reference_position.row(bonds.second(b)).transpose());
     const double diameter = p_.radius(bonds.first(b)) + p_.radius(bonds.second(b));
     const long band = std::lround(2.0 * (across(k, mid) - across_origin_[k]) / diameter);
-    const std::uint64_t h =
-        mix64(seed_ ^ mix64(static_cast<std::uint64_t>(k) * 0x9e3779b97f4a7c15ULL +
-                            static_cast<std::uint64_t>(band)));
-    const double u = (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;
-    return std::pow(-std::log(u), 1.0 / weibull_modulus_) / weibull_mean_;
+    return crack_band_factor(weibull_modulus_, seed_, k, band);
   }
 
  private:
@@ -745,7 +751,7 @@ class CrackSiteScatter {
   }
   const Particles& p_;
   const std::vector<StrengthCalibration>& plies_;
-  double weibull_modulus_, weibull_mean_;
+  double weibull_modulus_;
   std::uint64_t seed_;
   std::vector<double> across_origin_;
 };
@@ -802,7 +808,7 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
   // bond's factor depends only on its row and the seed), U = (draw / 2^11 + 1/2) / 2^53 in (0, 1).
   std::mt19937_64 random(seed);
   const double weibull_mean = weibull_modulus > 0 ? std::tgamma(1.0 + 1.0 / weibull_modulus) : 1.0;
-  const CrackSiteScatter site_scatter(p, plies, weibull_modulus, weibull_mean, seed,
+  const CrackSiteScatter site_scatter(p, plies, weibull_modulus, seed,
                                       per_crack_site && weibull_modulus > 0);
   for (int b = 0; b < bonds.size(); ++b) {
     double scatter = 1.0;

@@ -196,4 +196,9 @@ void assign_bond_strengths(Specimen& specimen, const std::vector<StrengthCalibra
                            std::uint64_t seed = 1, const std::vector<bool>& scattered_plies = {},
                            bool per_crack_site = false);
 
+/// The Weibull factor (modulus m > 0, mean 1) of crack band `band` of ply `ply`, as
+/// assign_bond_strengths' per_crack_site scatter draws it: (-ln U)^(1/m) / Gamma(1 + 1/m) with U
+/// from a hash of (seed, ply, band); the same band, the same factor, in any order.
+double crack_band_factor(double weibull_modulus, std::uint64_t seed, int ply, long band);
+
 }  // namespace plydem

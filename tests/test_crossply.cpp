@@ -105,6 +105,36 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
   }
 }
 
+TEST_CASE("plydem run crossply at the material point: traction-free cracks, 0 deg to the end") {
+  // failure_criterion = "puck": the 90 deg plies' sites crack in straight, traction-free
+  // transverse cracks (bond by bond every column of the quick coupon cracked: 10 per mm, none
+  // traction-free), and the 0 deg plies carry the laminate on towards the ply-discount bound of
+  // last-ply failure, XT / 2 for [0/90]s of equal plies (measured 0.87 of it; bond by bond 0.55).
+  const fs::path dir = fresh_directory("crossply_material_point");
+  std::ofstream(dir / "mp.toml")
+      << "experiment = \"crossply\"\nmaterial = \"eglass-my750\"\nstrategy = \"square\"\n"
+         "failure_criterion = \"puck\"\nweibull_modulus = 10\nseed = 1\n"
+         "[coupon]\nlength_mm = 2\nwidth_mm = 0.5\nthickness_mm = 0.2\ndiameter_mm = 0.1\n"
+         "[interface]\ntransverse_shear = true\n[quick]\nlayups = [\"[0/90]s\"]\n";
+  RunOptions options;
+  options.config = dir / "mp.toml";
+  options.out_dir = dir / "out";
+  options.quick = true;
+  run_experiment(options);
+  const std::map<std::string, double> rows = rows_of(dir / "out" / "results.csv");
+  const Material m = load_material("eglass-my750");
+  const double density = rows.at("[0/90]s|crack density 90 at peak|dem square");
+  const double free = rows.at("[0/90]s|traction-free crack density 90 at peak|dem square");
+  const double strength = rows.at("[0/90]s|strength|dem square");
+  MESSAGE("material point: " << density << " cracks/mm, " << free
+                             << " traction-free; strength / (XT / 2) "
+                             << (strength * 1e6 / (0.5 * m.strength.XT)));
+  CHECK(density > 0);
+  CHECK(density < 0.6 * 10);  // fewer than every column (0.1 mm particles)
+  CHECK(free == doctest::Approx(density));
+  CHECK(strength * 1e6 > 0.8 * 0.5 * m.strength.XT);
+}
+
 TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming it") {
   const fs::path dir = fresh_directory("crossply_bad");
   std::ofstream(dir / "bad.toml") << "experiment = \"crossply\"\nlayups = [\"[0/45]s\"]\n";

@@ -733,19 +733,31 @@ TEST_CASE("strength test at the material point: strength scatter per site, the w
   const StrengthResult a = StrengthTest(s).run(), b = StrengthTest(s).run();
   CHECK(a.stress == b.stress);
   CHECK(a.strength < 0.9 * s.coupon.material.strength.YT);
+  // Per crack band (--scatter-per site): the sites of one column along the 90 deg fibres share a
+  // factor, so the first crack runs down one column, all of it at that column's strength.
+  s.scatter_per_crack_site = true;
+  const StrengthResult band = StrengthTest(s).run();
+  REQUIRE(!band.path.empty());
+  const Particles& p = band.model->particles;
+  const double x = p.reference_position(band.path.front().site, 0);
+  int in_column = 0;
+  for (const EventPoint& e : band.path)
+    if (e.site >= 0 && std::abs(p.reference_position(e.site, 0) - x) < 1e-9) ++in_column;
+  CHECK(in_column == 10);  // the width's 10 rows
+  CHECK(band.first_failure_stress != a.first_failure_stress);
 }
 
 TEST_CASE("strength test at the material point: what it does not do yet is a clear error") {
   StrengthSettings s = small_coupon(90);
   s.failure_criterion = PlyFailureModel::kHashin;
-  s.weibull_modulus = 10;
-  s.scatter_per_crack_site = true;
-  CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("not per crack band"), Error);
+  s.layup = {0, 90 * kDeg};
+  s.interface_strength.normal = 30e6;
+  s.interface_strength.shear = 40e6;
+  CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("breaks no interface yet"), Error);
   // The material's own key asks for it the same way.
-  StrengthSettings m = small_coupon(90);
+  StrengthSettings m = s;
+  m.failure_criterion.reset();
   m.coupon.material.failure_criterion = PlyFailureModel::kTsaiWu;
-  m.weibull_modulus = 10;
-  m.scatter_per_crack_site = true;
   CHECK_THROWS_WITH_AS(StrengthTest(m).run(), doctest::Contains("\"tsai-wu\""), Error);
   // Softening cracks need the fracture energies (the built-in materials give none).
   StrengthSettings soft = small_coupon(90);

@@ -832,29 +832,43 @@ void refuse_what_material_points_lack(const StrengthSettings& s) {
                             "failure_criterion = \"bond\" for it",
                             name, what));
   };
-  refuse_unless(!(s.effective_weibull_modulus() > 0 && s.scatter_per_crack_site),
-                "draws its strength scatter per site (per particle), not per crack band (leave "
-                "out --scatter-per site)");
   refuse_unless(!s.interface_strength.given(),
                 "breaks no interface yet (leave the interface strengths out)");
 }
 
 // Strength scatter at the material point: each site's strengths times a Weibull factor of
-// modulus m and mean 1, draw k of std::mt19937_64(seed) for particle k (every particle draws, so
-// that a site's factor depends on its index and the seed only), U = (draw / 2^11 + 1/2) / 2^53,
-// f = (-ln U)^(1/m) / Gamma(1 + 1/m); sites of plies outside `scattered_plies` (when given) keep 1.
-std::vector<double> site_strength_factors(const Particles& p, double weibull_modulus,
-                                          std::uint64_t seed,
-                                          const std::vector<bool>& scattered_plies) {
-  std::vector<double> factors(static_cast<std::size_t>(p.size()), 1.0);
+// modulus m and mean 1, (-ln U)^(1/m) / Gamma(1 + 1/m). Per site: U from draw k of
+// std::mt19937_64(seed) for particle k (every particle draws, so that a site's factor depends on
+// its index and the seed only), U = (draw / 2^11 + 1/2) / 2^53. Per crack band (`per_band`): the
+// sites of one row along their ply's fibres share crack_band_factor of their band (their distance
+// across the fibre from the ply's lowest particle, in half diameters, rounded: the bands of
+// assign_bond_strengths' per-crack-site scatter), so that a transverse crack runs through its row
+// as a cross-ply's 90 deg cracks do. Sites of plies outside `scattered_plies` (when given) keep 1.
+std::vector<double> site_strength_factors(const Particles& p, const std::vector<Ply>& plies,
+                                          double weibull_modulus, std::uint64_t seed,
+                                          const std::vector<bool>& scattered_plies, bool per_band) {
+  const std::size_t n = static_cast<std::size_t>(p.size());
+  std::vector<double> factors(n, 1.0);
+  auto across = [&](int i) {
+    const double a = plies[static_cast<std::size_t>(p.ply(i))].angle;
+    return -std::sin(a) * p.reference_position(i, 0) + std::cos(a) * p.reference_position(i, 1);
+  };
+  std::vector<double> origin(plies.size(), std::numeric_limits<double>::infinity());
+  for (int i = 0; i < p.size(); ++i) {
+    const auto k = static_cast<std::size_t>(p.ply(i));
+    require(k < plies.size(), fmt::format("particle {} is in ply {} of {}", i, k, plies.size()));
+    origin[k] = std::min(origin[k], across(i));
+  }
   std::mt19937_64 random(seed);
   const double mean = std::tgamma(1.0 + 1.0 / weibull_modulus);
   for (int i = 0; i < p.size(); ++i) {
     const double u = (static_cast<double>(random() >> 11) + 0.5) * 0x1.0p-53;
-    const auto ply = static_cast<std::size_t>(p.ply(i));
-    if (!scattered_plies.empty() && !(ply < scattered_plies.size() && scattered_plies[ply]))
-      continue;
-    factors[static_cast<std::size_t>(i)] = std::pow(-std::log(u), 1.0 / weibull_modulus) / mean;
+    const auto k = static_cast<std::size_t>(p.ply(i));
+    if (!scattered_plies.empty() && !(k < scattered_plies.size() && scattered_plies[k])) continue;
+    const long band = std::lround(2.0 * (across(i) - origin[k]) / (2.0 * p.radius(i)));
+    factors[static_cast<std::size_t>(i)] =
+        per_band ? crack_band_factor(weibull_modulus, seed, static_cast<int>(k), band)
+                 : std::pow(-std::log(u), 1.0 / weibull_modulus) / mean;
   }
   return factors;
 }
@@ -1125,8 +1139,9 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
       require_cracks_along_lattice(s, plies, specimen.ply_calibrations);
     open_only_with_sites(specimen.model);
     if (result.weibull_modulus > 0)
-      material_point->strength_factors = site_strength_factors(
-          specimen.model.particles, result.weibull_modulus, s.seed, scattered_plies);
+      material_point->strength_factors =
+          site_strength_factors(specimen.model.particles, plies, result.weibull_modulus, s.seed,
+                                scattered_plies, s.scatter_per_crack_site);
   } else {
     assign_bond_strengths(specimen, result.ply_strengths, s.interface_strength,
                           consistent_edges ? 0.0 : result.weibull_modulus, s.seed, scattered_plies,
