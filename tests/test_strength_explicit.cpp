@@ -73,10 +73,13 @@ std::set<std::pair<long, long>> folded(const std::set<int>& sites, const Model& 
 
 TEST_CASE("explicit method at the material point: the five-strength peaks, as the events method") {
   for (const Material& material : {eglass(), carbon_ply()}) {
-    for (const auto& [angle, load] :
+    for (const auto& test_case :
          {std::pair{0.0, StrengthLoad::kTension}, std::pair{90.0, StrengthLoad::kTension},
           std::pair{0.0, StrengthLoad::kCompression}, std::pair{90.0, StrengthLoad::kCompression},
           std::pair{0.0, StrengthLoad::kShear}}) {
+      // Named copies, not structured bindings: Clang 14's lambdas (CAPTURE) cannot see those.
+      const double angle = test_case.first;
+      const StrengthLoad load = test_case.second;
       CAPTURE(material.name);
       CAPTURE(angle);
       const std::string load_name = strength_load_name(load);
