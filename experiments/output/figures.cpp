@@ -140,6 +140,18 @@ Figure plot_bonds_by_stiffness(const Model& model, const fs::path& out_dir, cons
 
 namespace {
 
+// One data block of segments (x1 y1 dx dy) and its plot clause, when it has any: gnuplot numbers
+// the blocks it finds, so `index` counts only those written.
+void add_segment_block(const std::string& name, const std::string& style, const std::string& rows,
+                       int count, const std::string& stem, int& index, std::string& data,
+                       std::string& plot) {
+  if (count == 0) return;
+  data += fmt::format("# {}\n{}\n\n", name, rows);
+  plot += fmt::format("{}'{}.dat' index {} using 1:2:3:4 with vectors nohead {} title '{} ({})'",
+                      index > 0 ? ", " : "", stem, index, style, name, count);
+  ++index;
+}
+
 // The sites' cracks of plot_bond_states: a data block per mode (fibre, matrix) appended to `data`
 // as gnuplot's blocks `index`, `index` + 1, ... (counted on), and their plot clauses.
 std::string crack_traces(const std::vector<CrackTrace>& cracks, const std::string& stem,
@@ -160,14 +172,9 @@ std::string crack_traces(const std::vector<CrackTrace>& cracks, const std::strin
   static const char* const kNames[2] = {"site cracks, fibre modes", "site cracks, matrix modes"};
   static const char* const kStyles[2] = {"lw 3.5 lc rgb '#8010a0'", "lw 3.5 lc rgb '#108040'"};
   std::string plot;
-  for (int block = 0; block < 2; ++block) {
-    if (counts[block] == 0) continue;
-    data += fmt::format("# {}\n{}\n\n", kNames[block], blocks[block]);
-    plot += fmt::format("{}'{}.dat' index {} using 1:2:3:4 with vectors nohead {} title '{} ({})'",
-                        index > 0 ? ", " : "", stem, index, kStyles[block], kNames[block],
-                        counts[block]);
-    ++index;
-  }
+  for (int block = 0; block < 2; ++block)
+    add_segment_block(kNames[block], kStyles[block], blocks[block], counts[block], stem, index,
+                      data, plot);
   return plot;
 }
 
@@ -229,14 +236,9 @@ Figure plot_bond_states(const Model& model, const fs::path& out_dir, const std::
   // Only non-empty blocks are written: gnuplot numbers the blocks it finds.
   std::string plot = "plot ";
   int index = 0;
-  for (int block = 0; block < 4; ++block) {
-    if (counts[block] == 0) continue;
-    data += fmt::format("# {}\n{}\n\n", kNames[block], blocks[block]);
-    plot += fmt::format("{}'{}.dat' index {} using 1:2:3:4 with vectors nohead {} title '{} ({})'",
-                        index > 0 ? ", " : "", stem, index, kStyles[block], kNames[block],
-                        counts[block]);
-    ++index;
-  }
+  for (int block = 0; block < 4; ++block)
+    add_segment_block(kNames[block], kStyles[block], blocks[block], counts[block], stem, index,
+                      data, plot);
   for (int mode = 0; mode < 2; ++mode) {
     if (cross_counts[mode] == 0) continue;
     const char* name = mode == 0 ? "tension" : "shear";
