@@ -501,7 +501,7 @@ struct UnitLoading {
 
 // The particles uniform grips hold: those of the grips, and in shear also those within the
 // grips' depth of the y edges (the frame: StrengthSettings::load).
-std::vector<bool> shear_frame(const Particles& p, StrengthLoad load) {
+std::vector<bool> held_by_grips(const Particles& p, StrengthLoad load) {
   std::vector<bool> held(static_cast<std::size_t>(p.size()));
   double depth = 0;  // the grips' depth along x, as assign_grips left it
   const double x_min = p.reference_position.col(0).minCoeff();
@@ -562,7 +562,7 @@ DofConstraints uniform_unit_load(const Strategy& strategy, double thickness,
   }
   std::vector<double> spin = result.uniform_spin;
   for (double& w : spin) w *= travel;
-  return uniform_grip_constraints(p, travel * e, spin, shear_frame(p, load));
+  return uniform_grip_constraints(p, travel * e, spin, held_by_grips(p, load));
 }
 
 // The grips' length when StrengthSettings::grip_length is 0: two diameters bond by bond (the
@@ -606,7 +606,7 @@ UnitLoading grip_coupon(const Strategy& strategy, const StrengthSettings& s,
         p, 0.0, travel * l.grips.span,
         s.grips == StrengthGrips::kClamped ? GripCondition::kClamped : GripCondition::kFree);
   }
-  if (s.load == StrengthLoad::kShear) drop_frame_bonds(model, shear_frame(p, s.load));
+  if (s.load == StrengthLoad::kShear) drop_frame_bonds(model, held_by_grips(p, s.load));
   // The load: the right grip's x reactions, in shear its y reactions (tau_xy times the section).
   const Dof load_dof = s.load == StrengthLoad::kShear ? Dof::kUy : Dof::kUx;
   l.reaction_dofs = DofFlags::Constant(p.size(), kDofsPerParticle, false);
