@@ -76,12 +76,23 @@ double bond_strain_energy(const Particles& particles, const Bonds& bonds) {
   return energy;
 }
 
-std::vector<Eigen::Matrix3d> particle_stresses(const Particles& particles, const Bonds& bonds) {
+std::vector<Eigen::Matrix3d> particle_stresses(const Particles& particles, const Bonds& bonds,
+                                               std::span<const Eigen::Vector3d> free_offsets) {
+  require(free_offsets.empty() || free_offsets.size() == static_cast<std::size_t>(bonds.size()),
+          fmt::format("particle stresses: {} free offsets for {} bonds", free_offsets.size(),
+                      bonds.size()));
   std::vector<Eigen::Matrix3d> stress(static_cast<std::size_t>(particles.size()),
                                       Eigen::Matrix3d::Zero());
   for (int b = 0; b < bonds.size(); ++b) {
     if (bonds.is_broken(b)) continue;
-    const Eigen::Vector3d force = evaluate(particles, bonds, b).force_on_first;
+    const int i = bonds.first(b), j = bonds.second(b);
+    const Eigen::Vector3d offset =
+        free_offsets.empty() ? Eigen::Vector3d::Zero() : free_offsets[static_cast<std::size_t>(b)];
+    const Eigen::Vector3d force =
+        parallel_bond_response(
+            bond_parameters(bonds, b), row3(particles.displacement, i), row3(particles.rotation, i),
+            row3(particles.displacement, j) - offset, row3(particles.rotation, j))
+            .force_on_first;
     const Eigen::Vector3d branch = bonds.length(b) * row3(bonds.normal, b);
     const Eigen::Matrix3d virial = 0.25 * (force * branch.transpose() + branch * force.transpose());
     stress[static_cast<std::size_t>(bonds.first(b))] += virial;

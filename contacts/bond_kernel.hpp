@@ -34,6 +34,7 @@
 #include <limits>
 #include <memory>
 #include <new>
+#include <span>
 #include <vector>
 
 #include "contacts/half_bond.hpp"
@@ -70,7 +71,11 @@ double bond_strain_energy(const Particles& particles, const Bonds& bonds);
 /// the second (the same product seen from either end), each particle owning half of each of its
 /// bonds, so that a uniform state is measured exactly. Bonds act through the reference loop's law
 /// (compute_bond_forces); broken bonds carry nothing; a particle of zero volume gets zero.
-std::vector<Eigen::Matrix3d> particle_stresses(const Particles& particles, const Bonds& bonds);
+/// `free_offsets` (one per bond, or empty: none) is each bond's free relative displacement: the
+/// u_j - u_i at which it carries no force (an eigen displacement, such as the affine displacement
+/// of a plastic strain: solvers/plastic_shear.hpp); a bond's force is then that of u_j - offset.
+std::vector<Eigen::Matrix3d> particle_stresses(const Particles& particles, const Bonds& bonds,
+                                               std::span<const Eigen::Vector3d> free_offsets = {});
 
 /// Bond b's deformation at the particles' current state, for the reference loop. The lever term
 /// (s_i theta_i + s_j theta_j) x n is written as (sigma (theta_i + theta_j) + delta (theta_j -

@@ -91,20 +91,20 @@ std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bond
   return strain;
 }
 
-std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,
-                                       std::span<const double> ply_angles,
-                                       FailureCriterion criterion, const Material& material,
-                                       std::span<const double> strength_factors) {
-  require(strength_factors.empty() ||
-              strength_factors.size() == static_cast<std::size_t>(particles.size()),
-          fmt::format("site failure: {} strength factors for {} particles", strength_factors.size(),
-                      particles.size()));
+std::vector<PlyStress> site_ply_stresses(const Particles& particles, const Bonds& bonds,
+                                         std::span<const double> ply_angles,
+                                         const Material& material,
+                                         std::span<const double> plastic_shear) {
+  require(
+      plastic_shear.empty() || plastic_shear.size() == static_cast<std::size_t>(particles.size()),
+      fmt::format("site stress: {} plastic shear strains for {} particles", plastic_shear.size(),
+                  particles.size()));
   const SiteSums sums = site_sums(particles, bonds);
   const Eigen::Matrix3d q = reduced_stiffness(material);
   std::vector<Eigen::Matrix3d> q_bar(ply_angles.size());
   for (std::size_t ply = 0; ply < ply_angles.size(); ++ply)
     q_bar[ply] = rotate_reduced_stiffness(q, ply_angles[ply]);
-  std::vector<SiteFailure> sites(sums.spread.size());
+  std::vector<PlyStress> stresses(sums.spread.size());
   for (int i = 0; i < particles.size(); ++i) {
     const int ply = particles.ply(i);
     require(ply >= 0 && static_cast<std::size_t>(ply) < ply_angles.size(),
@@ -116,7 +116,30 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
     const Eigen::Vector3d sigma = strain.allFinite()
                                       ? Eigen::Vector3d(stiffness * strain)
                                       : strand_stress(sums.spread[k], sums.moved[k], stiffness);
-    const double angle = ply_angles[static_cast<std::size_t>(ply)];
+    stresses[k] =
+        to_ply_axes(sigma(0), sigma(1), sigma(2), ply_angles[static_cast<std::size_t>(ply)]);
+    // In the ply's axes the reduced stiffness does not couple shear to the normal strains.
+    if (!plastic_shear.empty() && strain.allFinite())
+      stresses[k].tau12 -= q(2, 2) * plastic_shear[k];
+  }
+  return stresses;
+}
+
+std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,
+                                       std::span<const double> ply_angles,
+                                       FailureCriterion criterion, const Material& material,
+                                       std::span<const double> strength_factors,
+                                       std::span<const double> plastic_shear) {
+  require(strength_factors.empty() ||
+              strength_factors.size() == static_cast<std::size_t>(particles.size()),
+          fmt::format("site failure: {} strength factors for {} particles", strength_factors.size(),
+                      particles.size()));
+  const std::vector<PlyStress> stresses =
+      site_ply_stresses(particles, bonds, ply_angles, material, plastic_shear);
+  std::vector<SiteFailure> sites(stresses.size());
+  for (int i = 0; i < particles.size(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const double angle = ply_angles[static_cast<std::size_t>(particles.ply(i))];
     SiteFailure& site = sites[k];
     LaminaStrength strength = material.strength;
     if (!strength_factors.empty()) {
@@ -126,8 +149,7 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
       for (double* s : {&strength.XT, &strength.XC, &strength.YT, &strength.YC, &strength.S12})
         *s *= f;
     }
-    site.failure =
-        ply_failure(criterion, to_ply_axes(sigma(0), sigma(1), sigma(2), angle), strength);
+    site.failure = ply_failure(criterion, stresses[k], strength);
     site.crack_normal = crack_normal(site.failure, angle);
   }
   return sites;

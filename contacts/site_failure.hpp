@@ -47,20 +47,31 @@ Eigen::Vector3d crack_normal(const PlyFailure& failure, double ply_angle);
 /// thickness). A particle whose intact bonds do not span the plane reads NaN.
 std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bonds& bonds);
 
-/// Every particle's site failure at the current state: its in-plane stress, Q-bar of its ply
-/// (`material` at the fibre angle ply_angles[particles.ply(i)] [rad]) times its site strain, in
-/// the axes of the ply, judged by `criterion` with the material's strengths. A site whose bonds
-/// all lie along one line (a strand a crack left) carries the uniaxial stress of its stretch along
-/// that line (the ply's modulus in that direction times it). A site that carries no stress (no
-/// bond left) gets an infinite load factor. `strength_factors` (one per particle, or empty: 1)
-/// scales each site's strengths XT, XC, YT, YC and S12 (strength scatter). Throws
+/// Every particle's site stress at the current state in the axes of its ply: Q-bar of its ply
+/// (`material` at the fibre angle ply_angles[particles.ply(i)] [rad]) times its site strain,
+/// turned into the ply's axes, with tau12 = G12 (gamma12 - gamma_p) where `plastic_shear` (one
+/// per particle, or empty: 0) gives the site's plastic shear strain gamma_p (in the ply's axes
+/// the reduced stiffness couples no normal strain to shear). A site whose bonds all lie along one
+/// line carries the uniaxial stress of its stretch along that line (the ply's modulus in that
+/// direction times it), one without bonds zero. Throws plydem::Error naming the particle whose ply
+/// has no angle in `ply_angles`, and for plastic strains of another size.
+std::vector<PlyStress> site_ply_stresses(const Particles& particles, const Bonds& bonds,
+                                         std::span<const double> ply_angles,
+                                         const Material& material,
+                                         std::span<const double> plastic_shear = {});
+
+/// Every particle's site failure at the current state: its stress in the axes of its ply
+/// (site_ply_stresses) judged by `criterion` with the material's strengths. A site that carries no
+/// stress (no bond left) gets an infinite load factor. `strength_factors` (one per particle, or
+/// empty: 1) scales each site's strengths XT, XC, YT, YC and S12 (strength scatter). Throws
 /// plydem::Error naming the particle whose ply has no angle in `ply_angles`, for factors of
 /// another size or not positive, and as failure_load_factor does for a strength the criterion
-/// needs and the material lacks.
+/// needs and the material lacks. `plastic_shear`: as site_ply_stresses.
 std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,
                                        std::span<const double> ply_angles,
                                        FailureCriterion criterion, const Material& material,
-                                       std::span<const double> strength_factors = {});
+                                       std::span<const double> strength_factors = {},
+                                       std::span<const double> plastic_shear = {});
 
 /// The bonds a crack at particle `site` opens (contacts/bond_opening.hpp opens them), its plane
 /// through the site's cell with unit normal `normal` (crack_normal): the site's unbroken bonds

@@ -96,6 +96,9 @@ struct EventPoint {
   /// A softening site's tooth: 0 when its crack opens (or opens brittle), k for its k-th tooth
   /// after that.
   int site_tooth = 0;
+  /// A load step of a path that is not a failure (solvers/plastic_shear.hpp: the plastic shear
+  /// run's steps before its crack), not a critical state.
+  bool load_step = false;
   /// The strain energy the event's bonds lost as they changed at this state (what their damage
   /// dissipated: EventsResult::crack_energy sums these) [J]; set after EventSettings::on_event.
   double crack_energy = 0;

@@ -63,6 +63,26 @@ std::string crack_energy_lines(const StrengthResult& r) {
   return out;
 }
 
+// In-plane shear that followed the material's shear_curve: its points beside the simulated curve.
+std::string shear_curve_lines(const StrengthResult& r) {
+  std::string out = fmt::format(
+      "\nshear curve followed by plastic shear strain at the material point (Ramberg-Osgood fit, "
+      "eta {:.3g}; plastic work {:.4g} J)\n",
+      r.shear_law_eta, r.plastic_work);
+  if (r.shear_curve.empty()) return out + "(compared with the curve at 0 and 90 deg only)\n";
+  out += fmt::format("{:>10} {:>14} {:>14} {:>14} {:>12}\n", "gamma12 %", "measured MPa", "law MPa",
+                     "simulated MPa", "sim/measured");
+  for (const ShearCurveCheck& c : r.shear_curve) {
+    out += fmt::format("{:>10.2f} {:>14.2f} {:>14.2f} ", c.strain * 100, c.measured * kMPaPerPa,
+                       c.law * kMPaPerPa);
+    out += std::isfinite(c.simulated)
+               ? fmt::format("{:>14.2f} {:>12.4f}\n", c.simulated * kMPaPerPa,
+                             c.simulated / c.measured)
+               : fmt::format("{:>14} {:>12}\n", "(cracked)", "-");
+  }
+  return out;
+}
+
 }  // namespace
 
 const char* criterion_label(FailureCriterion criterion) {
@@ -122,6 +142,7 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
                        "fracture plane at the peak", r.peak_fracture_angle / kDegree);
     out += crack_energy_lines(r);
   }
+  if (r.plastic_shear) out += shear_curve_lines(r);
   if (r.edge_strengthened_bonds > 0) {
     out += fmt::format(
         "{:<34} {:>14}  (edge and grip bonds raised to fail with the bulk, by up to {:.3f}x)\n",
@@ -163,6 +184,35 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
   }
   out += fmt::format("building {:.2f} s, wall time {:.2f} s\n", r.build_seconds, r.wall_seconds);
   return out;
+}
+
+// The failure model's figures: the criterion, the peak's mode and plane, the cracks' energy
+// against G times their area, and in shear the followed shear curve.
+void add_failure_model_json(const StrengthResult& r, nlohmann::json& j) {
+  j["failure_criterion"] = failure_model_name(r.failure_criterion);
+  if (r.peak_mode.empty()) {
+    j["peak_mode"] = nullptr;
+  } else {
+    j["peak_mode"] = r.peak_mode;
+  }
+  j["peak_fracture_angle_deg"] = finite_or_null(r.peak_fracture_angle / kDegree);
+  j["cracked_sites"] = r.cracked_sites;
+  j["crack_area"] = r.crack_area;
+  j["crack_dissipated_energy"] = r.crack_energy;
+  j["crack_fracture_energy"] = r.crack_fracture_energy;
+  j["brittle_sites"] = r.brittle_sites;
+  j["softening_sites"] = r.softening_sites;
+  if (r.plastic_shear) {
+    nlohmann::json curve = nlohmann::json::array();
+    for (const ShearCurveCheck& c : r.shear_curve)
+      curve.push_back({{"gamma12", c.strain},
+                       {"measured_tau12", c.measured},
+                       {"law_tau12", c.law},
+                       {"simulated_tau12", finite_or_null(c.simulated)}});
+    j["shear_curve"] = curve;
+    j["shear_law_eta"] = r.shear_law_eta;
+    j["plastic_work"] = r.plastic_work;
+  }
 }
 
 nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s) {
@@ -231,19 +281,7 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   j["weibull_modulus"] = r.weibull_modulus;
   if (r.weibull_modulus > 0) j["seed"] = r.seed;
   j["stop"] = r.stop;
-  j["failure_criterion"] = failure_model_name(r.failure_criterion);
-  if (r.peak_mode.empty()) {
-    j["peak_mode"] = nullptr;
-  } else {
-    j["peak_mode"] = r.peak_mode;
-  }
-  j["peak_fracture_angle_deg"] = finite_or_null(r.peak_fracture_angle / kDegree);
-  j["cracked_sites"] = r.cracked_sites;
-  j["crack_area"] = r.crack_area;
-  j["crack_dissipated_energy"] = r.crack_energy;
-  j["crack_fracture_energy"] = r.crack_fracture_energy;
-  j["brittle_sites"] = r.brittle_sites;
-  j["softening_sites"] = r.softening_sites;
+  add_failure_model_json(r, j);
   j["factorizations"] = r.factorizations;
   j["solves"] = r.solves;
   j["dissipated_energy"] = r.dissipated_energy;

@@ -12,14 +12,17 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <span>
 #include <string_view>
 
 #include "contacts/bond_kernel.hpp"
 #include "core/error.hpp"
 #include "core/homogenizer.hpp"
 #include "core/measurements.hpp"
+#include "core/shear_curve.hpp"
 #include "core/stopwatch.hpp"
 #include "core/units.hpp"
+#include "solvers/plastic_shear.hpp"
 #include "strategies/boundary_cells.hpp"
 #include "strategies/registry.hpp"
 
@@ -676,8 +679,11 @@ struct StrengthCurve {
   // carries. The frame's right grip takes its y reaction over an edge whose height a row of bonds
   // to the frame blurs (half a row at either side, on square), and the virial is exact in the
   // uniform state at every gauge site.
-  double gauge_shear_stress(const Model& state) const {
-    const std::vector<Eigen::Matrix3d> stress = particle_stresses(state.particles, state.bonds);
+  // `free_offsets`: the bonds' free offsets of a plastic shear run (particle_stresses).
+  double gauge_shear_stress(const Model& state,
+                            std::span<const Eigen::Vector3d> free_offsets) const {
+    const std::vector<Eigen::Matrix3d> stress =
+        particle_stresses(state.particles, state.bonds, free_offsets);
     double weighted = 0, volume = 0;
     for (int i : gauge.particles) {
       const double v = state.particles.volume(i);
@@ -694,10 +700,11 @@ struct StrengthCurve {
     result.nominal_strain.push_back(0.0);
   }
 
-  void on_event(const Model& state, const EventPoint& point) {
+  void on_event(const Model& state, const EventPoint& point,
+                std::span<const Eigen::Vector3d> free_offsets = {}) {
     const GaugeStrain fit = fit_gauge_strain(state.particles, gauge.particles);
     result.strain.push_back(sign * (shear ? fit.gamma_xy : fit.exx));
-    result.stress.push_back(shear ? gauge_shear_stress(state)
+    result.stress.push_back(shear ? gauge_shear_stress(state, free_offsets)
                                   : sign * point.reaction / gauge.cross_section);
     result.nominal_strain.push_back(point.load_factor * kUnitNominalStrain);
     if (!record_snapshots) return;
@@ -823,6 +830,13 @@ EventsState restore_strength_run(const std::filesystem::path& restart,
 
 // Failure at the material point (StrengthSettings::failure_criterion other than bond): refuses
 // what it does not do yet, naming it.
+// In-plane shear at the material point of a material with a shear_curve: the plastic shear run.
+bool follows_shear_curve(const StrengthSettings& s) {
+  return s.load == StrengthLoad::kShear &&
+         s.effective_failure_criterion() != PlyFailureModel::kBond &&
+         !s.coupon.material.shear_curve.empty();
+}
+
 void refuse_what_material_points_lack(const StrengthSettings& s) {
   const PlyFailureModel model = s.effective_failure_criterion();
   if (model == PlyFailureModel::kBond) return;
@@ -834,6 +848,22 @@ void refuse_what_material_points_lack(const StrengthSettings& s) {
   };
   refuse_unless(!s.interface_strength.given(),
                 "breaks no interface yet (leave the interface strengths out)");
+  if (!follows_shear_curve(s)) return;
+  const std::string curve = fmt::format(
+      "material '{}' has a shear_curve, which in-plane shear (--load shear) follows "
+      "by plastic shear strain at the material point up to its first crack "
+      "(solvers/plastic_shear.hpp)",
+      s.coupon.material.name);
+  require(s.method == StrengthMethod::kEvents,
+          curve +
+              ", with the events method only: --method explicit does not follow it yet "
+              "(leave shear_curve out of the material file for a linear explicit run)");
+  require(!s.checkpoint.writes() && s.checkpoint.restart.empty(),
+          curve +
+              ": a run of load steps without checkpoints (--checkpoint-every, --restart do "
+              "not apply)");
+  require(!s.strength_options.softening,
+          curve + ", where the crack opens brittle: --softening does not apply");
 }
 
 // Strength scatter at the material point: each site's strengths times a Weibull factor of
@@ -1021,6 +1051,54 @@ EventsResult run_explicit(const StrengthSettings& s,
   return run_explicit_failure(model, loading.unit, loading.reaction_dofs, f);
 }
 
+// In-plane shear that follows the material's shear_curve (solvers/plastic_shear.hpp), each point
+// into `curve`.
+EventsResult run_plastic(const StrengthSettings& s,
+                         const std::function<void(const EventProgress&)>& progress,
+                         const StaticSettings& grip_settings, const UnitLoading& loading,
+                         Model& model, StrengthCurve& curve, MaterialPointFailure material_point,
+                         StrengthResult& result) {
+  PlasticShearSettings p;
+  p.material_point = std::move(material_point);
+  p.static_settings.pin_rigid_modes = grip_settings.pin_rigid_modes;
+  p.static_settings.linear_solver = grip_settings.linear_solver;
+  p.on_progress = progress;
+  p.progress_seconds = s.events.progress_seconds;
+  curve.start();
+  p.on_point = [&](const Model& state, const EventPoint& point,
+                   std::span<const Eigen::Vector3d> offsets) {
+    curve.on_event(state, point, offsets);
+  };
+  PlasticShearResult run = run_plastic_shear(model, loading.unit, loading.reaction_dofs, p);
+  result.plastic_shear = true;
+  result.plastic_work = run.plastic_work;
+  return std::move(run.events);
+}
+
+// The material's shear_curve beside the simulated curve (a ply at 0 or 90 deg: gamma_xy is
+// gamma12 there, up to its sign).
+void compare_shear_curve(StrengthResult& result) {
+  const RambergOsgoodShear law(result.material);
+  result.shear_law_eta = law.eta();
+  const double turned = std::remainder(result.ply_angle, std::numbers::pi / 2);
+  if (!result.layup.empty() || std::abs(turned) > 1e-9) return;
+  const std::size_t last = static_cast<std::size_t>(result.peak) + 1;  // the curve's peak
+  for (const ShearCurvePoint& q : result.material.shear_curve) {
+    ShearCurveCheck c;
+    c.strain = q.strain;
+    c.measured = q.stress;
+    c.law = law.stress_at(q.strain);
+    for (std::size_t k = 1; k <= last && k < result.strain.size(); ++k) {
+      const double g0 = std::abs(result.strain[k - 1]), g1 = std::abs(result.strain[k]);
+      if (g1 < q.strain || g1 == g0) continue;
+      const double t = (q.strain - g0) / (g1 - g0);
+      c.simulated = (1 - t) * std::abs(result.stress[k - 1]) + t * std::abs(result.stress[k]);
+      break;
+    }
+    result.shear_curve.push_back(c);
+  }
+}
+
 // The run's figures: the path, the peak and the first failure.
 void take_events_result(const EventsResult& run, StrengthResult& result) {
   require(!run.path.empty(),
@@ -1058,8 +1136,11 @@ void take_events_result(const EventsResult& run, StrengthResult& result) {
   const std::size_t peak = static_cast<std::size_t>(result.peak) + 1;
   result.strength = result.stress[peak];
   result.strain_at_peak = result.strain[peak];
-  result.first_failure_stress = result.stress[1];
-  result.first_failure_strain = result.strain[1];
+  // The first failure: the first point that is not a load step (a plastic shear run's).
+  std::size_t first = 0;
+  while (first + 1 < run.path.size() && run.path[first].load_step) ++first;
+  result.first_failure_stress = result.stress[first + 1];
+  result.first_failure_strain = result.strain[first + 1];
 }
 
 // Broken bonds by family and mode; every family of the coupon is listed.
@@ -1166,7 +1247,9 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   StrengthCurve curve(result, loading.gauge, s.record_snapshots, s.load);
   const bool at_material_points = material_point.has_value();
   const EventsResult run =
-      s.method == StrengthMethod::kExplicit
+      follows_shear_curve(s) ? run_plastic(s, progress_, grip_settings, loading, *model, curve,
+                                           std::move(*material_point), result)
+      : s.method == StrengthMethod::kExplicit
           ? run_explicit(s, progress_, loading, failure_load_factor(specimen_calibrations, result),
                          *model, curve, std::move(material_point))
           : run_to_failure(s, progress_, grip_settings, loading, *model, curve,
@@ -1177,6 +1260,7 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
                       "failure_criterion = \"bond\", or another strategy or particle size)",
                       run.path.size()));
   take_events_result(run, result);
+  if (result.plastic_shear) compare_shear_curve(result);
   count_broken_bonds(*model, result);
   if (s.record_snapshots) curve.finish_snapshots(model);
   result.model = std::move(model);

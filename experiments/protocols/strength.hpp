@@ -226,6 +226,16 @@ struct StrengthSnapshot {
   std::shared_ptr<const Model> model;
 };
 
+/// A point of the material's shear_curve beside the shear test's curve at the same strain.
+struct ShearCurveCheck {
+  double strain = 0;    ///< gamma12 of the material file's point
+  double measured = 0;  ///< its tau12 [Pa]
+  double law = 0;       ///< the fitted Ramberg-Osgood law's tau12 there [Pa]
+  /// The gauge's |tau_xy| at |gamma_xy| = strain on the simulated curve (linear between its
+  /// points) [Pa]; NaN beyond the peak (the coupon cracked before it).
+  double simulated = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct StrengthResult {
   std::string strategy;
   Material material;
@@ -254,6 +264,13 @@ struct StrengthResult {
   double crack_fracture_energy = 0;
   int brittle_sites = 0;
   int softening_sites = 0;  ///< still softening at the stop (EventsResult::softening_sites)
+  /// In-plane shear of a material with a shear_curve (solvers/plastic_shear.hpp): its points
+  /// beside the simulated curve (a ply at 0 or 90 deg, where gamma_xy is gamma12; empty
+  /// otherwise), the fitted law's exponent eta and the sites' plastic work [J].
+  bool plastic_shear = false;
+  std::vector<ShearCurveCheck> shear_curve;
+  double shear_law_eta = 0;
+  double plastic_work = 0;
 
   /// Stresses and strains along the load (StrengthSettings::load): positive in compression.
   double strength = 0;              ///< peak stress [Pa]
