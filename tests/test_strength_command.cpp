@@ -728,7 +728,7 @@ TEST_CASE("strength test at the material point: strength scatter per site, the w
   const double expected = std::pow(static_cast<double>(judged), -1.0 / m);
   MESSAGE("first failure / YT over " << seeds << " seeds: " << (sum / seeds) << ", weakest link of "
                                      << judged << " sites " << expected);
-  CHECK(sum / seeds == doctest::Approx(expected).epsilon(0.08));
+  CHECK(sum / seeds == doctest::Approx(expected).epsilon(0.08).scale(0));
   s.seed = 7;
   const StrengthResult a = StrengthTest(s).run(), b = StrengthTest(s).run();
   CHECK(a.stress == b.stress);
