@@ -155,6 +155,51 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
   return sites;
 }
 
+namespace {
+
+Eigen::Vector3d reference(const Particles& p, int i) {
+  return p.reference_position.row(i).transpose().matrix();
+}
+
+// The lattice around a site, from its in-ply bonds in the reference configuration (broken or
+// not): the spacing of the lattice's lines along a unit vector n (the smallest |l . n| of its bonds
+// that have a component along n: the distance from the site's line to the next), the area of the
+// lattice's cell in the layer (the smallest non-zero |l1 x l2| of two of its in-plane bonds) and
+// its longest bond.
+struct SiteLattice {
+  double spacing = 0;
+  double cell_area = 0;
+  double reach = 0;
+};
+
+SiteLattice site_lattice(const Particles& particles, const Bonds& bonds, int site,
+                         const Eigen::Vector3d& n) {
+  std::vector<Eigen::Vector3d> branches;
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_interface(b) || (bonds.first(b) != site && bonds.second(b) != site)) continue;
+    const int other = bonds.first(b) == site ? bonds.second(b) : bonds.first(b);
+    branches.push_back(reference(particles, other) - reference(particles, site));
+  }
+  SiteLattice lattice;
+  double spacing = std::numeric_limits<double>::infinity();
+  double area = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < branches.size(); ++k) {
+    const Eigen::Vector3d& l = branches[k];
+    lattice.reach = std::max(lattice.reach, l.norm());
+    const double along = std::abs(l.dot(n));
+    if (along > 1e-6 * l.norm()) spacing = std::min(spacing, along);
+    for (std::size_t m = k + 1; m < branches.size(); ++m) {
+      const double cross = std::abs(l.x() * branches[m].y() - l.y() * branches[m].x());
+      if (cross > 1e-6 * l.squaredNorm()) area = std::min(area, cross);
+    }
+  }
+  lattice.spacing = std::isfinite(spacing) ? spacing : 0;
+  lattice.cell_area = std::isfinite(area) ? area : 0;
+  return lattice;
+}
+
+}  // namespace
+
 std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bonds, int site,
                                     const Eigen::Vector3d& normal) {
   require(site >= 0 && site < particles.size(),
@@ -162,13 +207,41 @@ std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bon
   require(std::abs(normal.norm() - 1) < 1e-9,
           fmt::format("a crack's normal must be a unit vector (its length is {})", normal.norm()));
   std::vector<int> crossing;
+  const Eigen::Vector3d xs = reference(particles, site);
+  // The crack's segment in the layer: its in-plane normal and direction, and its length along
+  // that direction (the cell's area over the spacing of the lattice's lines along the normal).
+  const Eigen::Vector3d planar(normal.x(), normal.y(), 0);
+  const bool in_layer = planar.norm() > 1e-9;
+  const Eigen::Vector3d n_plane = in_layer ? Eigen::Vector3d(planar.normalized()) : planar;
+  const Eigen::Vector3d t(-n_plane.y(), n_plane.x(), 0);
+  const SiteLattice lattice =
+      in_layer ? site_lattice(particles, bonds, site, n_plane) : SiteLattice{};
+  const double half = lattice.spacing > 0 ? 0.5 * lattice.cell_area / lattice.spacing : 0;
   for (int b = 0; b < bonds.size(); ++b) {
-    if (bonds.is_broken(b) || (bonds.first(b) != site && bonds.second(b) != site)) continue;
-    if (bonds.is_interface(b)) continue;  // a ply's crack stays in its ply
-    // The bond's direction from the site: bonds.normal points from the first to the second.
-    const double outward = bonds.first(b) == site ? 1.0 : -1.0;
-    const Eigen::Vector3d direction(bonds.normal(b, 0), bonds.normal(b, 1), bonds.normal(b, 2));
-    if (outward * normal.dot(direction) > 1e-6) crossing.push_back(b);
+    if (bonds.is_broken(b) || bonds.is_interface(b)) continue;  // a ply's crack stays in its ply
+    const int i = bonds.first(b), j = bonds.second(b);
+    if (i == site || j == site) {
+      // The bond's direction from the site: bonds.normal points from the first to the second.
+      const double outward = i == site ? 1.0 : -1.0;
+      const Eigen::Vector3d direction(bonds.normal(b, 0), bonds.normal(b, 1), bonds.normal(b, 2));
+      if (outward * normal.dot(direction) > 1e-6) crossing.push_back(b);
+      continue;
+    }
+    if (!(half > 0)) continue;
+    // Another site's bond that crosses this site's segment of the plane, in the site's layer.
+    const Eigen::Vector3d xi = reference(particles, i), xj = reference(particles, j);
+    const double tolerance = 1e-6 * bonds.length(b);
+    if ((xi - xs).norm() > 2 * lattice.reach || std::abs(xi.z() - xs.z()) > tolerance ||
+        std::abs(xj.z() - xs.z()) > tolerance)
+      continue;
+    const double si = n_plane.dot(xi - xs), sj = n_plane.dot(xj - xs);
+    if (!(std::min(si, sj) <= tolerance && std::max(si, sj) > tolerance)) continue;
+    const Eigen::Vector3d at = std::abs(si) <= tolerance ? xi
+                               : std::abs(sj) <= tolerance
+                                   ? xj
+                                   : Eigen::Vector3d(xi + (xj - xi) * si / (si - sj));
+    const double along = t.dot(at - xs);
+    if (std::abs(along) <= half * (1 + 1e-6)) crossing.push_back(b);
   }
   return crossing;
 }
@@ -221,24 +294,11 @@ OpeningSite next_opening_site(const Particles& particles, const Bonds& bonds,
 }
 
 double crack_share(const Particles& particles, const Bonds& bonds, int site,
-                   std::span<const int> crack, std::span<const double> energy,
                    const Eigen::Vector3d& normal) {
-  require(crack.size() == energy.size(), "crack_share needs one energy per bond");
-  double weight = 0, projected = 0, reach = 0;
-  for (std::size_t k = 0; k < crack.size(); ++k) {
-    const int b = crack[k];
-    const int other = bonds.first(b) == site ? bonds.second(b) : bonds.first(b);
-    const double along =
-        std::abs((particles.reference_position.row(other) - particles.reference_position.row(site))
-                     .matrix()
-                     .dot(normal.transpose()));
-    weight += energy[k];
-    projected += along * energy[k];
-    reach += along;
-  }
-  const double volume = particles.volume(site);
-  if (!(projected > 0)) return volume * static_cast<double>(crack.size()) / reach;
-  return volume * weight / projected;
+  const SiteLattice lattice = site_lattice(particles, bonds, site, normal);
+  require(lattice.spacing > 0,
+          fmt::format("particle {} has no in-ply bond across its crack plane", site));
+  return particles.volume(site) / lattice.spacing;
 }
 
 }  // namespace plydem

@@ -74,14 +74,22 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
                                        std::span<const double> plastic_shear = {});
 
 /// The bonds a crack at particle `site` opens (contacts/bond_opening.hpp opens them), its plane
-/// through the site's cell with unit normal `normal` (crack_normal): the site's unbroken bonds
-/// whose branch vector from the site has a positive component along the normal (more than 1e-6 of
-/// its length), diagonals as much as axial bonds, in increasing bond index. The crack lies on the
-/// normal's side of the site (in-ply bonds only: an inclined crack's plane crosses the interface
-/// bonds to the next ply, which delaminate by their own law), so that the sites of one line of
-/// cracks, each opening towards the
-/// same side, open every bond that crosses the line once and no other: a crack is traction-free
-/// once open. Throws plydem::Error for a site out of range or a normal that is not a unit vector.
+/// through the site's cell with unit normal `normal` (crack_normal), on the normal's side of the
+/// site, in increasing bond index, in-ply bonds only (an inclined crack's plane crosses the
+/// interface bonds to the next ply, which delaminate by their own law):
+///  - the site's unbroken bonds whose branch vector from the site has a positive component along
+///    the normal (more than 1e-6 of its length), diagonals as much as axial bonds;
+///  - in the site's layer, the other unbroken bonds that cross the plane within the site's segment
+///    of it: from the plane's side away from the normal (or from on it) to the normal's side,
+///    crossing it at a distance along the plane's in-layer direction t from the site of at most
+///    h / 2, h = the lattice cell's area over the spacing of the lattice's lines along the normal
+///    (both from the site's bonds): the site spacing along a crack that follows a lattice
+///    direction. A lattice turned from the crack (a square one at 45 deg, whose crack runs along
+///    its diagonals) has bonds that join the sites on either side of the crack's row and cross it
+///    halfway between two of its sites: the first of the two to crack opens it.
+/// The sites of one row of cracks, each opening towards the same side, open every bond that
+/// crosses the row once and no other: a crack is traction-free once open. Throws plydem::Error
+/// for a site out of range or a normal that is not a unit vector.
 std::vector<int> bonds_across_crack(const Particles& particles, const Bonds& bonds, int site,
                                     const Eigen::Vector3d& normal);
 
@@ -113,13 +121,14 @@ struct OpeningSite {
 OpeningSite next_opening_site(const Particles& particles, const Bonds& bonds,
                               std::vector<SiteFailure>& sites, double tie_tolerance);
 
-/// Site `site`'s share of its crack plane through a lattice of such sites [m^2]:
-/// V sum(e_b) / sum(|l_b . n| e_b) over the crack's bonds `crack` with their strain energies
-/// `energy` (V the particle's volume, l_b the branch vector from the site in the reference
-/// configuration, n the crack's unit normal), which is V / a for a lattice of spacing a along the
-/// normal; unloaded bonds (no energy to weigh them by) by their mean reach along the normal.
+/// Site `site`'s share of its crack plane through a lattice of such sites [m^2]: V / a, V the
+/// particle's volume and a the spacing of the lattice's lines along the crack's unit normal n (the
+/// smallest |l . n| of the site's in-ply bonds, broken or not, that have a component along n, l
+/// the branch vector from the site in the reference configuration): the cell's area times the
+/// layer's thickness over a, or the segment of bonds_across_crack times the thickness (over
+/// cos phi for a plane inclined by phi through the thickness). Throws plydem::Error for a site
+/// with no such bond.
 double crack_share(const Particles& particles, const Bonds& bonds, int site,
-                   std::span<const int> crack, std::span<const double> energy,
                    const Eigen::Vector3d& normal);
 
 }  // namespace plydem

@@ -901,10 +901,7 @@ class EventLoop {
 
   // Site `site`'s share of its crack plane (bond_events.hpp, "Softening sites") [m^2].
   double crack_share(const SiteCrack& site) const {
-    std::vector<double> energy;
-    for (int b : site.bonds) energy.push_back(state_.bond_energy[static_cast<std::size_t>(b)]);
-    return plydem::crack_share(model_.particles, model_.bonds, site.particle, site.bonds, energy,
-                               site.normal);
+    return plydem::crack_share(model_.particles, model_.bonds, site.particle, site.normal);
   }
 
   // The last event's bonds lost `energy` [J] as they changed (EventPoint::crack_energy).
@@ -1015,10 +1012,9 @@ class EventLoop {
     // widen the crack into a band.
     for (const SofteningCrack& c : softening_) {
       sites[static_cast<std::size_t>(c.site)].failure.load_factor = kNever;
-      for (int b : c.bonds) {
-        const int other =
-            model_.bonds.first(b) == c.site ? model_.bonds.second(b) : model_.bonds.first(b);
-        sites[static_cast<std::size_t>(other)].failure.load_factor = kNever;
+      for (int b : c.bonds) {  // both ends: a crack's bonds need not start at its site
+        sites[static_cast<std::size_t>(model_.bonds.first(b))].failure.load_factor = kNever;
+        sites[static_cast<std::size_t>(model_.bonds.second(b))].failure.load_factor = kNever;
       }
     }
     OpeningSite opening = next_opening_site(model_.particles, model_.bonds, sites, kTieTolerance);

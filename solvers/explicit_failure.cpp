@@ -252,18 +252,15 @@ class ExplicitFailureRun {
   void open(const OpeningSite& opening) {
     const Particles& p = shown_.particles;
     const Bonds& bonds = model_.bonds;
-    std::vector<double> energy;
     for (int b : opening.bonds) {
       const int i = bonds.first(b), j = bonds.second(b);
       const BondResponse r = parallel_bond_response(
           bond_parameters(bonds, b), p.displacement.row(i).matrix().transpose(),
           p.rotation.row(i).matrix().transpose(), p.displacement.row(j).matrix().transpose(),
           p.rotation.row(j).matrix().transpose());
-      energy.push_back(r.energy);
       result_.crack_energy += r.energy;
     }
-    const double area =
-        crack_share(p, bonds, opening.particle, opening.bonds, energy, opening.normal);
+    const double area = crack_share(p, bonds, opening.particle, opening.normal);
     const PlyFailureMode mode = opening.site.failure.mode;
     const bool fibre =
         mode == PlyFailureMode::kFibreTension || mode == PlyFailureMode::kFibreCompression;

@@ -388,8 +388,7 @@ class PlasticShearRun {
     point.crack_energy = crack_energy;
     e.crack_energy = crack_energy;
     e.dissipated_energy = crack_energy;
-    const double area =
-        crack_share(p, model_.bonds, opening.particle, opening.bonds, energy, opening.normal);
+    const double area = crack_share(p, model_.bonds, opening.particle, opening.normal);
     const bool fibre = opening.site.failure.mode == PlyFailureMode::kFibreTension ||
                        opening.site.failure.mode == PlyFailureMode::kFibreCompression;
     e.crack_area = area;

@@ -949,8 +949,9 @@ void require_cracks_along_lattice(const StrengthSettings& s, const std::vector<P
     const double off = std::remainder(plies[k].angle - calibrations[k].lattice_angle, 90 * kDegree);
     require(std::abs(off) < 1e-9,
             fmt::format("{} need the square lattice along the fibres: ply {} at {:g} deg has its "
-                        "lattice at {:g} deg, and its cracks along a lattice diagonal would be "
-                        "bridged by bonds that no site on them owns (use --strategy-option "
+                        "lattice at {:g} deg, where softening cracks along the lattice's diagonals "
+                        "do not localize (a 90 deg E-glass coupon's sites softened across the "
+                        "whole gauge and dissipated 2.2 G w t; use --strategy-option "
                         "fibre_offset=0)",
                         what, k + 1, plies[k].angle / kDegree,
                         calibrations[k].lattice_angle / kDegree));
