@@ -15,6 +15,7 @@
 #include "core/shear_curve.hpp"
 #include "experiments/output/strength_report.hpp"
 #include "experiments/protocols/strength.hpp"
+#include "experiments/runner/strength_experiment.hpp"
 
 using namespace plydem;
 
@@ -64,7 +65,8 @@ void check_follows_curve(double angle_deg, double diameter) {
   }
   const RambergOsgoodShear law(m);
   CHECK(r.strength == doctest::Approx(m.strength.S12).epsilon(0.02));
-  CHECK(r.strain_at_peak == doctest::Approx(law.strain_at(m.strength.S12)).epsilon(0.01));
+  // (A ratio: doctest's Approx is absolute for values below 1.)
+  CHECK(r.strain_at_peak / law.strain_at(m.strength.S12) == doctest::Approx(1).epsilon(0.01));
   CHECK(r.first_failure_stress == doctest::Approx(r.strength).epsilon(1e-9));
   CHECK(r.stop == "failed");
   CHECK(r.cracked_sites == 1);
@@ -118,4 +120,19 @@ TEST_CASE("in-plane shear with a shear curve: what it does not do is a clear err
   s.checkpoint.every = 10;
   s.checkpoint.file = "plastic.ckpt";
   CHECK_THROWS_WITH_AS(StrengthTest(s).run(), doctest::Contains("without checkpoints"), Error);
+}
+
+TEST_CASE("the report's model note says how the ply fails and how the run loads it") {
+  StrengthSettings s = shear_coupon(0, 0.1e-3);
+  const std::string plastic = strength_model_note(s);
+  CHECK(plastic.find("at the material point") != std::string::npos);
+  CHECK(plastic.find("plastic shear strain") != std::string::npos);
+  CHECK(plastic.find("virial tau_xy") != std::string::npos);
+  s.load = StrengthLoad::kTension;
+  s.method = StrengthMethod::kExplicit;
+  const std::string explicit_note = strength_model_note(s);
+  CHECK(explicit_note.find("plastic shear strain") == std::string::npos);
+  CHECK(explicit_note.find("damped dynamics") != std::string::npos);
+  s.failure_criterion = PlyFailureModel::kBond;
+  CHECK(strength_model_note(s).find("parallel bonds") != std::string::npos);
 }

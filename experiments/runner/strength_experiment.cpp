@@ -46,24 +46,52 @@ const char* source_name(FailureCriterion c) {
 
 }  // namespace
 
+// How the ply fails in the run: bond by bond, or at the material point.
+std::string failure_model_note(const StrengthSettings& s) {
+  const PlyFailureModel model = s.effective_failure_criterion();
+  if (model == PlyFailureModel::kBond) {
+    return fmt::format(
+        "The bonds are {} parallel bonds (PFC's criterion, core/bond_failure.hpp) whose strengths "
+        "are calibrated so that the relaxed bulk without scatter first breaks exactly at XT, YT "
+        "and S12 in the ply's axes (strategies/strength_calibration.hpp). The model is linear up "
+        "to each break: it does not represent the ply's non-linear in-plane shear response "
+        "(E-glass reaches S12 at about 4% shear strain, a linear bond at 1.25%), and XC, YC only "
+        "through the bonds' shear mode.",
+        s.strength_options.softening ? "linear-softening" : "brittle");
+  }
+  return fmt::format(
+      "Failure is decided at the material point: each particle's site stress, in its ply's axes, "
+      "is judged by {}'s criterion with the lamina strengths, and a failed site opens every bond "
+      "across its crack plane at once ({}; contacts/site_failure.hpp). The model is linear up to "
+      "each crack{}.",
+      failure_model_name(model),
+      s.strength_options.softening ? "softening to dissipate G_matrix or G_fibre per unit area"
+                                   : "brittle",
+      s.coupon.material.shear_curve.empty() || s.load != StrengthLoad::kShear
+          ? ""
+          : " but in in-plane shear, which follows the material's shear_curve by plastic shear "
+            "strain (solvers/plastic_shear.hpp)");
+}
+
 std::string strength_model_note(const StrengthSettings& s) {
   return fmt::format(
-      "The bonds are {} parallel bonds (PFC's criterion, core/bond_failure.hpp) whose strengths "
-      "are calibrated so that the relaxed bulk without scatter first breaks exactly at XT, YT and "
-      "S12 in the ply's axes (strategies/strength_calibration.hpp). The model is linear up to "
-      "each break: it does not represent the ply's non-linear in-plane shear response (E-glass "
-      "reaches S12 at about 4% shear strain, a linear bond at 1.25%), and XC, YC only through "
-      "the bonds' shear mode. Loading: {} (sequentially linear analysis: each critical state is "
-      "one point, no damping, no loading rate). Grips {}; stress is the right grip's reaction over "
-      "the gauge cross-section, strain the gauge particles' fitted strain.",
-      s.strength_options.softening ? "linear-softening" : "brittle", strength_method_name(s.method),
+      "{} Loading: {} ({}). Grips {}; {}.", failure_model_note(s), strength_method_name(s.method),
+      s.method == StrengthMethod::kEvents
+          ? "sequentially linear analysis: each critical state is one point, no damping, no "
+            "loading rate"
+          : "damped dynamics, the grips moving at a constant rate: solvers/explicit_failure.hpp",
       s.grips == StrengthGrips::kUniform
           ? "uniform (held at the relaxed bulk's uniform state under sigma_x: uniform uniaxial "
             "stress up to the grips)"
       : s.grips == StrengthGrips::kFree
           ? "free (rigid along x, the ends contract and shear freely; they restrain the ply "
             "near the grips)"
-          : "clamped (rigid along x and held laterally)");
+          : "clamped (rigid along x and held laterally)",
+      s.load == StrengthLoad::kShear
+          ? "in shear a frame holds the coupon; stress is the gauge particles' mean virial tau_xy, "
+            "strain their fitted gamma_xy"
+          : "stress is the right grip's reaction over the gauge cross-section, strain the gauge "
+            "particles' fitted strain");
 }
 
 ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_dir,
