@@ -30,7 +30,10 @@
 /// - Failure. The run stops as "failed" when the strain energy at unit load has fallen to
 ///   kCollapsedEnergy of its first value or the reaction at unit load to kCollapsedReaction of its
 ///   first (the grips are no longer connected), when after the peak
-///   the reaction falls below stop_fraction of the peak, or when a factorization finds a mechanism
+///   the reaction falls below stop_fraction of the peak (at the material point, where a crack's
+///   run through a ply dips the critical states' reaction far below the peak and back, and the
+///   reaction at unit load, the coupon's stiffness, below stop_fraction of its first value as
+///   well), or when a factorization finds a mechanism
 ///   (EventsResult::message says where).
 /// - Breaks are logged with the bond's contact point in the reference configuration.
 /// - Energy. When a bond fails at load factor lambda at fixed grips, the structure releases
@@ -144,7 +147,8 @@ struct SofteningCrack {
 struct EventSettings {
   long max_events = 200000;
   /// Stop when, after the peak, the reaction at the critical state falls below this fraction of
-  /// the peak reaction (the specimen has failed).
+  /// the peak reaction (the specimen has failed); at the material point, when its reaction at unit
+  /// load (its stiffness) has fallen below this fraction of the intact one's as well.
   double stop_fraction = 0.02;
   /// Softening bonds: each tooth keeps this fraction of the bond's current stiffness.
   double tooth_stiffness_ratio = 0.5;

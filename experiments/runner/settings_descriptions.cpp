@@ -587,7 +587,8 @@ void add_events(SettingsDescription<S>& d) {
       .with_python("stop_fraction")
       .with_help(
           "the coupon has failed when, after the peak, the stress falls below this fraction of the "
-          "peak");
+          "peak (at the material point, and its stiffness below this fraction of the intact "
+          "coupon's)");
   auto& tooth =
       d.number(
            "tooth_stiffness_ratio", [](auto& s) -> auto& { return s.events.tooth_stiffness_ratio; })
