@@ -33,4 +33,20 @@ double orthotropic_hole_stress_concentration(const InPlaneConstants& constants);
 /// a strip of width W. Throws plydem::Error unless 0 <= D < W.
 double heywood_finite_width_factor(double diameter, double width);
 
+/// Notched strength over unnotched strength of an infinite orthotropic plate with a circular hole
+/// of `radius` R under uniaxial tension, by Whitney & Nuismer's criteria (J. Compos. Mater. 8
+/// (1974) 253) on Konish and Whitney's approximation of the stress ahead of the hole,
+///   sigma_y(x) / sigma = 1 + xi^2 / 2 + 3 xi^4 / 2 - (Kt_inf - 3) (5 xi^6 - 7 xi^8) / 2,
+///   xi = R / x (x from the hole's centre along the section):
+///  - point stress: sigma_y at a characteristic distance d0 ahead of the edge reaches the
+///    unnotched strength, sigma_N / sigma_0 = 2 / (2 + xi^2 + 3 xi^4 - (Kt_inf - 3)(5 xi^6 -
+///    7 xi^8)), xi = R / (R + d0);
+///  - average stress: its mean over a0 ahead of the edge does, sigma_N / sigma_0 = 2 (1 - xi) /
+///    (2 - xi^2 - xi^4 + (Kt_inf - 3)(xi^6 - xi^8)), xi = R / (R + a0).
+/// Both tend to 1 / Kt_inf as the distance shrinks and to 1 as it grows. A finite plate's ratio
+/// is this over the finite-width factor (Kt / Kt_inf). Throws plydem::Error for a Kt_inf below 1
+/// or a radius or distance that is not positive and finite.
+double point_stress_notched_ratio(double kt_inf, double radius, double distance);
+double average_stress_notched_ratio(double kt_inf, double radius, double distance);
+
 }  // namespace plydem

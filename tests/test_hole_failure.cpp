@@ -94,6 +94,41 @@ TEST_CASE("the hole's stress concentration: isotropic 3, Heywood's width factor,
                        doctest::Contains("narrower than its strip"), Error);
 }
 
+TEST_CASE("Whitney and Nuismer's notched strength: its limits and the average of the stress") {
+  // The point-stress ratio is 1 / sigma_y(R + d0) of Konish and Whitney's field (written out
+  // here); the average-stress ratio is a0 over its integral from R to R + a0 (trapezoids, 20,000
+  // of them); both tend to 1 / Kt_inf at the edge and to 1 far from it.
+  for (double kt : {3.0, 3.86, 6.0}) {
+    CAPTURE(kt);
+    const double radius = 1.5e-3;
+    auto field = [&](double x) {
+      const double xi = radius / x, x2 = xi * xi, x4 = x2 * x2, x6 = x4 * x2, x8 = x4 * x4;
+      return 1 + x2 / 2 + 1.5 * x4 - (kt - 3) * (5 * x6 - 7 * x8) / 2;
+    };
+    for (double distance : {0.2e-3, 1e-3, 3.8e-3}) {
+      CAPTURE(distance);
+      CHECK(point_stress_notched_ratio(kt, radius, distance) ==
+            doctest::Approx(1 / field(radius + distance)).epsilon(1e-12));
+      const int n = 20000;
+      double integral = 0;
+      for (int k = 0; k < n; ++k) {
+        const double a = radius + distance * k / n, b = radius + distance * (k + 1) / n;
+        integral += 0.5 * (field(a) + field(b)) * (b - a);
+      }
+      CHECK(average_stress_notched_ratio(kt, radius, distance) ==
+            doctest::Approx(distance / integral).epsilon(1e-7));
+    }
+    CHECK(point_stress_notched_ratio(kt, radius, 1e-12) == doctest::Approx(1 / kt).epsilon(1e-6));
+    CHECK(average_stress_notched_ratio(kt, radius, 1e-12) == doctest::Approx(1 / kt).epsilon(1e-6));
+    CHECK(point_stress_notched_ratio(kt, radius, 1e3) == doctest::Approx(1).epsilon(1e-6));
+    CHECK(average_stress_notched_ratio(kt, radius, 1e3) == doctest::Approx(1).epsilon(1e-5));
+  }
+  CHECK_THROWS_WITH_AS(point_stress_notched_ratio(3, 1e-3, 0), doctest::Contains("distance"),
+                       Error);
+  CHECK_THROWS_WITH_AS(average_stress_notched_ratio(0.5, 1e-3, 1e-3),
+                       doctest::Contains("Kt_inf >= 1"), Error);
+}
+
 namespace {
 
 // The first break of the notched plate of the 30 x 18 mm [0/90/0] plate (0.5 mm plies, the
@@ -164,7 +199,9 @@ TEST_CASE("plydem run hole_failure.toml --quick: notched below unnotched, Kt, ma
         "unnotched|strength gross|dem square", "notched|first failure gross stress|dem square",
         "unnotched|first failure gross stress|dem square",
         "notched|first failure gross stress|unnotched dem / Kt", "notched|Kt|lekhnitskii heywood",
-        "notched|notched to unnotched strength|dem square",
+        "notched|notched to unnotched strength|dem square", "notched|notched_ratio|dem square",
+        "notched|notched_ratio|point stress whitney-nuismer",
+        "notched|notched_ratio|average stress whitney-nuismer", "notched|notched_ratio|net section",
         "notched|first failure distance from hole edge|dem square",
         "notched|broken bonds at final|dem square"}) {
     INFO(key);
@@ -181,6 +218,16 @@ TEST_CASE("plydem run hole_failure.toml --quick: notched below unnotched, Kt, ma
   CHECK(notched < unnotched);
   CHECK(rows.at("notched|notched to unnotched strength|dem square") ==
         doctest::Approx(notched / unnotched).epsilon(1e-9));
+  CHECK(rows.at("notched|notched_ratio|dem square") ==
+        rows.at("notched|notched to unnotched strength|dem square"));
+  // The references: Kt_inf = Kt / Heywood's factor, d0 = 1 mm and a0 = 3.8 mm (the defaults).
+  const double fwc = heywood_finite_width_factor(1e-3, 6e-3);
+  CHECK(rows.at("notched|notched_ratio|point stress whitney-nuismer") ==
+        doctest::Approx(point_stress_notched_ratio(kt / fwc, 0.5e-3, 1e-3) / fwc).epsilon(1e-9));
+  CHECK(
+      rows.at("notched|notched_ratio|average stress whitney-nuismer") ==
+      doctest::Approx(average_stress_notched_ratio(kt / fwc, 0.5e-3, 3.8e-3) / fwc).epsilon(1e-9));
+  CHECK(rows.at("notched|notched_ratio|net section") == doctest::Approx(5.0 / 6.0).epsilon(1e-9));
   CHECK(rows.at("notched|strength net section|dem square") ==
         doctest::Approx(notched / (1 - 1.0 / 6.0)).epsilon(1e-9));
   // The notch breaks first, at its edge (within 1.5 particles), below the unnotched plate.

@@ -18,6 +18,8 @@
 //   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa)
 //   [events] max_events, stop_fraction, max_update_rank
 //   [maps] load_fractions (of the notched plate's peak grip force, each in (0, 1])
+//   [references] point_stress_distance_mm = 1.0, average_stress_distance_mm = 3.8 (Whitney and
+//            Nuismer's characteristic distances d0, a0: core/stress_concentration.hpp)
 //   [output] vtu_series
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -84,7 +86,14 @@ struct HoleFailureSettings {
   StrengthSettings unnotched, notched;
   double hole = 0;                ///< diameter [m]
   std::vector<double> fractions;  ///< of the notched plate's peak grip force, sorted
+  /// Whitney and Nuismer's characteristic distances d0 (point stress), a0 (average stress) [m].
+  double point_stress_distance = 0, average_stress_distance = 0;
 };
+
+// Whitney and Nuismer's characteristic distances for a carbon/epoxy laminate with a hole (their
+// 1974 paper's d0 = 0.04 in and a0 = 0.15 in), the references' defaults [mm].
+constexpr double kPointStressDistanceMm = 1.0;
+constexpr double kAverageStressDistanceMm = 3.8;
 
 // The kind's settings: the strength command's (strength_settings_description()) but the ply
 // angle; its defaults are the paper's Fig. 16 plate (a [0/90/0] laminate 60 x 36 mm of 0.5 mm
@@ -113,7 +122,13 @@ const std::vector<std::pair<std::string, std::string>>& hole_failure_own_keys() 
   static const std::vector<std::pair<std::string, std::string>> keys{
       {"maps.load_fractions",
        "the damage maps' loads, fractions of the notched plate's peak grip force, each in (0, 1]; "
-       "default [0.5, 0.8, 1.0]"}};
+       "default [0.5, 0.8, 1.0]"},
+      {"references.point_stress_distance_mm",
+       "Whitney and Nuismer's point-stress distance d0 ahead of the hole's edge [mm] (the notched "
+       "strength's reference); default 1.0"},
+      {"references.average_stress_distance_mm",
+       "Whitney and Nuismer's average-stress distance a0 ahead of the hole's edge [mm]; default "
+       "3.8"}};
   return keys;
 }
 
@@ -138,6 +153,13 @@ HoleFailureSettings parse_hole_failure(const ExperimentConfig& c,
                         origin, f));
   }
   std::sort(fractions.begin(), fractions.end());
+  const double d0 = c.number("references.point_stress_distance_mm", kPointStressDistanceMm);
+  const double a0 = c.number("references.average_stress_distance_mm", kAverageStressDistanceMm);
+  for (const auto& [key, value] :
+       {std::pair{"point_stress_distance_mm", d0}, std::pair{"average_stress_distance_mm", a0}}) {
+    require(std::isfinite(value) && value > 0,
+            fmt::format("{}: references.{} must be positive, got {}", origin, key, value));
+  }
   StrengthSettings unnotched = base;
   unnotched.hole_diameter = 0;
   const StrengthSettings& notched = base;
@@ -148,7 +170,8 @@ HoleFailureSettings parse_hole_failure(const ExperimentConfig& c,
     throw Error(fmt::format("{}: {}", origin, e.what()));
   }
   require_strengths(unnotched.coupon.material, fmt::format("{} (kind hole_failure)", origin));
-  return {name, layup_text, unnotched, notched, hole, fractions};
+  return {name, layup_text, unnotched,         notched,
+          hole, fractions,  d0 * kMetresPerMm, a0 * kMetresPerMm};
 }
 
 KindSettings hole_failure_kind_settings() {
@@ -199,6 +222,9 @@ struct NotchedMeasures {
   double from_edge;  ///< of the first break [m]
   bool at_edge;
   int first_ply;  ///< -1: an interface
+  /// Whitney and Nuismer's notched over unnotched strength (point and average stress) of the
+  /// infinite plate over the finite-width factor.
+  double point_stress_ratio, average_stress_ratio;
 };
 
 NotchedMeasures measure_notched(const HoleFailureSettings& s, const StrengthResult& n,
@@ -260,7 +286,9 @@ NotchedMeasures measure_notched(const HoleFailureSettings& s, const StrengthResu
           d,
           from_edge,
           at_edge,
-          first_ply};
+          first_ply,
+          point_stress_notched_ratio(kt_inf, 0.5 * s.hole, s.point_stress_distance) / fwc,
+          average_stress_notched_ratio(kt_inf, 0.5 * s.hole, s.average_stress_distance) / fwc};
 }
 
 // results.csv's rows of ExperimentOutput `out` for `case_name` when `value` is finite.
@@ -289,6 +317,11 @@ void add_notched_rows(const HoleFailureSettings& s, const NotchedMeasures& m,
   row("notched", "finite width factor", "heywood", m.fwc, "1");
   row("notched", "Kt", "lekhnitskii heywood", m.kt, "1");
   row("notched", "notched to unnotched strength", dem, m.notched_gross / m.unnotched_strength, "1");
+  // The notched strength's names for scripts (issue 33): the DEM's and its references'.
+  row("notched", "notched_ratio", dem, m.notched_gross / m.unnotched_strength, "1");
+  row("notched", "notched_ratio", "point stress whitney-nuismer", m.point_stress_ratio, "1");
+  row("notched", "notched_ratio", "average stress whitney-nuismer", m.average_stress_ratio, "1");
+  row("notched", "notched_ratio", "net section", m.net_fraction, "1");
   row("notched", "hole particles removed", dem, n.hole.particles, "1");
   row("notched", "particles", dem, n.particles, "1");
   row("unnotched", "strength gross", dem, m.unnotched_strength * kMPaPerPa, "MPa");
@@ -433,6 +466,15 @@ std::string hole_failure_markdown(const HoleFailureSettings& s, const NotchedMea
                       fmt::format("{:.2f}", m.unnotched_first * kMPaPerPa), "MPa"});
   md += markdown_row({"notched / unnotched strength",
                       fmt::format("{:.3f}", m.notched_gross / m.unnotched_strength), "", ""});
+  md += fmt::format(
+      "\n**Notched strength against the closed forms.** Notched over unnotched strength {:.3f}; "
+      "Whitney and Nuismer's point-stress criterion (d0 = {:g} mm) gives {:.3f} and their "
+      "average-stress criterion (a0 = {:g} mm) {:.3f}, each the infinite plate's (Lekhnitskii's "
+      "Kt_inf) over Heywood's finite-width factor (core/stress_concentration.hpp); the net "
+      "section bounds it at 1 - D/W = {:.3f}.\n",
+      m.notched_gross / m.unnotched_strength, s.point_stress_distance / kMetresPerMm,
+      m.point_stress_ratio, s.average_stress_distance / kMetresPerMm, m.average_stress_ratio,
+      m.net_fraction);
   md += fmt::format(
       "\n**First failure against the closed form.** The notched plate first breaks in {} at "
       "{:.2f} mm from the hole's edge ({}), at a gross stress of {:.2f} MPa. Lekhnitskii's "
