@@ -1157,7 +1157,8 @@ class EventLoop {
       last_progress_ = elapsed;
       settings_.on_progress({events_, broken_, point.load_factor, peak_reaction_, elapsed});
     }
-    // At the material point the stiffness decides too, at the next solve (failed_at_material_point).
+    // At the material point the stiffness decides too, at the next solve
+    // (failed_at_material_point).
     if (!settings_.material_point && below_stop_fraction())
       pending_stop_ = "failed";
     else if (events_ >= settings_.max_events)
