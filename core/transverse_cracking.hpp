@@ -9,6 +9,8 @@
 ///   lambda^2 = G23 (b E1 + d E2) / (b d^2 E1 E2),
 /// E0 = (b E1 + d E2) / (b + d) the uncracked modulus the model assumes (rule of mixtures), and for
 /// a dense crack pattern (s -> 0) the ply-discount limit E = b E1 / (b + d).
+/// §6's fracture mechanics of the same layer follow: the in-situ strength, the energy of a new
+/// crack between two, and the crack density it sets against the applied stress.
 
 #include "core/material.hpp"
 
@@ -20,5 +22,50 @@ double shear_lag_stiffness_ratio(const Material& material, double b, double d, d
 
 /// The ply-discount limit of E / E0: b E1 / (b E1 + d E2).
 double ply_discount_stiffness_ratio(const Material& material, double b, double d);
+
+/// The shear-lag parameter lambda of the file comment [1/m].
+double shear_lag_parameter(const Material& material, double b, double d);
+
+// Fracture mechanics of the 90° layer (../shared/DAMAGE_NOTES.md §6). G_Ic is the material's
+// G_matrix (the energy of a crack along the fibres); each function throws plydem::Error naming
+// G_matrix when the material has none.
+
+/// Where a 90° layer lies in the laminate: between two other plies, or on the surface.
+enum class PlyPlacement { kEmbedded, kOuter };
+
+/// The in-situ transverse tensile strength of a 90° layer of thickness `t` (Camanho, Davila,
+/// Pinho, Iannucci & Robinson, Compos. A 37 (2006) 165, eqs. 43-46, after Dvorak & Laws 1987):
+///   thick:   Y_is = 1.12 sqrt(2) YT (any embedded ply thicker than the transition thickness),
+///   thin embedded: Y_is = sqrt(8 G_Ic / (pi t Lambda22)),
+///   thin outer:    Y_is = 1.79 sqrt(G_Ic / (pi t Lambda22)),
+/// Lambda22 = 2 (1/E2 - nu21^2 / E1). A layer is thin below the transition thickness, where the two
+/// are equal; an outer layer has no thick limit of its own here (Camanho's thick outer ply is YT).
+struct InSituStrength {
+  double thick = 0;                 ///< 1.12 sqrt(2) YT (embedded), YT (outer) [Pa]
+  double thin = 0;                  ///< the thin-ply formula at t [Pa]
+  double transition_thickness = 0;  ///< where thin = thick [m]
+  double value = 0;                 ///< thin below the transition thickness, thick above [Pa]
+};
+InSituStrength in_situ_transverse_strength(const Material& material, double t,
+                                           PlyPlacement placement = PlyPlacement::kEmbedded);
+
+/// The energy a new transverse crack releases per unit crack area when it forms midway in an
+/// uncracked interval of length `interval` of the 90° layer, in the shear-lag stress field of the
+/// file comment, at the 90° layer's stress sigma90 far from cracks [Pa] (finite fracture
+/// mechanics, the complementary energy the new crack adds at fixed load):
+///   G = sigma90^2 (lambda d^2 / G23) [2 tanh(lambda L / 4) - tanh(lambda L / 2)]  [J/m^2],
+/// increasing in L to sigma90^2 lambda d^2 / G23, an isolated crack's (`interval` = +inf).
+double new_crack_energy_release_rate(const Material& material, double b, double d, double sigma90,
+                                     double interval);
+
+/// The 90° layer's stress at which an isolated crack releases G_Ic: the energy criterion of the
+/// first crack, sqrt(G_Ic G23 / (lambda d^2)) [Pa].
+double isolated_crack_stress(const Material& material, double b, double d);
+
+/// The crack-multiplication model: at 90° stress sigma90, the interval L* in which a new crack
+/// midway releases exactly G_Ic (+inf below isolated_crack_stress: no crack forms). Cracks that
+/// split every interval longer than L* leave intervals between L*/2 and L*, so the crack density
+/// lies between 1 / L* and 2 / L* [1/m] (the band crossply's report draws).
+double crack_multiplication_interval(const Material& material, double b, double d, double sigma90);
 
 }  // namespace plydem

@@ -170,3 +170,87 @@ TEST_CASE("the shear-lag stiffness of a cracked cross-ply and its ply-discount l
                        Error);
   CHECK_THROWS_WITH_AS(shear_lag_stiffness_ratio(m, b, d, -1), doctest::Contains("density"), Error);
 }
+
+namespace {
+// E-glass/MY750 with a matrix fracture energy (WWFE-I gives none): a glass/epoxy mode-I value.
+Material with_matrix_fracture_energy(double g) {
+  Material m = load_material("eglass-my750");
+  m.strength.G_matrix = g;
+  return m;
+}
+}  // namespace
+
+TEST_CASE(
+    "a new crack between two releases the complementary energy the shear-lag stiffness "
+    "loses") {
+  // Independent route: the laminate's compliance from shear_lag_stiffness_ratio. A length L
+  // between two cracks under laminate stress sigma holds the complementary energy (per unit
+  // width) sigma^2 h L / (2 E(1/L)); a crack midway leaves two lengths L/2, and the difference
+  // over the new crack's area 2d (the whole 90° layer) is G. The 90° layer's stress far from
+  // cracks is sigma E2 / E0 in the model's equal-strain laminate.
+  const Material m = with_matrix_fracture_energy(200);
+  const double b = 0.2e-3, d = 0.2e-3, h = 2 * (b + d);
+  const double e0 = (b * m.E1 + d * m.E2) / (b + d);
+  const double sigma = 100e6, sigma90 = sigma * m.E2 / e0;
+  auto energy = [&](double length) {
+    return sigma * sigma * h * length / (2 * e0 * shear_lag_stiffness_ratio(m, b, d, 1 / length));
+  };
+  for (double length : {0.1e-3, 0.4e-3, 1e-3, 5e-3}) {
+    const double g = (2 * energy(length / 2) - energy(length)) / (2 * d);
+    CHECK(new_crack_energy_release_rate(m, b, d, sigma90, length) ==
+          doctest::Approx(g).epsilon(1e-9));
+  }
+  // An isolated crack releases the most, and the energy criterion of the first crack meets G_Ic.
+  CHECK(new_crack_energy_release_rate(m, b, d, sigma90, 1.0) ==
+        doctest::Approx(new_crack_energy_release_rate(m, b, d, sigma90, INFINITY)).epsilon(1e-9));
+  const double first = isolated_crack_stress(m, b, d);
+  CHECK(new_crack_energy_release_rate(m, b, d, first, INFINITY) ==
+        doctest::Approx(m.strength.G_matrix).epsilon(1e-12));
+  // Below it no crack forms; above it the interval L* where a new crack releases G_Ic shrinks as
+  // the stress grows.
+  CHECK(std::isinf(crack_multiplication_interval(m, b, d, 0.99 * first)));
+  double previous = INFINITY;
+  for (double factor : {1.01, 1.2, 1.5, 2.0, 3.0}) {
+    const double interval = crack_multiplication_interval(m, b, d, factor * first);
+    CHECK(new_crack_energy_release_rate(m, b, d, factor * first, interval) ==
+          doctest::Approx(m.strength.G_matrix).epsilon(1e-9));
+    CHECK(interval < previous);
+    previous = interval;
+  }
+  CHECK_THROWS_WITH_AS(isolated_crack_stress(load_material("eglass-my750"), b, d),
+                       doctest::Contains("G_matrix"), Error);
+  CHECK_THROWS_WITH_AS(new_crack_energy_release_rate(m, b, d, NAN, 1e-3),
+                       doctest::Contains("finite"), Error);
+}
+
+TEST_CASE("the in-situ transverse strength of a 90° layer (Camanho et al. 2006)") {
+  const Material m = with_matrix_fracture_energy(200);
+  const double yt = m.strength.YT;
+  // A thick embedded layer: 1.12 sqrt(2) YT, whatever its thickness.
+  const InSituStrength thick = in_situ_transverse_strength(m, 10e-3);
+  CHECK(thick.value / (1.12 * std::sqrt(2.0) * yt) == doctest::Approx(1).epsilon(1e-14));
+  // Thin: the slit crack through the layer (length t, Dvorak & Laws 1987) releases
+  // G = pi t Lambda22 sigma^2 / 8 at its onset: the strength is where that is G_Ic.
+  const double lambda22 = 2 * (1 / m.E2 - m.nu21() * m.nu21() / m.E1);
+  for (double t : {0.1e-3, 0.2e-3, 0.4e-3}) {
+    const InSituStrength s = in_situ_transverse_strength(m, t);
+    REQUIRE(t < s.transition_thickness);
+    const double released = std::numbers::pi * t * lambda22 * s.value * s.value / 8;
+    CHECK(released / m.strength.G_matrix == doctest::Approx(1).epsilon(1e-12));
+    CHECK(s.value > thick.value);
+  }
+  // The two meet at the transition thickness; a thinner layer is stronger as 1 / sqrt(t).
+  const InSituStrength at = in_situ_transverse_strength(m, thick.transition_thickness);
+  CHECK(at.thin / at.thick == doctest::Approx(1).epsilon(1e-12));
+  CHECK(in_situ_transverse_strength(m, 0.1e-3).value /
+            in_situ_transverse_strength(m, 0.4e-3).value ==
+        doctest::Approx(2).epsilon(1e-12));
+  // An outer layer: 1.79 sqrt(G_Ic / (pi t Lambda22)), weaker than an embedded one as thin.
+  const InSituStrength outer = in_situ_transverse_strength(m, 0.1e-3, PlyPlacement::kOuter);
+  CHECK(outer.thin / std::sqrt(m.strength.G_matrix / (std::numbers::pi * 0.1e-3 * lambda22)) ==
+        doctest::Approx(1.79).epsilon(1e-12));
+  CHECK(outer.thin < in_situ_transverse_strength(m, 0.1e-3).thin);
+  CHECK_THROWS_WITH_AS(in_situ_transverse_strength(load_material("eglass-my750"), 0.2e-3),
+                       doctest::Contains("G_matrix"), Error);
+  CHECK_THROWS_WITH_AS(in_situ_transverse_strength(m, 0), doctest::Contains("thickness"), Error);
+}

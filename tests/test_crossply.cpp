@@ -3,9 +3,11 @@
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <sstream>
 #include <vector>
 
@@ -63,8 +65,39 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
   CHECK(ratio > m.E1 / (m.E1 + m.E2) - 0.05);
   CHECK(rows.count("[0/90]s|first ply failure stress|clt max-stress") == 1);
   CHECK(rows.count("[0/90]s|cracks ply 2|dem square") == 1);  // the 90° plies crack
+  // Issue 33's names. The 90° plies' stress per unit laminate stress, written out for [0/90]s of
+  // equal plies (a11 = (Q11 + Q22) / 2, a12 = Q12 per unit thickness; the 90° ply's x stiffness
+  // is Q22): k90 = (Q22 a11 - Q12 a12) / (a11^2 - a12^2).
+  const double q = 1 / (1 - m.nu12 * m.nu21());
+  const double q11 = m.E1 * q, q22 = m.E2 * q, q12 = m.nu12 * q22;
+  const double a11 = (q11 + q22) / 2, a12 = q12;
+  const double k90 = (q22 * a11 - q12 * a12) / (a11 * a11 - a12 * a12);
+  CHECK(rows.at("[0/90]s|onset_stress|clt yt") * 1e6 ==
+        doctest::Approx(m.strength.YT / k90).epsilon(1e-9));
+  // The in-situ strength of the embedded 0.4 mm 90° layer with G_Ic = 200 J/m^2 (the config's
+  // references.G_Ic_J_m2): thin, sqrt(8 G / (pi t Lambda22)).
+  const double lambda22 = 2 * (1 / m.E2 - m.nu21() * m.nu21() / m.E1);
+  const double in_situ = std::sqrt(8 * 200 / (std::numbers::pi * 0.4e-3 * lambda22));
+  CHECK(in_situ > 1.12 * std::sqrt(2.0) * m.strength.YT);
+  CHECK(rows.at("[0/90]s|onset_stress|in-situ camanho") * 1e6 ==
+        doctest::Approx(in_situ / k90).epsilon(1e-9));
+  const double ex = 1 / (a11 / (a11 * a11 - a12 * a12));
+  CHECK(rows.at("[0/90]s|onset_strain|in-situ camanho") / 100 ==
+        doctest::Approx(in_situ / k90 / ex).epsilon(1e-9));
+  REQUIRE(rows.count("[0/90]s|onset_stress|energy isolated crack") == 1);
+  // The crack-multiplication band at the DEM's strength: 2/L* is twice 1/L*.
+  CHECK(rows.at("[0/90]s|saturation_crack_density|crack multiplication 2/L*") ==
+        doctest::Approx(2 * rows.at("[0/90]s|saturation_crack_density|crack multiplication 1/L*")));
+  CHECK(rows.at("[0/90]s|saturation_crack_density|dem") == doctest::Approx(density));
+  CHECK(rows.at("[0/90]s|strength|dem") == rows.at("[0/90]s|strength|dem square"));
+  CHECK(rows.at("[0/90]s|strength|fibre failure bound") * 1e6 ==
+        doctest::Approx(m.strength.XT / 2).epsilon(1e-12));
+  REQUIRE(rows.count("[0/90]s|onset_stress|dem") == 1);
+  CHECK(rows.at("[0/90]s|onset_stress|dem") <= rows.at("[0/90]s|strength|dem"));
   const std::string report = read(dir / "report.md");
   CHECK(report.find("## Summary") != std::string::npos);
+  CHECK(report.find("## Transverse cracking against fracture mechanics") != std::string::npos);
+  CHECK(fs::exists(dir / "plots" / "crossply_crack_density.dat"));
   CHECK(report.find("| [0/90]s |") != std::string::npos);
   CHECK(fs::exists(dir / "crossply__0_90_s_cracks.csv"));
   // Crack planes against strain: the header, and densities that never fall.

@@ -20,6 +20,8 @@
 //   [interface] normal, shear (N/m^3), strength_normal, strength_shear (Pa),
 //               transverse_shear = true (the plies carry G13, G23: strategies/laminate.hpp)
 //   [fem] element_mm (0 = half a particle diameter), elements_per_ply = 2, threads = 1
+//   [references] G_Ic_J_m2 (the fracture-mechanics references' G_Ic where the material has no
+//                G_matrix)
 //   [events] max_events, stop_fraction, max_update_rank
 //   [output] vtu_series
 #include <fmt/format.h>
@@ -30,7 +32,9 @@
 #include <fstream>
 #include <numbers>
 
+#include "core/elasticity.hpp"
 #include "core/error.hpp"
+#include "core/failure_criteria.hpp"
 #include "core/transverse_cracking.hpp"
 #include "core/units.hpp"
 #include "experiments/fem/calculix.hpp"
@@ -172,6 +176,10 @@ struct CrossplySettings {
   bool scatter_ninety = true;  ///< scatter = "90"
   std::vector<std::string> layups;
   std::vector<std::pair<int, int>> counts;  ///< (m, n) of each [0_m/90_n]s
+  /// The material the fracture-mechanics references use: the coupon's, with G_matrix from
+  /// references.G_Ic_J_m2 where the material gives none (0: neither does; those references are
+  /// left out and the report says so).
+  Material reference_material;
 };
 
 // The kind's settings: the strength command's (strength_settings_description()) but the ply
@@ -199,7 +207,10 @@ const std::vector<std::pair<std::string, std::string>>& crossply_own_keys() {
       {"scatter", "\"90\" (the strength scatter in the 90° plies only, the default) or \"all\""},
       {"fem.element_mm", "CalculiX's in-plane element size [mm]; 0 = half a particle diameter"},
       {"fem.elements_per_ply", "CalculiX's elements through each ply; default 2"},
-      {"fem.threads", "threads CalculiX may use; default 1"}};
+      {"fem.threads", "threads CalculiX may use; default 1"},
+      {"references.G_Ic_J_m2",
+       "the 90° layer's mode-I fracture energy [J/m^2] for the in-situ strength and the "
+       "crack-multiplication references, where the material gives no G_matrix; default none"}};
   return keys;
 }
 
@@ -235,7 +246,20 @@ CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentConte
           fmt::format("{}: scatter must be \"90\" (the 90° plies only) or \"all\", got \"{}\"",
                       origin, scatter));
   require_strengths(base.coupon.material, fmt::format("{} (kind crossply)", origin));
-  return {name, base, fem, scatter == "90", layups, counts};
+  Material reference = base.coupon.material;
+  const double g_ic = c.number("references.G_Ic_J_m2", 0);
+  require(
+      std::isfinite(g_ic) && g_ic >= 0,
+      fmt::format("{}: references.G_Ic_J_m2 must be a positive fracture energy in J/m^2, got {}",
+                  origin, g_ic));
+  if (g_ic > 0) {
+    require(reference.strength.G_matrix == 0 || reference.strength.G_matrix == g_ic,
+            fmt::format("{}: references.G_Ic_J_m2 = {:g} J/m^2 but material '{}' gives G_matrix = "
+                        "{:g} J/m^2: give it once",
+                        origin, g_ic, reference.name, reference.strength.G_matrix));
+    reference.strength.G_matrix = g_ic;
+  }
+  return {name, base, fem, scatter == "90", layups, counts, reference};
 }
 
 KindSettings crossply_kind_settings() {
@@ -326,6 +350,9 @@ std::vector<LaminateRun> run_crossply(const CrossplySettings& cs, const Experime
 // kStiffnessSamples critical states, over the free length between the grips.
 struct StiffnessSamples {
   Curve dem;
+  /// The 90° crack density [1/mm] against the largest laminate stress reached so far [MPa], up to
+  /// the peak.
+  Curve density_against_stress;
   std::string csv;                          ///< STEM_crack_planes.csv
   double last_density = 0, last_ratio = 1;  ///< at the last sample up to the peak
 };
@@ -339,6 +366,10 @@ StiffnessSamples sample_stiffness(const LaminateRun& run) {
   const std::vector<int>& ninety = run.ninety;
   const std::size_t events = r.strain.size() - 1;
   Curve dem{fmt::format("DEM {}", text), {}, {}, true};
+  Curve against_stress{fmt::format("DEM {}", text), {}, {}, true};
+  std::vector<double> reached(r.stress.size(), 0.0);
+  for (std::size_t e = 1; e < r.stress.size(); ++e)
+    reached[e] = std::max(reached[e - 1], r.stress[e]);
   const double e0 = r.stress[1] / r.strain[1];
   std::vector<BondBreak> so_far;
   std::size_t next = 0;
@@ -368,16 +399,167 @@ StiffnessSamples sample_stiffness(const LaminateRun& run) {
     if (static_cast<long>(e) <= r.peak + 1) {
       last_density = density;
       last_ratio = ratio;
+      against_stress.x.push_back(reached[e] * kMPaPerPa);
+      against_stress.y.push_back(density * kMetresPerMm);
     }
   }
-  return {dem, planes_csv, last_density, last_ratio};
+  return {dem, against_stress, planes_csv, last_density, last_ratio};
+}
+
+// The fracture-mechanics references of one [0_m/90_n]s laminate (core/transverse_cracking.hpp,
+// ../shared/DAMAGE_NOTES.md §6), as laminate stresses: the 90° layer's stress far from cracks is
+// CLT's under the laminate stress sigma_x (k90 sigma_x), its strain sigma_x / Ex.
+struct CrackingReferences {
+  double k90 = 0;               ///< the 90° plies' sigma2 per unit laminate sigma_x (CLT)
+  double ex = 0;                ///< CLT's Ex [Pa]
+  double b = 0, d = 0;          ///< the 0° sublaminate's thickness, half the 90° layer's [m]
+  double clt_yt = NAN;          ///< laminate stress at which the 90° plies reach YT [Pa]
+  double fibre_bound = NAN;     ///< XT times the 0° plies' share of the thickness [Pa]
+  bool energy = false;          ///< G_matrix known: the references below are computed
+  InSituStrength in_situ;       ///< of the embedded 90° layer (2d thick)
+  double in_situ_onset = NAN;   ///< laminate stress at which sigma2 reaches it [Pa]
+  double isolated_onset = NAN;  ///< laminate stress at which an isolated crack releases G_Ic [Pa]
+  /// The crack-multiplication band at laminate stress `sigma`: 1 / L* and 2 / L* [1/m] (0 below
+  /// the first crack).
+  std::pair<double, double> band(const Material& m, double sigma) const {
+    const double interval = crack_multiplication_interval(m, b, d, k90 * sigma);
+    return std::isinf(interval) ? std::pair{0.0, 0.0} : std::pair{1 / interval, 2 / interval};
+  }
+};
+
+CrackingReferences cracking_references(const CrossplySettings& cs, const LaminateRun& run) {
+  const Material& material = cs.reference_material;
+  const double t = cs.base.coupon.thickness;
+  CrackingReferences r;
+  r.b = run.m * t;
+  r.d = run.n * t;
+  std::vector<Ply> plies;
+  for (double angle : run.settings.layup) plies.push_back({material, angle, t});
+  const double h = t * static_cast<double>(plies.size());
+  const Eigen::Matrix3d a = laminate_extensional_stiffness(plies);
+  // Strains under sigma_x = 1 (N_x = h), then the 90° plies' stress in their own axes.
+  const Eigen::Vector3d strain = a.ldlt().solve(Eigen::Vector3d(h, 0, 0));
+  const Eigen::Vector3d ninety =
+      rotate_reduced_stiffness(reduced_stiffness(material), std::numbers::pi / 2) * strain;
+  r.k90 = to_ply_axes(ninety(0), ninety(1), ninety(2), std::numbers::pi / 2).sigma2;
+  r.ex = laminate_constants(plies).Ex;
+  r.clt_yt = material.strength.YT / r.k90;
+  r.fibre_bound = material.strength.XT * r.b / (r.b + r.d);
+  r.energy = material.strength.G_matrix > 0;
+  if (r.energy) {
+    r.in_situ = in_situ_transverse_strength(material, 2 * r.d, PlyPlacement::kEmbedded);
+    r.in_situ_onset = r.in_situ.value / r.k90;
+    r.isolated_onset = isolated_crack_stress(material, r.b, r.d) / r.k90;
+  }
+  return r;
+}
+
+// The DEM's first transverse crack: the first critical state at which a 90° crack plane spans
+// kSpanningFraction of the width. Its stress and strain are the largest the load reached before
+// (a load-controlled test had to reach it: the crack's last bond broke at the state before).
+struct CrackOnset {
+  bool found = false;
+  double stress = NAN, strain = NAN;  ///< [Pa], gauge strain
+};
+
+CrackOnset find_onset(const LaminateRun& run) {
+  const StrengthResult& r = run.result;
+  const std::size_t states = r.stress.size();
+  auto cracked = [&](std::size_t e) {
+    std::vector<BondBreak> before;
+    for (const BondBreak& br : r.breaks)
+      if (br.at < static_cast<double>(e)) before.push_back(br);
+    const auto planes = ninety_planes(*r.model, before, run.ninety, run.x_begin, run.x_end,
+                                      run.settings.coupon.width);
+    return ninety_density(planes, run.x_begin, run.x_end) > 0;
+  };
+  CrackOnset onset;
+  if (states < 2 || !cracked(states - 1)) return onset;
+  // Cracks only accumulate: bisect for the first state with one.
+  std::size_t low = 0, high = states - 1;  // cracked(high), !cracked(low)
+  while (high - low > 1) {
+    const std::size_t mid = (low + high) / 2;
+    (cracked(mid) ? high : low) = mid;
+  }
+  std::size_t top = 1;
+  for (std::size_t e = 1; e < high; ++e)
+    if (r.stress[e] > r.stress[top]) top = e;
+  onset.found = true;
+  onset.stress = r.stress[top];
+  onset.strain = r.strain[top];
+  return onset;
+}
+
+// The laminate's onset, saturation and strength beside the fracture-mechanics references: its
+// results.csv rows (issue 33's names), its row of the fracture table and its curves of the crack
+// density against stress.
+template <class Row>
+void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& run,
+                               const StiffnessSamples& samples, const Row& row,
+                               std::string& fracture_table, std::vector<Curve>& density_curves) {
+  const StrengthResult& r = run.result;
+  const Material& material = cs.reference_material;
+  const CrackingReferences refs = cracking_references(cs, run);
+  const CrackOnset onset = find_onset(run);
+  auto onset_rows = [&](const std::string& source, double stress) {
+    row("onset_stress", source, stress * kMPaPerPa, "MPa");
+    row("onset_strain", source, 100 * stress / refs.ex, "%");
+  };
+  if (onset.found) {
+    row("onset_stress", "dem", onset.stress * kMPaPerPa, "MPa");
+    row("onset_strain", "dem", 100 * onset.strain, "%");
+  }
+  onset_rows("clt yt", refs.clt_yt);
+  const double layer = 2 * refs.d;
+  row("saturation_crack_density", "dem", samples.last_density * kMetresPerMm, "1/mm");
+  row("saturation_crack_density", "1 / 90 layer thickness", 1 / layer * kMetresPerMm, "1/mm");
+  row("strength", "dem", r.strength * kMPaPerPa, "MPa");
+  row("strength", "fibre failure bound", refs.fibre_bound * kMPaPerPa, "MPa");
+  std::string in_situ = "-", isolated = "-", band_text = "-";
+  if (refs.energy) {
+    onset_rows("in-situ camanho", refs.in_situ_onset);
+    onset_rows("energy isolated crack", refs.isolated_onset);
+    const auto [low, high] = refs.band(material, r.strength);
+    row("saturation_crack_density", "crack multiplication 1/L*", low * kMetresPerMm, "1/mm");
+    row("saturation_crack_density", "crack multiplication 2/L*", high * kMetresPerMm, "1/mm");
+    in_situ = fmt::format("{:.1f} ({:.3f}%; Y_is {:.1f})", refs.in_situ_onset * kMPaPerPa,
+                          100 * refs.in_situ_onset / refs.ex, refs.in_situ.value * kMPaPerPa);
+    isolated = fmt::format("{:.1f} ({:.3f}%)", refs.isolated_onset * kMPaPerPa,
+                           100 * refs.isolated_onset / refs.ex);
+    band_text = fmt::format("{:.2f} – {:.2f}", low * kMetresPerMm, high * kMetresPerMm);
+    Curve low_curve{fmt::format("1/L* {}", run.text), {}, {}, false};
+    Curve high_curve{fmt::format("2/L* {}", run.text), {}, {}, false};
+    const double top = std::max(r.strength, refs.isolated_onset);
+    for (int j = 0; j <= 80; ++j) {
+      const double sigma = refs.isolated_onset + (top - refs.isolated_onset) * j / 80;
+      const auto [l, h] = refs.band(material, sigma);
+      low_curve.x.push_back(sigma * kMPaPerPa);
+      low_curve.y.push_back(l * kMetresPerMm);
+      high_curve.x.push_back(sigma * kMPaPerPa);
+      high_curve.y.push_back(h * kMetresPerMm);
+    }
+    density_curves.push_back(low_curve);
+    density_curves.push_back(high_curve);
+  }
+  density_curves.push_back(samples.density_against_stress);
+  fracture_table += markdown_row(
+      {run.text, fmt::format("{:.2f}", layer / kMetresPerMm),
+       onset.found ? fmt::format("{:.1f} ({:.3f}%)", onset.stress * kMPaPerPa, 100 * onset.strain)
+                   : "no crack",
+       fmt::format("{:.1f} ({:.3f}%)", refs.clt_yt * kMPaPerPa, 100 * refs.clt_yt / refs.ex),
+       in_situ, isolated, fmt::format("{:.2f}", samples.last_density * kMetresPerMm),
+       fmt::format("{:.2f}", samples.last_density * layer), band_text,
+       fmt::format("{:.1f}", r.strength * kMPaPerPa),
+       fmt::format("{:.1f}", refs.fibre_bound * kMPaPerPa),
+       fmt::format("{:.2f}", r.strength / refs.fibre_bound)});
 }
 
 // One laminate's part of the report: its strength test's section, its row of the summary table,
 // its curves of the stiffness figure, the crack planes' CSV and results.csv's rows.
 void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const fs::path& out_dir,
                      ExperimentOutput& out, std::string& table, std::string& fem_notes,
-                     std::string& sections, std::vector<Curve>& curves) {
+                     std::string& sections, std::vector<Curve>& curves, std::string& fracture_table,
+                     std::vector<Curve>& density_curves) {
   const std::string& name = cs.name;
   const std::string& text = run.text;
   const int m = run.m, n = run.n;
@@ -447,6 +629,43 @@ void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const f
     row("stiffness ratio at peak between grips", "calculix same cracks", fem_same.ratio, "1");
     row("cracks cut in calculix", "calculix same cracks", fem_same.cracks, "1");
   }
+  report_fracture_mechanics(cs, run, samples, row, fracture_table, density_curves);
+}
+
+PlotAxes axes_top_left() {
+  PlotAxes axes;
+  axes.key = "left top";
+  return axes;
+}
+
+// The report's section on transverse cracking against fracture mechanics.
+std::string fracture_mechanics_markdown(const CrossplySettings& cs, const std::string& table,
+                                        const Figure& figure) {
+  const Material& m = cs.reference_material;
+  std::string md = fmt::format(
+      "## Transverse cracking against fracture mechanics\n\n"
+      "The *onset* is the DEM's first transverse crack in a 90° ply (a crack plane across {:.0f}% "
+      "of the width), at the largest laminate stress the load had reached; the references are "
+      "laminate stresses at which CLT's stress in the 90° plies (their sigma2 under sigma_x, "
+      "no cure stress) reaches YT, the in-situ strength of the embedded 90° layer (Camanho, "
+      "Dávila, Pinho, Iannucci & Robinson, Compos. A 37 (2006) 165: 1.12 √2 YT when thick, "
+      "√(8 G_Ic / (π t Λ22)) when thin) and the stress at which an isolated crack releases G_Ic in "
+      "the shear-lag field (finite fracture mechanics, core/transverse_cracking.hpp), with the "
+      "strain CLT's Ex gives. The density *at the peak* is the 90° layers' transverse cracks per "
+      "mm when the laminate fails (`saturation_crack_density`), beside the crack-multiplication "
+      "band at the same stress: a new crack forms midway between two when it releases G_Ic, so "
+      "the spacing ends between L*/2 and L*. The *fibre-failure bound* is XT times the 0° plies' "
+      "share of the thickness.",
+      100 * kSpanningFraction);
+  md += m.strength.G_matrix > 0
+            ? fmt::format(" G_Ic = {:g} J/m² ({}).\n\n", m.strength.G_matrix,
+                          cs.base.coupon.material.strength.G_matrix > 0
+                              ? "the material's G_matrix"
+                              : "references.G_Ic_J_m2: the material gives none")
+            : " The material gives no G_matrix and references.G_Ic_J_m2 is not set: the in-situ "
+              "strength and the energy references are left out.\n\n";
+  md += table + "\n" + figure_markdown(figure, "Crack density against laminate stress") + "\n";
+  return md;
 }
 
 ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<LaminateRun>& runs,
@@ -469,8 +688,22 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
   std::string fem_notes;
   std::string sections;
   std::vector<Curve> curves;
+  std::string fracture_table =
+      markdown_row({"laminate", "90° layer (mm)", "onset DEM (MPa, strain)", "90° plies at YT, CLT",
+                    "in-situ strength (Camanho 2006)", "isolated crack at G_Ic",
+                    "cracks per mm at the peak, DEM", "× 90° layer thickness",
+                    "crack multiplication 1/L* – 2/L* at the DEM's strength", "strength DEM (MPa)",
+                    "fibre-failure bound (MPa)", "DEM / bound"}) +
+      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+  std::vector<Curve> density_curves;
   for (const LaminateRun& run : runs)
-    report_laminate(cs, run, context.out_dir, out, table, fem_notes, sections, curves);
+    report_laminate(cs, run, context.out_dir, out, table, fem_notes, sections, curves,
+                    fracture_table, density_curves);
+  const Figure density_figure =
+      plot_curves(density_curves, context.out_dir, fmt::format("{}_crack_density", file_stem(name)),
+                  fmt::format("{}: 90° crack density against the laminate stress", material.name),
+                  "laminate stress (MPa)", "cracks per mm in the 90° layer", axes_top_left());
+  out.files.insert(out.files.end(), density_figure.files.begin(), density_figure.files.end());
   PlotAxes axes;
   axes.key = "right top";
   const Figure figure =
@@ -517,6 +750,7 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
             "DEM loses too much stiffness per crack (strategies/laminate.hpp).",
       table, fem_notes.empty() ? "" : "\nCalculiX not run:\n\n" + fem_notes,
       figure_markdown(figure, "Secant stiffness against crack density"));
+  md += fracture_mechanics_markdown(cs, fracture_table, density_figure);
   md += "## Each laminate\n\n" + sections;
   return out;
 }
