@@ -47,6 +47,7 @@ BondParameters bond_parameters(const Bonds& bonds, int b) {
   params.bending_stiffness = bonds.bending_stiffness(b);
   params.twisting_stiffness = bonds.twisting_stiffness(b);
   params.out_of_plane_shear_ratio = bonds.out_of_plane_shear_ratio(b);
+  params.free_offset = row3(bonds.free_offset, b);
   return params;
 }
 
@@ -122,6 +123,7 @@ BondDeformation bond_deformation(const Particles& p, const Bonds& bonds, int b, 
   du[0] = (p.displacement(j, 0) - p.displacement(i, 0)) - fmadd(a[1], n[2], -(a[2] * n[1]));
   du[1] = (p.displacement(j, 1) - p.displacement(i, 1)) - fmadd(a[2], n[0], -(a[0] * n[2]));
   du[2] = (p.displacement(j, 2) - p.displacement(i, 2)) - fmadd(a[0], n[1], -(a[1] * n[0]));
+  for (int c = 0; c < 3; ++c) du[c] -= bonds.free_offset(b, c);
   for (int c = 0; c < 3 && du_out; ++c) du_out[c] = du[c];
   for (int c = 0; c < 3 && dtheta_out; ++c) dtheta_out[c] = dtheta[c];
   return deformation_of(du, dtheta, n);
@@ -411,6 +413,9 @@ GatherBonds::GatherBonds(const Bonds& bonds, const std::vector<int>& order,
                          const GatherBreaking& breaking) {
   const int n = static_cast<int>(order.size());
   check_permutation(order, n);
+  require(!bonds.has_free_offsets(),
+          "the gather kernel (backends cpu, cuda and emulation) does not carry the bonds' free "
+          "offsets (cure stresses, thermal.delta_T): use the reference backend or a static solve");
   particles_ = n;
   padded_ = (n + lanes::kCount - 1) / lanes::kCount * lanes::kCount;
   std::vector<int> kernel_index(n);

@@ -37,8 +37,9 @@ namespace plydem {
 /// and is refused by its version. 3: each event's cracked site and its mode (failure at the
 /// material point). 4: the cracked site's fracture angle, and which
 /// of the events solver's changes since its last factorization were applied in one update. 5: the
-/// sites' softening cracks, each event's tooth and the cracks' energy and area.
-inline constexpr std::uint32_t kCheckpointVersion = 5;
+/// sites' softening cracks, each event's tooth and the cracks' energy and area. 6: the bonds'
+/// free offsets (cure stresses).
+inline constexpr std::uint32_t kCheckpointVersion = 6;
 
 /// FNV-1a 64 of `bytes`, continuing from `hash`.
 std::uint64_t fnv1a64(std::string_view bytes, std::uint64_t hash = 0xcbf29ce484222325ull);

@@ -57,6 +57,10 @@ Material eglass_my750() {
   m.strength.YT = 40e6;
   m.strength.YC = 145e6;
   m.strength.S12 = 73e6;
+  // WWFE-I (Soden et al. 1998, Table 1): alpha1 = 8.6e-6 /K, alpha2 = 26.4e-6 /K.
+  m.alpha1 = 8.6e-6;
+  m.alpha2 = 26.4e-6;
+  m.thermal_expansion_given = true;
   return m;
 }
 
@@ -134,8 +138,9 @@ double* strength_entry(LaminaStrength& s, std::string_view key) {
 
 // Keys that are not numbers among the strengths: the failure model, the shear curve and Puck's
 // inclination parameters.
-constexpr std::string_view kOtherKeys[] = {"failure_criterion", "shear_curve", "puck_p12_tension",
-                                           "puck_p12_compression"};
+constexpr std::string_view kOtherKeys[] = {
+    "failure_criterion",    "shear_curve", "puck_p12_tension",
+    "puck_p12_compression", "alpha1",      "alpha2"};
 
 bool is_known_key(std::string_view key) {
   if (key == "name") return true;
@@ -252,6 +257,17 @@ Material parse_material_file(const std::string& file, const std::string* text = 
     }
   }
   read_failure_model(table, file, m);
+  const std::optional<double> alpha1 = read_number(table, "alpha1", file, false);
+  const std::optional<double> alpha2 = read_number(table, "alpha2", file, false);
+  require(alpha1.has_value() == alpha2.has_value(),
+          "material file " + in_quotes(file) +
+              ": give both alpha1 and alpha2 (the thermal expansion along and across the fibre, "
+              "1/K) or neither");
+  if (alpha1) {
+    m.alpha1 = *alpha1;
+    m.alpha2 = *alpha2;
+    m.thermal_expansion_given = true;
+  }
   return m;
 }
 
@@ -294,6 +310,15 @@ void validate(const Material& material) {
   require_finite(material, "nu12", material.nu12);
   require_finite(material, "nu23", material.nu23);
   require_finite_positive(material, "density", material.density, "kg/m^3");
+  // Thermal expansion: any sign (carbon fibres contract along their length as they warm), but a
+  // strain of a percent over 100 K is no solid's.
+  for (const auto& [key, alpha] :
+       {std::pair{"alpha1", material.alpha1}, std::pair{"alpha2", material.alpha2}}) {
+    require(std::isfinite(alpha) && std::abs(alpha) < 1e-4,
+            "material " + in_quotes(material.name) + ": " + key +
+                " must be a finite thermal expansion below 1e-4 1/K in magnitude, got " +
+                format_number(alpha));
+  }
   {
     LaminaStrength copy = material.strength;
     for (auto key : kNumberKeys) {

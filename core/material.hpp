@@ -70,6 +70,11 @@ struct Material {
   /// The measured in-plane shear curve, strictly increasing in both strain and stress, never above
   /// the linear G12 gamma line; empty: linear to S12 (core/shear_curve.hpp fits it).
   std::vector<ShearCurvePoint> shear_curve;
+  /// Coefficients of thermal expansion along the fibre and across it (alpha3 = alpha2) [1/K], for
+  /// cure stresses (strategies/cure_stress.hpp); thermal_expansion_given is false for a material
+  /// without them (material file keys alpha1, alpha2: both or neither).
+  double alpha1 = 0, alpha2 = 0;
+  bool thermal_expansion_given = false;
 
   double nu21() const { return nu12 * E2 / E1; }
   double G23() const { return E2 / (2.0 * (1.0 + nu23)); }

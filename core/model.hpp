@@ -162,6 +162,10 @@ struct Bonds {
   /// Mixed-mode law: r = E_II / E_I, the elastic energy the intact bond holds at onset in pure
   /// mode II over that in pure mode I: (c^2 / k_s) / (sigma_c^2 / k_n) (> 0).
   Eigen::ArrayXd peak_energy_ratio;
+  /// The relative displacement u_second - u_first of the contact point at which the bond carries
+  /// no force [m]: an eigen-displacement, such as a ply's cure shrinkage (its thermal strain times
+  /// the branch vector: strategies/cure_stress.hpp). Zero for every bond a strategy builds.
+  Vector3Array free_offset;
   /// 0 intact .. 1 broken: the stiffnesses above are (1 - damage) times the intact ones.
   Eigen::ArrayXd damage;
   Eigen::ArrayXi state;  ///< BondState as int
@@ -191,6 +195,7 @@ struct Bonds {
     f(FieldInfo{"mixed_mode_exponent"}, &Bonds::mixed_mode_exponent);
     f(FieldInfo{"fracture_energy_ratio", false, 1.0}, &Bonds::fracture_energy_ratio);
     f(FieldInfo{"peak_energy_ratio", false, 1.0}, &Bonds::peak_energy_ratio);
+    f(FieldInfo{"free_offset"}, &Bonds::free_offset);
     f(FieldInfo{"damage"}, &Bonds::damage);
     f(FieldInfo{"state"}, &Bonds::state);
   }
@@ -220,6 +225,8 @@ struct Bonds {
   bool is_broken(int b) const { return state(b) != static_cast<int>(BondState::kIntact); }
   /// Whether any bond has a finite strength (the model can break).
   bool breakable() const;
+  /// Whether any bond has a non-zero free offset (cure stresses).
+  bool has_free_offsets() const { return (free_offset != 0).any(); }
 };
 
 namespace detail {

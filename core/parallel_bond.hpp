@@ -8,7 +8,8 @@
 /// contact point at lever s_i from i and s_j from j, the relative displacement of the contact point
 /// and the relative rotation are
 ///   du = (u_j - u_i) - (s_i theta_i + s_j theta_j) x n,     dtheta = theta_j - theta_i,
-/// both zero under any rigid translation or (infinitesimal) rigid rotation. The bond carries
+/// both zero under any rigid translation or (infinitesimal) rigid rotation. A bond with a free
+/// offset q (an eigen-displacement: cure shrinkage) takes du - q for du. The bond carries
 ///   F = k_n (n.du) n + k_s (du - (n.du) n)          acting +F on i and -F on j,
 ///   M = k_t (n.dtheta) n + k_b (dtheta - (n.dtheta) n)   acting +M on i and -M on j,
 /// plus the moments of F about each centre. This is the exact gradient of the bond energy
@@ -40,6 +41,9 @@ struct BondParameters {
   double bending_stiffness = 0;
   double twisting_stiffness = 0;
   double out_of_plane_shear_ratio = 1;  ///< r = k_z / k_s (see the file comment)
+  /// The relative displacement at which the bond carries no force (Bonds::free_offset): du of the
+  /// file comment is taken from it.
+  Eigen::Vector3d free_offset = Eigen::Vector3d::Zero();
 };
 
 /// z of the file comment: the unit part of e_z perpendicular to `n`; zero for a bond along z.
@@ -83,7 +87,8 @@ inline Eigen::Vector3d contact_relative_displacement(const BondParameters& b,
                                                      const Eigen::Vector3d& theta_i,
                                                      const Eigen::Vector3d& u_j,
                                                      const Eigen::Vector3d& theta_j) {
-  return (u_j - u_i) - (b.lever_first * theta_i + b.lever_second * theta_j).cross(b.normal);
+  return (u_j - u_i) - (b.lever_first * theta_i + b.lever_second * theta_j).cross(b.normal) -
+         b.free_offset;
 }
 
 inline BondResponse parallel_bond_response(const BondParameters& b, const Eigen::Vector3d& u_i,

@@ -1257,6 +1257,10 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
                         const EventSettings& settings, const EventsState* resume) {
   const auto start = Clock::now();
   settings.validate();
+  require(!model.bonds.has_free_offsets(),
+          "events: the bonds carry free offsets (cure stresses, thermal.delta_T), which the events "
+          "solver does not take yet (its load factor scales every bond's state from zero); the "
+          "static solver and the reference backend take them");
   check_inputs(model, unit, reaction_dofs, settings.material_point.has_value());
   EventLoop loop(model, unit, reaction_dofs, settings, start);
   if (resume) loop.resume(*resume);

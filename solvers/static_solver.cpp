@@ -457,6 +457,25 @@ Eigen::VectorXd bond_generalized_forces(Particles& p, const Bonds& bonds, double
   return f;
 }
 
+// The generalized forces the bonds' free offsets put on the particles at zero displacement and
+// rotation (the load g0 of K u = g0: each bond pulls its ends towards its free offset).
+Eigen::VectorXd free_offset_load(const Model& model) {
+  const Bonds& bonds = model.bonds;
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(kDofsPerParticle * model.particles.size());
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_broken(b) || (bonds.free_offset.row(b) == 0).all()) continue;
+    const BondResponse r =
+        parallel_bond_response(bond_parameters(bonds, b), zero, zero, zero, zero);
+    const int i = kDofsPerParticle * bonds.first(b), j = kDofsPerParticle * bonds.second(b);
+    g.segment<3>(i) += r.force_on_first;
+    g.segment<3>(j) -= r.force_on_first;
+    g.segment<3>(i + 3) += r.torque_on_first;
+    g.segment<3>(j + 3) += r.torque_on_second;
+  }
+  return g;
+}
+
 void set_state(Particles& p, const Eigen::VectorXd& u) {
   for (int i = 0; i < p.size(); ++i)
     for (int c = 0; c < 3; ++c) {
@@ -739,6 +758,10 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
     const Eigen::VectorXd k_u = m.k.multiply(u_ranked);
     for (int d = 0; d < m.dofs; ++d)
       if (m.free_index[d] >= 0) b(m.free_index[d]) = -m.s(m.free_index[d]) * k_u(d);
+  }
+  if (model.bonds.has_free_offsets()) {
+    const Eigen::VectorXd g0 = free_offset_load(model);
+    for (int f = 0; f < nf; ++f) b(f) += m.s(f) * g0(m.free_dofs[f]);
   }
   result.seconds.assembly += phase.seconds();
 

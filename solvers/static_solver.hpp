@@ -182,9 +182,11 @@ struct StaticResult {
 };
 
 /// Solves the linear static problem and writes the state into `model.particles`: displacement and
-/// rotation (prescribed dofs get their values), and force and torque as compute_bond_forces gives
-/// them (about zero on free dofs, minus the reaction on prescribed ones), so that callers sum grip
-/// forces as after an explicit run. Velocities are left as they were.
+/// rotation (prescribed dofs get their values; the bonds' free offsets, Bonds::free_offset, are a
+/// load: the forces they exert at zero displacement, strategies/cure_stress.hpp), and force and
+/// torque as compute_bond_forces gives them (about zero on free dofs, minus the reaction on
+/// prescribed ones), so that callers sum grip forces as after an explicit run. Velocities are left
+/// as they were.
 ///
 /// Throws plydem::Error, naming the cause, for: constraints of the wrong size or non-finite values;
 /// a bond with a negative or non-finite stiffness (an unstable calibration); a particle with a free
