@@ -92,6 +92,22 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
   CHECK(rows.at("[0/90]s|strength|dem") == rows.at("[0/90]s|strength|dem square"));
   CHECK(rows.at("[0/90]s|strength|fibre failure bound") * 1e6 ==
         doctest::Approx(m.strength.XT / 2).epsilon(1e-12));
+  // Cure stresses (thermal.delta_T = -100 K): CLT's written out for [0/90]s of equal plies. By
+  // symmetry eps0_x = eps0_y = e, with (a11 + a12) e = ((Q11 + Q12) alpha1 + (Q12 + Q22) alpha2)
+  // dT / 2 (the thermal force resultant per unit thickness), and the 90° plies' sigma2 is
+  // Q22 (e - alpha2 dT) + Q12 (e - alpha1 dT); the DEM's on a 4 mm square coupon within 2%.
+  const double dt = -100;
+  const double e = ((q11 + q12) * m.alpha1 + (q12 + q22) * m.alpha2) * dt / (2 * (a11 + a12));
+  const double cure90 = q22 * (e - m.alpha2 * dt) + q12 * (e - m.alpha1 * dt);
+  CHECK(rows.at("[0/90]s|cure_stress_90|clt") * 1e6 == doctest::Approx(cure90).epsilon(1e-9));
+  CHECK(rows.at("[0/90]s|cure_stress_0|clt") ==
+        doctest::Approx(-rows.at("[0/90]s|cure_stress_90|clt")));
+  CHECK(rows.at("[0/90]s|cure_stress_90|dem") ==
+        doctest::Approx(rows.at("[0/90]s|cure_stress_90|clt")).epsilon(0.02));
+  CHECK(rows.at("[0/90]s|cure_stress_0|dem") ==
+        doctest::Approx(rows.at("[0/90]s|cure_stress_0|clt")).epsilon(0.02));
+  CHECK(rows.at("[0/90]s|onset_stress|clt yt with cure") * 1e6 ==
+        doctest::Approx((m.strength.YT - cure90) / k90).epsilon(1e-9));
   REQUIRE(rows.count("[0/90]s|onset_stress|dem") == 1);
   CHECK(rows.at("[0/90]s|onset_stress|dem") <= rows.at("[0/90]s|strength|dem"));
   const std::string report = read(dir / "report.md");
