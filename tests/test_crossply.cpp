@@ -193,3 +193,38 @@ TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming i
   CHECK_THROWS_WITH_AS(run_experiment(options),
                        doctest::Contains("'[0/45]s' is not a cross-ply [0_m/90_n]s"), Error);
 }
+
+TEST_CASE("plydem run crossply at two particle sizes: the finest reports, the coarser as dem d=") {
+  const fs::path dir = fresh_directory("crossply_sizes");
+  std::ofstream(dir / "sizes.toml")
+      << "experiment = \"crossply\"\nmaterial = \"eglass-my750\"\nstrategy = \"square\"\n"
+         "failure_criterion = \"puck\"\nweibull_modulus = 10\nseed = 1\n"
+         "layups = [\"[0/90]s\"]\n"
+         "[coupon]\nlength_mm = 1.6\nwidth_mm = 0.4\nthickness_mm = 0.2\n"
+         "diameters_mm = [0.05, 0.1]\n";
+  RunOptions options;
+  options.config = dir / "sizes.toml";
+  options.out_dir = dir / "out";
+  run_experiment(options);
+  const std::map<std::string, double> rows = rows_of(dir / "out" / "results.csv");
+  for (const char* quantity :
+       {"onset_stress", "onset_strain", "saturation_crack_density", "strength"}) {
+    CHECK(rows.count(fmt::format("[0/90]s|{}|dem", quantity)) == 1);
+    CHECK(rows.count(fmt::format("[0/90]s|{}|dem d=0.1", quantity)) == 1);
+    CHECK(rows.count(fmt::format("[0/90]s|{}|dem d=0.05", quantity)) == 0);
+  }
+  // The report is the finest's: its strength is the one the strength test's rows give.
+  CHECK(rows.at("[0/90]s|strength|dem") == rows.at("[0/90]s|strength|dem square"));
+  const std::string report = read(dir / "out" / "report.md");
+  CHECK(report.find("## Particle size") != std::string::npos);
+  CHECK(report.find("0.05 mm particles") != std::string::npos);
+
+  std::ofstream(dir / "both.toml") << "experiment = \"crossply\"\nlayups = [\"[0/90]s\"]\n"
+                                      "[coupon]\ndiameter_mm = 0.1\ndiameters_mm = [0.1, 0.05]\n";
+  options.config = dir / "both.toml";
+  CHECK_THROWS_WITH_AS(run_experiment(options), doctest::Contains("not both"), Error);
+  std::ofstream(dir / "twice.toml") << "experiment = \"crossply\"\nlayups = [\"[0/90]s\"]\n"
+                                       "[coupon]\ndiameters_mm = [0.1, 0.1]\n";
+  options.config = dir / "twice.toml";
+  CHECK_THROWS_WITH_AS(run_experiment(options), doctest::Contains("twice"), Error);
+}
