@@ -40,6 +40,12 @@ std::map<std::string, double> rows_of(const fs::path& csv) {
   return rows;
 }
 
+// The start of a crossply config failing at the material point with strength scatter: E-glass,
+// square, Puck, Weibull m = 10, seed 1.
+const char* const kMaterialPointConfig =
+    "experiment = \"crossply\"\nmaterial = \"eglass-my750\"\nstrategy = \"square\"\n"
+    "failure_criterion = \"puck\"\nweibull_modulus = 10\nseed = 1\n";
+
 }  // namespace
 
 TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiffness") {
@@ -161,9 +167,8 @@ TEST_CASE("plydem run crossply at the material point: traction-free cracks, 0 de
   // last-ply failure, XT / 2 for [0/90]s of equal plies (measured 0.87 of it; bond by bond 0.55).
   const fs::path dir = fresh_directory("crossply_material_point");
   std::ofstream(dir / "mp.toml")
-      << "experiment = \"crossply\"\nmaterial = \"eglass-my750\"\nstrategy = \"square\"\n"
-         "failure_criterion = \"puck\"\nweibull_modulus = 10\nseed = 1\n"
-         "[coupon]\nlength_mm = 2\nwidth_mm = 0.5\nthickness_mm = 0.2\ndiameter_mm = 0.1\n"
+      << kMaterialPointConfig
+      << "[coupon]\nlength_mm = 2\nwidth_mm = 0.5\nthickness_mm = 0.2\ndiameter_mm = 0.1\n"
          "[interface]\ntransverse_shear = true\n[quick]\nlayups = [\"[0/90]s\"]\n";
   RunOptions options;
   options.config = dir / "mp.toml";
@@ -197,9 +202,8 @@ TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming i
 TEST_CASE("plydem run crossply at two particle sizes: the finest reports, the coarser as dem d=") {
   const fs::path dir = fresh_directory("crossply_sizes");
   std::ofstream(dir / "sizes.toml")
-      << "experiment = \"crossply\"\nmaterial = \"eglass-my750\"\nstrategy = \"square\"\n"
-         "failure_criterion = \"puck\"\nweibull_modulus = 10\nseed = 1\n"
-         "layups = [\"[0/90]s\"]\n"
+      << kMaterialPointConfig
+      << "layups = [\"[0/90]s\"]\n"
          "[coupon]\nlength_mm = 1.6\nwidth_mm = 0.4\nthickness_mm = 0.2\n"
          "diameters_mm = [0.05, 0.1]\n";
   RunOptions options;
