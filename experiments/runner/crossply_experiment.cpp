@@ -39,7 +39,6 @@
 #include "core/units.hpp"
 #include "experiments/fem/calculix.hpp"
 #include "experiments/output/figures.hpp"
-#include "experiments/protocols/coupon.hpp"
 #include "experiments/protocols/strength.hpp"
 #include "experiments/runner/coupon_config.hpp"
 #include "experiments/runner/experiment.hpp"
@@ -342,20 +341,16 @@ struct LaminateRun {
 // stresses within half a laminate thickness of the centre, beside CLT's.
 void solve_laminate_cure(const CrossplySettings& cs, SpecimenBuilder& builder, LaminateRun& run) {
   const StrengthSettings& s = run.settings;
-  const std::vector<Ply> plies = [&] {
-    std::vector<Ply> p;
-    for (double angle : s.layup) p.push_back({s.coupon.material, angle, s.coupon.thickness});
-    return p;
-  }();
-  const double thickness = s.coupon.thickness * static_cast<double>(plies.size());
-  CouponSpec square = s.coupon;
-  square.length = square.width = 5 * thickness;
+  LaminateSpec square{s.coupon, s.layup, s.interface};
+  const double thickness = s.coupon.thickness * static_cast<double>(s.layup.size());
+  square.coupon.length = square.coupon.width = 5 * thickness;
   spdlog::info("{}: {}: cure of a {:g} mm square coupon at {:g} K", cs.name, run.text,
-               square.length / kMetresPerMm, cs.delta_T);
-  Model model = build_coupon(builder, square, s.layup, s.interface, s.coupon.ply_angle).model;
+               square.coupon.length / kMetresPerMm, cs.delta_T);
+  Model model = build_laminate(builder, square).model;
+  const std::vector<Ply> plies = laminate_plies(square);
   run.cure_dem = solve_cure(model, plies, cs.delta_T, 0.5 * thickness);
   run.cure_clt = clt_thermal_ply_stresses(plies, cs.delta_T);
-  run.cure_coupon = square.length;
+  run.cure_coupon = square.coupon.length;
 }
 
 LaminateRun run_laminate(const CrossplySettings& cs, std::size_t k, double diameter,
@@ -606,12 +601,11 @@ struct LaminateTargets {
 // density against stress.
 template <class Row>
 void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& run,
-                               const StiffnessSamples& samples, const Row& row,
-                               std::string& fracture_table, std::vector<Curve>& density_curves,
-                               LaminateTargets& targets) {
+                               const CrackingReferences& refs, const StiffnessSamples& samples,
+                               const Row& row, std::string& fracture_table,
+                               std::vector<Curve>& density_curves, LaminateTargets& targets) {
   const StrengthResult& r = run.result;
   const Material& material = cs.reference_material;
-  const CrackingReferences refs = cracking_references(cs, run);
   const CrackOnset onset = find_onset(run);
   auto onset_rows = [&](const std::string& source, double stress) {
     row("onset_stress", source, stress * kMPaPerPa, "MPa");
@@ -686,9 +680,8 @@ void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& ru
 // The cure check: the 0° and 90° plies' stresses along and across their fibres at the centre of
 // the square coupon, DEM beside CLT (rows cure_stress_0 sigma1, cure_stress_90 sigma2, MPa).
 template <class Row>
-void report_cure(const CrossplySettings& cs, const LaminateRun& run, const Row& row,
+void report_cure(const LaminateRun& run, const CrackingReferences& refs, const Row& row,
                  std::string& cure_table) {
-  const CrackingReferences refs = cracking_references(cs, run);
   auto in_ply = [](const Eigen::Vector3d& s, double angle) {
     return to_ply_axes(s(0), s(1), s(2), angle);
   };
@@ -787,9 +780,11 @@ void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const f
     row("cracks cut in calculix", "calculix same cracks", fem_same.cracks, "1");
   }
   targets.emplace_back();
-  report_fracture_mechanics(cs, run, samples, row, fracture_table, density_curves, targets.back());
+  const CrackingReferences refs = cracking_references(cs, run);
+  report_fracture_mechanics(cs, run, refs, samples, row, fracture_table, density_curves,
+                            targets.back());
   if (fem_same.skipped.empty()) targets.back().fem = fem_same.ratio;
-  if (!run.cure_dem.empty()) report_cure(cs, run, row, cure_table);
+  if (!run.cure_dem.empty()) report_cure(run, refs, row, cure_table);
 }
 
 // The onset, the density at the peak and the strength of one run (the figures the particle-size
