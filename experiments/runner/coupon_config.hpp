@@ -31,6 +31,18 @@ std::vector<std::string> coupon_config_keys();
 /// The settings (of tension_settings_description()) coupon_from_config and grips_from_config read.
 SettingsSelection coupon_config_selection();
 
+/// coupon.diameters_mm (in a quick run quick.diameters_mm, where [quick] gives it or
+/// quick.diameter_mm): the particle diameters a kind runs its specimens at, coarsest first [m];
+/// {`diameter`} (the coupon's) when not given. Throws plydem::Error naming the file for a
+/// non-positive or repeated diameter, or for diameters_mm beside diameter_mm in the same table.
+std::vector<double> particle_diameters_from_config(const ExperimentConfig& config, bool quick,
+                                                   double diameter);
+
+/// `keys` (a kind's own config keys with their descriptions) and coupon.diameters_mm,
+/// quick.diameters_mm, described as running `what` at each size.
+std::vector<std::pair<std::string, std::string>> with_particle_diameters_keys(
+    const std::string& what, std::vector<std::pair<std::string, std::string>> keys);
+
 /// Strategy options written "NAME=VALUE" -> (NAME, VALUE). Throws plydem::Error naming the entry,
 /// prefixed by `what` ("--strategy-option", or the config and key), when it is not NAME=VALUE or
 /// VALUE is not a finite number.

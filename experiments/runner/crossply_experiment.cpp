@@ -205,52 +205,25 @@ StrengthSettings crossply_defaults(const ExperimentContext& context) {
 }
 
 const std::vector<std::pair<std::string, std::string>>& crossply_own_keys() {
-  static const std::vector<std::pair<std::string, std::string>> keys{
-      {"layups",
-       "the [0_m/90_n]s laminates, one case each; default [\"[0/90]s\", "
-       "\"[0/90_2]s\", \"[0/90_4]s\"]"},
-      {"quick.layups", "the laminates of a quick run"},
-      {"scatter", "\"90\" (the strength scatter in the 90° plies only, the default) or \"all\""},
-      {"fem.element_mm", "CalculiX's in-plane element size [mm]; 0 = half a particle diameter"},
-      {"fem.elements_per_ply", "CalculiX's elements through each ply; default 2"},
-      {"fem.threads", "threads CalculiX may use; default 1"},
-      {"thermal.delta_T",
-       "the temperature change from stress-free to test [K] (cure cooling: negative): the cure "
-       "stresses beside CLT's on a square coupon of the laminate, and the references with them "
-       "(the failure test itself runs without: the events solver does not take them yet); "
-       "default 0"},
-      {"coupon.diameters_mm",
-       "particle diameters [mm] to run every laminate at (replaces coupon.diameter_mm): the "
-       "finest gives the report, the others rows of source \"dem d=<mm>\" and the particle-size "
-       "table; default: coupon.diameter_mm alone"},
-      {"quick.diameters_mm", "the particle diameters of a quick run"},
-      {"references.G_Ic_J_m2",
-       "the 90° layer's mode-I fracture energy [J/m^2] for the in-situ strength and the "
-       "crack-multiplication references, where the material gives no G_matrix; default none"}};
+  static const std::vector<std::pair<std::string, std::string>> keys = with_particle_diameters_keys(
+      "every laminate",
+      {{"layups",
+        "the [0_m/90_n]s laminates, one case each; default [\"[0/90]s\", "
+        "\"[0/90_2]s\", \"[0/90_4]s\"]"},
+       {"quick.layups", "the laminates of a quick run"},
+       {"scatter", "\"90\" (the strength scatter in the 90° plies only, the default) or \"all\""},
+       {"fem.element_mm", "CalculiX's in-plane element size [mm]; 0 = half a particle diameter"},
+       {"fem.elements_per_ply", "CalculiX's elements through each ply; default 2"},
+       {"fem.threads", "threads CalculiX may use; default 1"},
+       {"thermal.delta_T",
+        "the temperature change from stress-free to test [K] (cure cooling: negative): the cure "
+        "stresses beside CLT's on a square coupon of the laminate, and the references with them "
+        "(the failure test itself runs without: the events solver does not take them yet); "
+        "default 0"},
+       {"references.G_Ic_J_m2",
+        "the 90° layer's mode-I fracture energy [J/m^2] for the in-situ strength and the "
+        "crack-multiplication references, where the material gives no G_matrix; default none"}});
   return keys;
-}
-
-// coupon.diameters_mm (quick.diameters_mm in a quick run), coarsest first, in metres; the
-// coupon's diameter alone when not given.
-std::vector<double> crossply_diameters(const ExperimentConfig& c, const ExperimentContext& context,
-                                       const StrengthSettings& base) {
-  const std::string origin = c.path().string();
-  std::vector<double> mm = c.numbers("coupon.diameters_mm", {});
-  if (context.quick) mm = c.numbers("quick.diameters_mm", mm);
-  if (mm.empty()) return {base.coupon.particle_diameter};
-  require(!c.contains("coupon.diameter_mm") && !c.contains("quick.diameter_mm"),
-          fmt::format("{}: give coupon.diameters_mm or coupon.diameter_mm, not both", origin));
-  std::vector<double> diameters;
-  for (double d : mm) {
-    require(
-        std::isfinite(d) && d > 0,
-        fmt::format("{}: coupon.diameters_mm must be positive diameters in mm, got {}", origin, d));
-    diameters.push_back(d * kMetresPerMm);
-  }
-  std::sort(diameters.begin(), diameters.end(), std::greater<>());
-  require(std::adjacent_find(diameters.begin(), diameters.end()) == diameters.end(),
-          fmt::format("{}: coupon.diameters_mm names a diameter twice", origin));
-  return diameters;
 }
 
 CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentContext& context) {
@@ -274,7 +247,8 @@ CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentConte
   base.layup = parse_layup(layups.front());
   read_config_settings(c, d, crossply_selection(), context.quick, base);
   base.layup.clear();  // each case sets its own
-  const std::vector<double> diameters = crossply_diameters(c, context, base);
+  const std::vector<double> diameters =
+      particle_diameters_from_config(c, context.quick, base.coupon.particle_diameter);
   base.coupon.particle_diameter = diameters.back();  // what the report and its references read
   FemSettings fem;
   fem.mesh.element_size = c.number("fem.element_mm", 0) * kMetresPerMm;
