@@ -47,6 +47,57 @@ double shear_lag_stiffness_ratio(const Material& m, double b, double d, double d
   return 1.0 / (1.0 + d * m.E2 / (b * m.E1) * std::tanh(ls) / ls);
 }
 
+double HashinCrossPly::chi(double rho) const {
+  require(std::isfinite(rho) && rho > 0,
+          fmt::format("Hashin's cross-ply: rho (half the crack spacing over half the 90° layer) "
+                      "must be positive, got {}",
+                      rho));
+  const double a2 = alpha * alpha, b2 = beta * beta;
+  // For large rho, cosh and sinh share their growth: chi -> 2 alpha (alpha^2 + beta^2).
+  if (2 * alpha * rho > 700) return 2 * alpha * (a2 + b2);
+  // cosh x - cos y as 2 sinh^2(x/2) + 2 sin^2(y/2): no cancellation at small rho.
+  const double sh = std::sinh(alpha * rho), sn = std::sin(beta * rho);
+  return 2 * alpha * beta * (a2 + b2) * (2 * sh * sh + 2 * sn * sn) /
+         (alpha * std::sin(2 * beta * rho) + beta * std::sinh(2 * alpha * rho));
+}
+
+HashinCrossPly hashin_cross_ply(const Material& m, double b, double d) {
+  require_thicknesses(b, d);
+  const double lambda = b / d;
+  const double ea = m.E1, et = m.E2, nua = m.nu12, nut = m.nu23, ga = m.G12, gt = m.G23();
+  const double c00 = 1 / et + 1 / (lambda * ea);
+  const double c02 = nut / et * (lambda + 2.0 / 3.0) - lambda * nua / (3 * ea);
+  const double c11 = (1 / gt + lambda / ga) / 3;
+  const double eta = (3 * lambda * lambda + 12 * lambda + 8) / 60;
+  const double c22 = (lambda + 1) * eta / et;
+  HashinCrossPly h;
+  h.p = (c02 - c11) / c22;
+  h.q = c00 / c22;
+  h.eta = eta;
+  require(4 * h.q > h.p * h.p,
+          fmt::format("Hashin's cross-ply: 4q <= p^2 (p = {:.4g}, q = {:.4g}) for material '{}' "
+                      "with 0° sublaminates {:g} mm and a 90° layer {:g} mm thick: the closed "
+                      "form covers oscillating perturbations only",
+                      h.p, h.q, m.name, b * 1e3, 2 * d * 1e3));
+  const double root_q = std::sqrt(h.q);
+  h.alpha = std::sqrt((root_q - h.p / 2) / 2);
+  h.beta = std::sqrt((root_q + h.p / 2) / 2);
+  return h;
+}
+
+double hashin_stiffness_ratio(const Material& m, double b, double d, double density) {
+  const HashinCrossPly h = hashin_cross_ply(m, b, d);
+  require(std::isfinite(density) && density >= 0,
+          fmt::format("transverse cracking: the crack density must be finite and >= 0, got {} "
+                      "1/m",
+                      density));
+  if (density == 0) return 1.0;
+  const double e0 = (b * m.E1 + d * m.E2) / (b + d);
+  const double k1 = m.E2 / e0;
+  const double rho = 1 / (2 * density * d);
+  return 1 / (1 + e0 * k1 * k1 * h.eta * h.chi(rho) / (m.E2 * rho));
+}
+
 double ply_discount_stiffness_ratio(const Material& m, double b, double d) {
   require_thicknesses(b, d);
   return b * m.E1 / (b * m.E1 + d * m.E2);

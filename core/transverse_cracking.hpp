@@ -2,7 +2,8 @@
 /// \file
 /// Closed forms for the stiffness of a cross-ply [0_m/90_n]s with transverse cracks in its 90°
 /// layer (../shared/DAMAGE_NOTES.md §5): the shear-lag model (Garrett & Bailey, J. Mater. Sci. 12
-/// (1977) 157; Highsmith & Reifsnider, ASTM STP 775 (1982) 103) and its ply-discount limit.
+/// (1977) 157; Highsmith & Reifsnider, ASTM STP 775 (1982) 103), its ply-discount limit, and
+/// Hashin's variational bound (§6).
 /// With b the thickness of each 0° sublaminate, d half the 90° layer's thickness and 2 s the crack
 /// spacing (s = 1 / (2 density)),
 ///   E / E0 = 1 / (1 + (d E2) / (b E1) tanh(lambda s) / (lambda s)),
@@ -25,6 +26,42 @@ double ply_discount_stiffness_ratio(const Material& material, double b, double d
 
 /// The shear-lag parameter lambda of the file comment [1/m].
 double shear_lag_parameter(const Material& material, double b, double d);
+
+/// Hashin's variational analysis of the cracked cross-ply (Hashin, Mech. Mater. 4 (1985) 121;
+/// Nairn, J. Compos. Mater. 23 (1989) 1106): the 90° layer's axial stress perturbation between two
+/// cracks 2a apart is sigma90 psi(xi), xi = x / d, psi(±rho) = 1, psi'(±rho) = 0 (rho = a / d),
+/// the minimiser of the complementary energy
+///   F = C22 integral over (-rho, rho) of (q psi^2 - p psi'^2 + psi''^2) dxi,
+/// with, for lambda = b / d (E_A = E1, E_T = E2, nu_A = nu12, nu_T = nu23, G_A = G12, G_T = G23),
+///   C00 = 1/E_T + 1/(lambda E_A),  C02 = (nu_T/E_T)(lambda + 2/3) - lambda nu_A / (3 E_A),
+///   C11 = (1/G_T + lambda/G_A) / 3, C22 = (lambda + 1)(3 lambda^2 + 12 lambda + 8) / (60 E_T),
+///   p = (C02 - C11) / C22, q = C00 / C22.
+/// Its Euler-Lagrange equation psi'''' + p psi'' + q psi = 0 has, where 4q > p^2, the roots
+/// ±alpha ± i beta, alpha^2 = (sqrt(q) - p/2) / 2, beta^2 = (sqrt(q) + p/2) / 2, and
+///   chi(rho) = -psi'''(rho) = 2 alpha beta (alpha^2 + beta^2) (cosh 2 alpha rho - cos 2 beta rho)
+///              / (alpha sin 2 beta rho + beta sinh 2 alpha rho),
+/// the minimum of F being 2 C22 chi(rho). The cracked laminate's compliance is then bounded by
+///   1/E <= 1/E0 + k1^2 eta(lambda) chi(rho) / (E_T rho),  k1 = E_T / E0,
+///   eta = (3 lambda^2 + 12 lambda + 8) / 60,
+/// E0 the rule-of-mixtures modulus of the file comment: a rigorous lower bound of the stiffness,
+/// tending to the ply-discount limit as rho -> 0.
+struct HashinCrossPly {
+  double p = 0, q = 0;         ///< the Euler-Lagrange equation's coefficients
+  double alpha = 0, beta = 0;  ///< its roots' real and imaginary parts
+  double eta = 0;              ///< eta(lambda)
+  /// chi(rho) of the comment, for rho > 0.
+  double chi(double rho) const;
+};
+
+/// Hashin's analysis of the cross-ply of 0° sublaminates `b` thick and a 90° layer 2 `d` thick.
+/// Throws plydem::Error for non-positive thicknesses, or where 4q <= p^2 (non-oscillating
+/// perturbations, which this closed form does not cover; the message names p and q).
+HashinCrossPly hashin_cross_ply(const Material& material, double b, double d);
+
+/// E / E0 of Hashin's variational bound at `density` cracks per unit length [1/m] (0: 1), evenly
+/// spaced (2a = 1 / density). Throws plydem::Error as hashin_cross_ply, or for a negative or
+/// non-finite density.
+double hashin_stiffness_ratio(const Material& material, double b, double d, double density);
 
 // Fracture mechanics of the 90° layer (../shared/DAMAGE_NOTES.md §6). G_Ic is the material's
 // G_matrix (the energy of a crack along the fibres); each function throws plydem::Error naming

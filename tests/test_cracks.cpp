@@ -2,9 +2,13 @@
 // of a square coupon, counted, measured and told apart by ply.
 #include <doctest/doctest.h>
 
+#include <Eigen/Sparse>
+
 #include <cmath>
 #include <functional>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 #include "core/error.hpp"
 #include "core/transverse_cracking.hpp"
@@ -169,6 +173,85 @@ TEST_CASE("the shear-lag stiffness of a cracked cross-ply and its ply-discount l
   CHECK_THROWS_WITH_AS(shear_lag_stiffness_ratio(m, 0, d, 1e3), doctest::Contains("positive"),
                        Error);
   CHECK_THROWS_WITH_AS(shear_lag_stiffness_ratio(m, b, d, -1), doctest::Contains("density"), Error);
+}
+
+namespace {
+
+// The minimum of Hashin's complementary-energy functional over C22,
+//   integral over (-rho, rho) of (q psi^2 - p psi'^2 + psi''^2) dxi,  psi(±rho) = 1, psi'(±rho) =
+//   0,
+// by finite differences on `n` intervals (psi'' at the ends from mirrored ghost nodes, which holds
+// the slopes there at zero),
+// computed here without the closed form's roots: it should equal 2 chi(rho).
+double hashin_functional_minimum(double p, double q, double rho, int n) {
+  const double h = 2 * rho / n;
+  // The energy is psi^T A psi over the nodes 0..n; each term is a weight times (c . psi)^2.
+  std::vector<Eigen::Triplet<double>> entries;
+  auto add_square = [&](const std::vector<std::pair<int, double>>& c, double weight) {
+    for (const auto& [i, ci] : c)
+      for (const auto& [j, cj] : c) entries.emplace_back(i, j, weight * ci * cj);
+  };
+  for (int i = 0; i <= n; ++i) {
+    const double w = (i == 0 || i == n) ? h / 2 : h;
+    add_square({{i, 1.0}}, w * q);
+    // psi'' at node i; the ghost node beyond each end mirrors its neighbour (psi' = 0 there).
+    const int left = i == 0 ? 1 : i - 1, right = i == n ? n - 1 : i + 1;
+    add_square({{left, 1 / (h * h)}, {i, -2 / (h * h)}, {right, 1 / (h * h)}}, w);
+  }
+  for (int i = 0; i < n; ++i) add_square({{i, -1 / h}, {i + 1, 1 / h}}, -p * h);
+  Eigen::SparseMatrix<double> a(n + 1, n + 1);
+  a.setFromTriplets(entries.begin(), entries.end());
+  // Unknowns: the interior nodes; the ends are 1. Minimum: f^T A_ff f - b^T A_uu^-1 b, b = A_uf f.
+  const Eigen::SparseMatrix<double> interior = a.block(1, 1, n - 1, n - 1);
+  Eigen::VectorXd coupling = Eigen::VectorXd::Zero(n - 1);
+  for (int k = 1; k < n; ++k) coupling(k - 1) = a.coeff(k, 0) + a.coeff(k, n);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(interior);
+  REQUIRE(solver.info() == Eigen::Success);
+  const Eigen::VectorXd u = solver.solve(coupling);
+  const double ends = a.coeff(0, 0) + a.coeff(n, n) + 2 * a.coeff(0, n);
+  return ends - coupling.dot(u);
+}
+
+}  // namespace
+
+TEST_CASE("Hashin's variational stiffness of a cracked cross-ply: energy, limits, refusals") {
+  const Material m = load_material("eglass-my750");
+  const double t = 0.2e-3;
+  for (int n : {1, 2, 4}) {
+    CAPTURE(n);
+    const double b = t, d = n * t;
+    const HashinCrossPly h = hashin_cross_ply(m, b, d);
+    // The closed form's chi is half the functional's minimum, computed without its roots.
+    for (double rho : {0.3, 1.0, 3.0}) {
+      CAPTURE(rho);
+      // Steps of 0.003: finer ones lose digits to the fourth-difference matrix's conditioning.
+      const int steps = static_cast<int>(std::ceil(2 * rho / 0.003));
+      CHECK(hashin_functional_minimum(h.p, h.q, rho, steps) ==
+            doctest::Approx(2 * h.chi(rho)).epsilon(1e-5));
+    }
+    // Dense cracks: the 90° layer carries nothing, the ply-discount modulus b E1 / (b + d) over
+    // the rule of mixtures (b E1 + d E2) / (b + d).
+    const double discount = b * m.E1 / (b * m.E1 + d * m.E2);
+    CHECK(hashin_stiffness_ratio(m, b, d, 1e4 / d) == doctest::Approx(discount).epsilon(1e-6));
+    CHECK(ply_discount_stiffness_ratio(m, b, d) == doctest::Approx(discount).epsilon(1e-14));
+    // No cracks, and cracks far apart: E0; the stiffness falls as the density grows.
+    CHECK(hashin_stiffness_ratio(m, b, d, 0) == 1.0);
+    CHECK(hashin_stiffness_ratio(m, b, d, 1e-6 / d) == doctest::Approx(1.0).epsilon(1e-5));
+    double previous = 1;
+    for (double density : {0.1e3, 0.5e3, 1e3, 2e3, 5e3}) {
+      const double ratio = hashin_stiffness_ratio(m, b, d, density);
+      CHECK(ratio < previous);
+      CHECK(ratio > discount);
+      previous = ratio;
+    }
+  }
+  CHECK_THROWS_WITH_AS(hashin_stiffness_ratio(m, t, t, -1), doctest::Contains("crack density"),
+                       Error);
+  // Shear moduli far below the moduli: the perturbation stops oscillating (4q <= p^2), which the
+  // closed form does not cover.
+  Material soft = m;
+  soft.G12 = 1e6;
+  CHECK_THROWS_WITH_AS(hashin_cross_ply(soft, t, t), doctest::Contains("4q <= p^2"), Error);
 }
 
 namespace {

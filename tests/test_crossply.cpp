@@ -65,6 +65,13 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
   const double density = rows.at("[0/90]s|crack density 90 at peak|dem square");
   CHECK(rows.at("[0/90]s|stiffness ratio at peak|shear lag") ==
         doctest::Approx(shear_lag_stiffness_ratio(m, 0.2e-3, 0.2e-3, density * 1e3)).epsilon(1e-9));
+  // Hashin's variational bound at the same density, between the ply discount and the intact.
+  REQUIRE(rows.count("[0/90]s|stiffness ratio at peak|hashin variational") == 1);
+  const double hashin = rows.at("[0/90]s|stiffness ratio at peak|hashin variational");
+  CHECK(hashin ==
+        doctest::Approx(hashin_stiffness_ratio(m, 0.2e-3, 0.2e-3, density * 1e3)).epsilon(1e-9));
+  CHECK(hashin >= m.E1 / (m.E1 + m.E2));
+  CHECK(hashin < 1.0);
   // The cracked laminate is softer than the intact one and stiffer than its 0° plies alone.
   const double ratio = rows.at("[0/90]s|stiffness ratio at peak|dem square");
   CHECK(ratio < 1.0);
