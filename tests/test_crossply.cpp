@@ -129,6 +129,19 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
   CHECK(fs::exists(dir / "plots" / "crossply_crack_density.dat"));
   CHECK(report.find("| [0/90]s |") != std::string::npos);
   CHECK(fs::exists(dir / "crossply__0_90_s_cracks.csv"));
+  // Crack maps per ply at maps.load_fractions (default 0.1, 0.25, 0.5, 1) of the peak and the
+  // final state: damage only grows along the path, and the maps' VTU series is written.
+  double broken = 0;
+  for (const char* map : {"0.1 of peak", "0.25 of peak", "0.5 of peak", "1 of peak", "final"}) {
+    const std::string key = fmt::format("[0/90]s|broken bonds at {}|dem square", map);
+    INFO(key);
+    REQUIRE(rows.count(key) == 1);
+    CHECK(rows.at(key) >= broken);
+    broken = rows.at(key);
+  }
+  CHECK(broken > 0);
+  CHECK(report.find("### [0/90]s: crack maps per ply") != std::string::npos);
+  CHECK(fs::exists(dir / "vtu" / "crossply__0_90_s_damage_maps.pvd"));
   // Crack planes against strain: the header, and densities that never fall.
   const std::string planes = read(dir / "crossply__0_90_s_crack_planes.csv");
   CHECK(planes.rfind("event,strain,stress_MPa,crack_planes_per_mm,traction_free_per_mm,E_over_E0\n",

@@ -42,6 +42,7 @@
 #include "experiments/output/figures.hpp"
 #include "experiments/protocols/strength.hpp"
 #include "experiments/runner/coupon_config.hpp"
+#include "experiments/runner/damage_maps.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/report_text.hpp"
 #include "experiments/runner/settings_config.hpp"
@@ -187,6 +188,8 @@ struct CrossplySettings {
   /// one, the coupon's diameter, unless given. The finest is the report's; the others give the
   /// particle-size table and rows of source `dem d=<mm>`.
   std::vector<double> diameters;
+  /// maps.load_fractions: the crack maps' loads, fractions of each laminate's peak, sorted.
+  std::vector<double> map_fractions;
 };
 
 // The kind's settings: the strength command's (strength_settings_description()) but the ply
@@ -221,6 +224,9 @@ const std::vector<std::pair<std::string, std::string>>& crossply_own_keys() {
         "stresses beside CLT's on a square coupon of the laminate, and the references with them "
         "(the failure test itself runs without: the events solver does not take them yet); "
         "default 0"},
+       {"maps.load_fractions",
+        "the crack maps' loads, fractions of each laminate's peak, each in (0, 1]; default [0.1, "
+        "0.25, 0.5, 1.0]"},
        {"references.G_Ic_J_m2",
         "the 90° layer's mode-I fracture energy [J/m^2] for the in-situ strength and the "
         "crack-multiplication references, where the material gives no G_matrix; default none"}});
@@ -283,7 +289,8 @@ CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentConte
           fmt::format("{}: thermal.delta_T = {} K needs the material's thermal expansion: material "
                       "'{}' gives no alpha1, alpha2",
                       origin, delta_T, reference.name));
-  return {name, base, fem, scatter == "90", layups, counts, reference, delta_T, diameters};
+  const std::vector<double> maps = load_fractions_from_config(c, {0.1, 0.25, 0.5, 1.0});
+  return {name, base, fem, scatter == "90", layups, counts, reference, delta_T, diameters, maps};
 }
 
 KindSettings crossply_kind_settings() {
@@ -678,6 +685,29 @@ void report_cure(const LaminateRun& run, const CrackingReferences& refs, const R
        refs.energy ? mpa(refs.isolated_onset_cure) : "-"});
 }
 
+// The laminate's crack maps per ply at maps.load_fractions of its peak and its final state.
+std::string crack_maps_markdown(const CrossplySettings& cs, const LaminateRun& run,
+                                const fs::path& out_dir, ExperimentOutput& out) {
+  DamageMapsSpec spec;
+  spec.name = cs.name;
+  spec.case_name = run.text;
+  spec.source = fmt::format("dem {}", run.result.strategy);
+  spec.file_prefix = fmt::format("{}_{}", cs.name, run.text);
+  spec.title = run.text;
+  spec.fractions = cs.map_fractions;
+  for (std::size_t k = 0; k < run.settings.layup.size(); ++k)
+    spec.ply_labels.push_back(
+        fmt::format("ply {} ({:g}°)", k, run.settings.layup[k] * 180 / std::numbers::pi));
+  spec.area = run.result.cross_section;
+  const DamageMaps maps = draw_damage_maps(run.result, spec, out_dir, out);
+  return fmt::format(
+      "### {}: crack maps per ply\n\nAt each maps.load_fractions of the peak (the first critical "
+      "state on the way up that reaches it) and after the last event; plies side by side, bottom "
+      "first. Cracks: broken bonds within 1.5 particle diameters in the same ply "
+      "(solvers/cracks.hpp).\n\n{}\n{}\n",
+      run.text, maps.table, maps.figures);
+}
+
 // One laminate's part of the report: its strength test's section, its row of the summary table,
 // its curves of the stiffness figure, the crack planes' CSV and results.csv's rows.
 void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const fs::path& out_dir,
@@ -967,10 +997,12 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
                     "isolated-crack onset with cure"}) +
       "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
   std::vector<LaminateTargets> targets;
-  for (const LaminateRun& run : runs)
-    if (run.finest)
-      report_laminate(cs, run, context.out_dir, out, table, fem_notes, sections, curves,
-                      fracture_table, density_curves, cure_table, targets);
+  for (const LaminateRun& run : runs) {
+    if (!run.finest) continue;
+    report_laminate(cs, run, context.out_dir, out, table, fem_notes, sections, curves,
+                    fracture_table, density_curves, cure_table, targets);
+    sections += crack_maps_markdown(cs, run, context.out_dir, out);
+  }
   const Figure density_figure =
       plot_curves(density_curves, context.out_dir, fmt::format("{}_crack_density", file_stem(name)),
                   fmt::format("{}: 90° crack density against the laminate stress", material.name),

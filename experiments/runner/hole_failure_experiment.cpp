@@ -34,15 +34,14 @@
 #include "core/stress_concentration.hpp"
 #include "core/units.hpp"
 #include "experiments/output/figures.hpp"
-#include "experiments/output/vtk_output.hpp"
 #include "experiments/protocols/strength.hpp"
 #include "experiments/runner/coupon_config.hpp"
+#include "experiments/runner/damage_maps.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "experiments/runner/report_text.hpp"
 #include "experiments/runner/settings_config.hpp"
 #include "experiments/runner/settings_descriptions.hpp"
 #include "experiments/runner/strength_experiment.hpp"
-#include "solvers/cracks.hpp"
 #include "strategies/laminate.hpp"
 #include "strategies/registry.hpp"
 
@@ -67,19 +66,6 @@ double grip_travel(const StrengthResult& r, std::size_t k) {
   return r.nominal_strain[k] * r.span;
 }
 
-// A copy of the run's final model with the bonds that broke at or after critical state `event`
-// intact again: the damage present at that state (the path is linear between events, so the
-// broken set is all that differs).
-Model damage_at(const StrengthResult& r, long event) {
-  Model m = *r.model;
-  for (const BondBreak& b : r.breaks) {
-    if (b.at >= static_cast<double>(event)) {
-      m.bonds.state(b.bond) = static_cast<int>(BondState::kIntact);
-      m.bonds.damage(b.bond) = 0;
-    }
-  }
-  return m;
-}
 // A `hole_failure` config's settings: the two plates' strength tests (the same but for the hole).
 struct HoleFailureSettings {
   std::string name;        ///< the config's, naming rows and files
@@ -160,14 +146,7 @@ HoleFailureSettings parse_hole_failure(const ExperimentConfig& c,
   require(hole > 0, fmt::format("{}: coupon.hole_diameter_mm must be positive (the notched "
                                 "plate needs a hole), got {} mm",
                                 origin, hole / kMetresPerMm));
-  std::vector<double> fractions = c.numbers("maps.load_fractions", {0.5, 0.8, 1.0});
-  for (double f : fractions) {
-    require(std::isfinite(f) && f > 0 && f <= 1,
-            fmt::format("{}: maps.load_fractions must lie in (0, 1] (fractions of the peak "
-                        "grip force), got {}",
-                        origin, f));
-  }
-  std::sort(fractions.begin(), fractions.end());
+  const std::vector<double> fractions = load_fractions_from_config(c, {0.5, 0.8, 1.0});
   const double d0 = c.number("references.point_stress_distance_mm", kPointStressDistanceMm);
   const double a0 = c.number("references.average_stress_distance_mm", kAverageStressDistanceMm);
   for (const auto& [key, value] :
@@ -391,77 +370,23 @@ Figure load_displacement_figure(const HoleFailureSettings& s, const StrengthResu
       "grip travel (mm)", "grip force (N)");
 }
 
-// The damage maps' report text: the table of states and the figures.
-struct DamageMaps {
-  std::string table, figures;
-};
-
 // Damage maps per ply: the notched plate at each fraction of its peak (the first critical
 // state on the way up whose grip force reaches it), and its final state.
 DamageMaps damage_maps(const HoleFailureSettings& s, const NotchedMeasures& m,
                        const StrengthResult& n, const fs::path& out_dir, ExperimentOutput& out) {
-  const std::string& name = s.name;
-  const std::string dem = fmt::format("dem {}", s.unnotched.strategy);
-  const auto row = row_adder(out, name);
-  std::vector<std::string> ply_labels;
+  DamageMapsSpec spec;
+  spec.name = s.name;
+  spec.case_name = "notched";
+  spec.source = fmt::format("dem {}", s.unnotched.strategy);
+  spec.file_prefix = s.name;
+  spec.title = s.layup_text;
+  spec.fractions = s.fractions;
   for (std::size_t k = 0; k < m.plies.size(); ++k)
-    ply_labels.push_back(
+    spec.ply_labels.push_back(
         fmt::format("ply {} ({:g}°)", k, m.plies[k].angle * 180 / std::numbers::pi));
-  std::string maps;
-  std::string map_table = markdown_row({"map", "event", "grip force (N)", "gross stress (MPa)",
-                                        "broken bonds", "cracks per ply"}) +
-                          "|---|--:|--:|--:|--:|---|\n";
-  // The maps' states as a VTU series too (time = event), drawn on the undeformed plate: the
-  // displacements at an earlier critical state are not kept (only the bonds' states are).
-  fs::create_directories(out_dir / "vtu");
-  const std::string maps_stem = file_stem(fmt::format("{}_damage_maps", name));
-  VtkSeries maps_series((out_dir / "vtu" / fmt::format("{}.pvd", maps_stem)).string());
-  auto add_map = [&](const std::string& label, long event, const Model& state, double force) {
-    Model undeformed = state;
-    undeformed.particles.displacement.setZero();
-    undeformed.particles.rotation.setZero();
-    maps_series.add_model(static_cast<double>(event), undeformed);
-    std::vector<BondBreak> so_far;
-    for (const BondBreak& b : n.breaks)
-      if (b.at < static_cast<double>(event)) so_far.push_back(b);
-    const std::vector<Crack> cracks = find_cracks(state, so_far);
-    std::string per_ply;
-    for (std::size_t k = 0; k < m.plies.size(); ++k) {
-      const auto count = std::count_if(cracks.begin(), cracks.end(), [&](const Crack& cr) {
-        return !cr.interface && cr.ply == static_cast<int>(k);
-      });
-      per_ply += fmt::format("{}{}: {}", k == 0 ? "" : ", ", k, count);
-    }
-    map_table += markdown_row({label, fmt::format("{}", event), fmt::format("{:.1f}", force),
-                               fmt::format("{:.2f}", force / m.gross_area * kMPaPerPa),
-                               fmt::format("{}", so_far.size()), per_ply});
-    const std::string stem = file_stem(fmt::format("{}_damage_{}", name, label));
-    const Figure f = plot_bond_states(
-        state, out_dir, stem,
-        fmt::format("{}: damage at {} (grip force {:.0f} N)", s.layup_text, label, force), 0, 0,
-        ply_labels);
-    out.files.insert(out.files.end(), f.files.begin(), f.files.end());
-    maps += figure_markdown(f, fmt::format("damage per ply at {}: broken bonds in tension red, "
-                                           "in shear blue",
-                                           label)) +
-            "\n";
-    row("notched", fmt::format("broken bonds at {}", label), dem,
-        static_cast<double>(so_far.size()), "1");
-  };
-  for (double f : s.fractions) {
-    std::size_t k = 1;
-    while (k < m.n_peak && grip_force(n, k) < f * m.notched_peak_force) ++k;
-    add_map(fmt::format("{:g} of peak", f), static_cast<long>(k),
-            damage_at(n, static_cast<long>(k)), grip_force(n, k));
-  }
-  add_map("final", n.events + 1, *n.model, grip_force(n, n.stress.size() - 1));
-  out.files.push_back(fs::path("vtu") / fmt::format("{}.pvd", maps_stem));
-  for (const std::string& file : maps_series.files()) out.files.push_back(fs::path("vtu") / file);
-  maps += fmt::format(
-      "ParaView: `vtu/{}.pvd` (these states on the undeformed plate; bond cell "
-      "data `state`, `damage`).\n",
-      maps_stem);
-  return {map_table, maps};
+  spec.area = m.gross_area;
+  spec.stress_name = "gross stress";
+  return draw_damage_maps(n, spec, out_dir, out);
 }
 
 // Issue 33's target for the notched strength: notched over unnotched strength changes by less
