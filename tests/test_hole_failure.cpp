@@ -261,9 +261,9 @@ TEST_CASE("plydem run hole_failure.toml --quick: notched below unnotched, Kt, ma
 
 namespace {
 
-// `plydem run` of a hole_failure config of the quick plate's shape (10 x 6 mm [0/90/0], 0.5 mm
-// plies, a 1 mm hole) failing at the material point (Puck) at each of `diameters_mm`; its
-// results.csv rows and report.
+// `plydem run` of a hole_failure config of the shipped plate (10 x 6 mm [0/90/0], 0.5 mm plies, a
+// 1 mm hole, the paper's interface stiffness, stopped below half the peak) failing at the material
+// point (Puck) at each of `diameters_mm`; its results.csv rows and report.
 struct SizesRun {
   std::map<std::string, double> rows;
   std::string report;
@@ -275,7 +275,10 @@ SizesRun run_at_sizes(const std::string& diameters_mm, const std::string& label)
                                        "failure_criterion = \"puck\"\n"
                                        "[coupon]\nlength_mm = 10\nwidth_mm = 6\n"
                                        "hole_diameter_mm = 1\ndiameters_mm = "
-                                    << diameters_mm << "\n[output]\nvtu_series = false\n";
+                                    << diameters_mm
+                                    << "\n[interface]\nnormal = 1e14\nshear = 1e13\n"
+                                       "[events]\nstop_fraction = 0.5\n"
+                                       "[output]\nvtu_series = false\n";
   RunOptions options;
   options.config = dir / "sizes.toml";
   options.out_dir = dir / "out";
