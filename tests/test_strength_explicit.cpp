@@ -69,14 +69,19 @@ std::set<std::pair<long, long>> folded(const std::set<int>& sites, const Model& 
   return at;
 }
 
-// The five strengths of `material` by the explicit method: peaks against the targets and the
+// Each (angle [deg], load) of the five strengths.
+using StrengthCases = std::vector<std::pair<double, StrengthLoad>>;
+const StrengthCases kFiveStrengths{{0.0, StrengthLoad::kTension},
+                                   {90.0, StrengthLoad::kTension},
+                                   {0.0, StrengthLoad::kCompression},
+                                   {90.0, StrengthLoad::kCompression},
+                                   {0.0, StrengthLoad::kShear}};
+
+// The strengths `cases` of `material` by the explicit method: peaks against the targets and the
 // events method's.
-void check_five_strengths(const Material& material) {
+void check_five_strengths(const Material& material, const StrengthCases& cases = kFiveStrengths) {
   {
-    for (const auto& test_case :
-         {std::pair{0.0, StrengthLoad::kTension}, std::pair{90.0, StrengthLoad::kTension},
-          std::pair{0.0, StrengthLoad::kCompression}, std::pair{90.0, StrengthLoad::kCompression},
-          std::pair{0.0, StrengthLoad::kShear}}) {
+    for (const auto& test_case : cases) {
       // Named copies, not structured bindings: Clang 14's lambdas (CAPTURE) cannot see those.
       const double angle = test_case.first;
       const StrengthLoad load = test_case.second;
@@ -126,8 +131,17 @@ void check_five_strengths(const Material& material) {
 
 }  // namespace
 
-TEST_CASE("explicit method at the material point: the five-strength peaks, as the events method") {
-  check_five_strengths(eglass());
+// E-glass's five strengths: matrix compression and shear in both builds, the rest in the release
+// build only (label slow; the sanitizer build keeps the tension path in the same-bits case below,
+// at 60 deg, which cracks in mixed mode).
+TEST_CASE("explicit method at the material point: YC and S12 peaks, as the events method") {
+  check_five_strengths(eglass(), {{90.0, StrengthLoad::kCompression}, {0.0, StrengthLoad::kShear}});
+}
+
+TEST_CASE("slow: explicit method at the material point: XT, YT and XC peaks, as events") {
+  check_five_strengths(eglass(), {{0.0, StrengthLoad::kTension},
+                                  {90.0, StrengthLoad::kTension},
+                                  {0.0, StrengthLoad::kCompression}});
 }
 
 // The carbon ply's, in the release build only (label slow): the same code path as E-glass's.
