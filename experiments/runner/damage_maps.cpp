@@ -15,15 +15,9 @@
 namespace plydem {
 namespace fs = std::filesystem;
 
-namespace {
-
-// The grip force [N] at curve point k of a strength result (its stress is the reaction over the
-// gauge cross-section).
 double grip_force(const StrengthResult& r, std::size_t k) {
   return r.stress[k] * r.cross_section;
 }
-
-}  // namespace
 
 Model damage_at(const StrengthResult& r, long event) {
   Model m = *r.model;

@@ -16,6 +16,10 @@
 
 namespace plydem {
 
+/// The grip force [N] at curve point k of a strength result (its stress is the reaction over the
+/// gauge cross-section).
+double grip_force(const StrengthResult& result, std::size_t k);
+
 /// A copy of the run's final model with the bonds that broke at or after critical state `event`
 /// intact again: the damage present at that state (the path is linear between events, so the
 /// broken set is all that differs).

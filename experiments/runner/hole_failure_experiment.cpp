@@ -55,12 +55,6 @@ namespace {
 // inside it, and its bonds' contact points half a diameter further.
 constexpr double kEdgeDiameters = 1.5;
 
-// The grip force [N] at curve point k of a strength result (its stress is the reaction over the
-// gauge cross-section).
-double grip_force(const StrengthResult& r, std::size_t k) {
-  return r.stress[k] * r.cross_section;
-}
-
 // The grip travel [m] at curve point k: the nominal strain times the grip-to-grip span.
 double grip_travel(const StrengthResult& r, std::size_t k) {
   return r.nominal_strain[k] * r.span;
