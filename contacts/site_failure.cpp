@@ -31,7 +31,7 @@ struct SiteSums {
   Eigen::Vector3d strain(std::size_t k) const;
 };
 
-SiteSums site_sums(const Particles& particles, const Bonds& bonds) {
+SiteSums site_sums(const Particles& particles, const Bonds& bonds, bool subtract_free_offsets) {
   const auto n = static_cast<std::size_t>(particles.size());
   SiteSums sums{std::vector<Eigen::Matrix2d>(n, Eigen::Matrix2d::Zero()),
                 std::vector<Eigen::Matrix2d>(n, Eigen::Matrix2d::Zero())};
@@ -41,9 +41,10 @@ SiteSums site_sums(const Particles& particles, const Bonds& bonds) {
     const Eigen::Vector2d r = (particles.reference_position.row(j).head<2>() -
                                particles.reference_position.row(i).head<2>())
                                   .transpose();
-    const Eigen::Vector2d du =
+    Eigen::Vector2d du =
         (particles.displacement.row(j).head<2>() - particles.displacement.row(i).head<2>())
             .transpose();
+    if (subtract_free_offsets) du -= bonds.free_offset.row(b).head<2>().transpose().matrix();
     for (int end : {i, j}) {
       sums.spread[static_cast<std::size_t>(end)] += r * r.transpose();
       sums.moved[static_cast<std::size_t>(end)] += du * r.transpose();
@@ -85,7 +86,7 @@ Eigen::Vector3d SiteSums::strain(std::size_t k) const {
 }  // namespace
 
 std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bonds& bonds) {
-  const SiteSums sums = site_sums(particles, bonds);
+  const SiteSums sums = site_sums(particles, bonds, true);
   std::vector<Eigen::Vector3d> strain(sums.spread.size());
   for (std::size_t k = 0; k < strain.size(); ++k) strain[k] = sums.strain(k);
   return strain;
@@ -94,12 +95,13 @@ std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bond
 std::vector<PlyStress> site_ply_stresses(const Particles& particles, const Bonds& bonds,
                                          std::span<const double> ply_angles,
                                          const Material& material,
-                                         std::span<const double> plastic_shear) {
+                                         std::span<const double> plastic_shear,
+                                         bool subtract_free_offsets) {
   require(
       plastic_shear.empty() || plastic_shear.size() == static_cast<std::size_t>(particles.size()),
       fmt::format("site stress: {} plastic shear strains for {} particles", plastic_shear.size(),
                   particles.size()));
-  const SiteSums sums = site_sums(particles, bonds);
+  const SiteSums sums = site_sums(particles, bonds, subtract_free_offsets);
   const Eigen::Matrix3d q = reduced_stiffness(material);
   std::vector<Eigen::Matrix3d> q_bar(ply_angles.size());
   for (std::size_t ply = 0; ply < ply_angles.size(); ++ply)
@@ -125,32 +127,70 @@ std::vector<PlyStress> site_ply_stresses(const Particles& particles, const Bonds
   return stresses;
 }
 
+namespace {
+
+// Each site's strengths times its factor (site_failures).
+LaminaStrength site_strength(const Material& material, std::span<const double> strength_factors,
+                             int i) {
+  LaminaStrength strength = material.strength;
+  if (strength_factors.empty()) return strength;
+  const double f = strength_factors[static_cast<std::size_t>(i)];
+  require(std::isfinite(f) && f > 0,
+          fmt::format("site failure: particle {} has strength factor {}", i, f));
+  for (double* s : {&strength.XT, &strength.XC, &strength.YT, &strength.YC, &strength.S12}) *s *= f;
+  return strength;
+}
+
+void require_strength_factors(const Particles& particles,
+                              std::span<const double> strength_factors) {
+  require(strength_factors.empty() ||
+              strength_factors.size() == static_cast<std::size_t>(particles.size()),
+          fmt::format("site failure: {} strength factors for {} particles", strength_factors.size(),
+                      particles.size()));
+}
+
+}  // namespace
+
 std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& bonds,
                                        std::span<const double> ply_angles,
                                        FailureCriterion criterion, const Material& material,
                                        std::span<const double> strength_factors,
                                        std::span<const double> plastic_shear) {
-  require(strength_factors.empty() ||
-              strength_factors.size() == static_cast<std::size_t>(particles.size()),
-          fmt::format("site failure: {} strength factors for {} particles", strength_factors.size(),
-                      particles.size()));
+  require_strength_factors(particles, strength_factors);
   const std::vector<PlyStress> stresses =
       site_ply_stresses(particles, bonds, ply_angles, material, plastic_shear);
   std::vector<SiteFailure> sites(stresses.size());
   for (int i = 0; i < particles.size(); ++i) {
     const auto k = static_cast<std::size_t>(i);
-    const double angle = ply_angles[static_cast<std::size_t>(particles.ply(i))];
     SiteFailure& site = sites[k];
-    LaminaStrength strength = material.strength;
-    if (!strength_factors.empty()) {
-      const double f = strength_factors[k];
-      require(std::isfinite(f) && f > 0,
-              fmt::format("site failure: particle {} has strength factor {}", i, f));
-      for (double* s : {&strength.XT, &strength.XC, &strength.YT, &strength.YC, &strength.S12})
-        *s *= f;
-    }
-    site.failure = ply_failure(criterion, stresses[k], strength);
-    site.crack_normal = crack_normal(site.failure, angle);
+    site.failure =
+        ply_failure(criterion, stresses[k], site_strength(material, strength_factors, i));
+    site.crack_normal =
+        crack_normal(site.failure, ply_angles[static_cast<std::size_t>(particles.ply(i))]);
+  }
+  return sites;
+}
+
+std::vector<SiteFailure> preloaded_site_failures(
+    const Particles& particles, std::span<const PlyStress> preload, std::span<const PlyStress> unit,
+    std::span<const double> ply_angles, FailureCriterion criterion, const Material& material,
+    std::span<const double> strength_factors) {
+  require_strength_factors(particles, strength_factors);
+  const auto n = static_cast<std::size_t>(particles.size());
+  require(preload.size() == n && unit.size() == n,
+          fmt::format("site failure: {} preload and {} unit stresses for {} particles",
+                      preload.size(), unit.size(), n));
+  std::vector<SiteFailure> sites(n);
+  for (int i = 0; i < particles.size(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const int ply = particles.ply(i);
+    require(ply >= 0 && static_cast<std::size_t>(ply) < ply_angles.size(),
+            fmt::format("site failure: particle {} is in ply {}, and {} ply angle(s) were given", i,
+                        ply, ply_angles.size()));
+    SiteFailure& site = sites[k];
+    site.failure = preloaded_ply_failure(criterion, preload[k], unit[k],
+                                         site_strength(material, strength_factors, i));
+    site.crack_normal = crack_normal(site.failure, ply_angles[static_cast<std::size_t>(ply)]);
   }
   return sites;
 }

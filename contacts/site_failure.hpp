@@ -41,10 +41,11 @@ Eigen::Vector3d crack_normal(const PlyFailure& failure, double ply_angle);
 
 /// Every particle's in-plane strain (eps_xx, eps_yy, gamma_xy) at the current state: the symmetric
 /// part of the in-plane displacement gradient G that fits u_j - u_i = G (x_j - x_i) best (least
-/// squares, in-plane components, reference positions) over the particle's unbroken bonds that
-/// have no damage (a softening crack's bonds open across it: they are not the site's strain). Exact
-/// whenever the in-plane displacement is affine in x and y (whatever it does through the
-/// thickness). A particle whose intact bonds do not span the plane reads NaN.
+/// squares, in-plane components, reference positions; du less the bond's free offset) over the
+/// particle's unbroken bonds that have no damage (a softening crack's bonds open across it: they
+/// are not the site's strain). Exact whenever the in-plane displacement is affine in x and y
+/// (whatever it does through the thickness). A particle whose intact bonds do not span the plane
+/// reads NaN.
 std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bonds& bonds);
 
 /// Every particle's site stress at the current state in the axes of its ply: Q-bar of its ply
@@ -55,10 +56,15 @@ std::vector<Eigen::Vector3d> site_strains(const Particles& particles, const Bond
 /// line carries the uniaxial stress of its stretch along that line (the ply's modulus in that
 /// direction times it), one without bonds zero. Throws plydem::Error naming the particle whose ply
 /// has no angle in `ply_angles`, and for plastic strains of another size.
+/// The strain is that of the bonds' relative displacements less their free offsets (cure
+/// stresses: Bonds::free_offset, the state's own mechanical strain); `subtract_free_offsets` false
+/// reads the displacements alone (the events solver's unit load, whose state adds to the
+/// preload's).
 std::vector<PlyStress> site_ply_stresses(const Particles& particles, const Bonds& bonds,
                                          std::span<const double> ply_angles,
                                          const Material& material,
-                                         std::span<const double> plastic_shear = {});
+                                         std::span<const double> plastic_shear = {},
+                                         bool subtract_free_offsets = true);
 
 /// Every particle's site failure at the current state: its stress in the axes of its ply
 /// (site_ply_stresses) judged by `criterion` with the material's strengths. A site that carries no
@@ -72,6 +78,16 @@ std::vector<SiteFailure> site_failures(const Particles& particles, const Bonds& 
                                        FailureCriterion criterion, const Material& material,
                                        std::span<const double> strength_factors = {},
                                        std::span<const double> plastic_shear = {});
+
+/// Every site's failure as its stress grows from `preload` along `unit` (each one per particle, in
+/// its ply's axes: site_ply_stresses of the cured state and of the unit load): the smallest load
+/// factor lambda >= 0 at which preload + lambda unit fails it (core/failure_criteria.hpp
+/// preloaded_ply_failure; 0 where the preload alone does), with `strength_factors` and the
+/// errors of site_failures.
+std::vector<SiteFailure> preloaded_site_failures(
+    const Particles& particles, std::span<const PlyStress> preload, std::span<const PlyStress> unit,
+    std::span<const double> ply_angles, FailureCriterion criterion, const Material& material,
+    std::span<const double> strength_factors = {});
 
 /// The bonds a crack at particle `site` opens (contacts/bond_opening.hpp opens them), its plane
 /// through the site's cell with unit normal `normal` (crack_normal), on the normal's side of the

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/preloaded_failure.hpp"
 
 namespace plydem {
 namespace {
@@ -297,6 +298,23 @@ PlyFailure ply_failure(FailureCriterion criterion, const PlyStress& stress,
   if (f.mode == PlyFailureMode::kMatrixCompression) {
     f.fracture_angle = puck_fracture_plane(stress, strength).angle;
   }
+  return f;
+}
+
+PlyFailure preloaded_ply_failure(FailureCriterion criterion, const PlyStress& preload,
+                                 const PlyStress& unit, const LaminaStrength& strength) {
+  auto at = [&](double lambda) {
+    return PlyStress{preload.sigma1 + lambda * unit.sigma1, preload.sigma2 + lambda * unit.sigma2,
+                     preload.tau12 + lambda * unit.tau12};
+  };
+  auto utilisation = [&](double lambda) {
+    return 1.0 / failure_load_factor(criterion, at(lambda), strength);  // 0 where never
+  };
+  const double lambda =
+      first_failure_factor(utilisation, failure_load_factor(criterion, unit, strength));
+  if (!std::isfinite(lambda)) return {lambda, ply_failure(criterion, unit, strength).mode, 0.0};
+  PlyFailure f = ply_failure(criterion, at(lambda), strength);
+  f.load_factor = lambda;
   return f;
 }
 

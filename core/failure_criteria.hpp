@@ -89,6 +89,14 @@ struct PlyFailure {
 PlyFailure ply_failure(FailureCriterion criterion, const PlyStress& stress,
                        const LaminaStrength& strength);
 
+/// A ply's failure as its stress grows from `preload` along `unit` (preload + lambda unit: a cure
+/// stress, then the test's load): the smallest lambda >= 0 at which the stress reaches the
+/// criterion's surface (core/preloaded_failure.hpp first_failure_factor; 0 when the preload alone
+/// does, +inf if never) as the load factor, with ply_failure's mode and fracture angle at that
+/// stress. Throws plydem::Error as ply_failure does.
+PlyFailure preloaded_ply_failure(FailureCriterion criterion, const PlyStress& preload,
+                                 const PlyStress& unit, const LaminaStrength& strength);
+
 /// The uniaxial tensile strength sigma_x [Pa] of a coupon of one ply at `ply_angle` [rad] (fibre
 /// from the load axis) under the criterion: failure_load_factor of the unit sigma_x.
 double off_axis_strength(FailureCriterion criterion, const LaminaStrength& strength,

@@ -17,6 +17,7 @@
 #include "contacts/bond_opening.hpp"
 #include "core/disjoint_sets.hpp"
 #include "core/error.hpp"
+#include "core/preloaded_failure.hpp"
 #include "core/stopwatch.hpp"
 
 namespace plydem {
@@ -154,11 +155,20 @@ void check_inputs(const Model& model, const DofConstraints& unit, const DofFlags
 /// prescribed non-zero value touches. Those "active" dofs are found once per set of constraints;
 /// the columns of a change are kept on them alone (half the rank for a hex2d layer pulled in its
 /// plane), and exactly so: Delta K never couples active to inactive dofs.
+///
+/// A preload (bond_events.hpp, "Preload") is a second right-hand side on the same factor and
+/// updates: the prescribed values at load factor 0 and the bonds' free offsets q, whose load on a
+/// changed bond falls with its stiffness, by Delta K q^ (q^ the offset as a translation of the
+/// bond's second particle), which lies in the range of V as Delta K_fp does. Both columns share Z,
+/// G and C; each has its own u0, a and V^T u0.
 class UnitLoadSolver {
  public:
-  UnitLoadSolver(const EventSettings& settings, const DofConstraints& unit)
+  UnitLoadSolver(const EventSettings& settings, const DofConstraints& unit, const DofArray& preload,
+                 bool preloaded)
       : settings_(settings.static_settings),
         constraints_(unit),
+        preload_(preload),
+        preloaded_(preloaded),
         refactor_every_change_(settings.refactor_every_event || settings.max_update_rank == 0),
         max_rank_(settings.max_update_rank) {
     if (settings_.method == StaticMethod::kAuto) settings_.method = StaticMethod::kDirect;
@@ -170,26 +180,35 @@ class UnitLoadSolver {
   int factorizations() const { return factorizations_; }
   int rank() const { return rank_; }
 
-  /// A new set of prescribed dofs (more of them): the stiffness is factored at the next solve.
-  void set_constraints(const DofConstraints& constraints) {
+  /// The preload's prescribed values (the loose pieces' included).
+  const DofArray& preload() const { return preload_; }
+
+  /// A new set of prescribed dofs (more of them) and their values at load factor 0: the stiffness
+  /// is factored at the next solve.
+  void set_constraints(const DofConstraints& constraints, const DofArray& preload) {
     constraints_ = constraints;
+    preload_ = preload;
     stale_ = true;
     active_stale_ = true;
   }
 
-  /// The unit-load solution (every dof, 6 * particle + component) for the model's current bonds.
-  /// May factor the stiffness (then it writes the factored system's solution into the model's
-  /// particles, as StaticSystem::solve does) and throws plydem::Error as StaticSystem does.
-  void solve(Model& model, Eigen::VectorXd& u) {
+  /// The unit-load solution (every dof, 6 * particle + component) for the model's current bonds,
+  /// and with a preload the preload's state into `preloaded` (left alone without one). May factor
+  /// the stiffness (then it writes the factored system's solution into the model's particles, as
+  /// StaticSystem::solve does) and throws plydem::Error as StaticSystem does.
+  void solve(Model& model, Eigen::VectorXd& u, Eigen::VectorXd& preloaded) {
     if (stale_) factor(model);
-    u = u0_;
+    u = u0_.col(0);
+    if (preloaded_) preloaded = u0_.col(1);
     if (rank_ == 0) return;
     const int r = rank_;
-    const Eigen::VectorXd h = y0_.head(r) + g_.topLeftCorner(r, r) * a_.head(r);
-    Eigen::VectorXd x = l_.topLeftCorner(r, r).triangularView<Eigen::Lower>().solve(h);
+    const Eigen::MatrixXd h = y0_.topRows(r) + g_.topLeftCorner(r, r) * a_.topRows(r);
+    Eigen::MatrixXd x = l_.topLeftCorner(r, r).triangularView<Eigen::Lower>().solve(h);
     l_.topLeftCorner(r, r).triangularView<Eigen::Lower>().transpose().solveInPlace(x);
-    const Eigen::VectorXd du = z_.leftCols(r) * (a_.head(r) + x);
-    for (std::size_t k = 0; k < active_dofs_.size(); ++k) u(active_dofs_[k]) += du(k);
+    const Eigen::MatrixXd du = z_.leftCols(r) * (a_.topRows(r) + x);
+    for (std::size_t k = 0; k < active_dofs_.size(); ++k) u(active_dofs_[k]) += du(k, 0);
+    if (!preloaded_) return;
+    for (std::size_t k = 0; k < active_dofs_.size(); ++k) preloaded(active_dofs_[k]) += du(k, 1);
   }
 
   /// Bond b's stiffness lost `removed` (its BondParameters with the stiffness taken away);
@@ -216,6 +235,8 @@ class UnitLoadSolver {
   void save(EventsState& s) const {
     s.constraints = constraints_;
     s.factored_from = factored_from_;
+    s.preload = preload_;
+    s.preload_factored_from = preload_factored_from_;
     s.stale = stale_;
     s.active_stale = active_stale_;
     s.active_dofs = active_stale_ ? std::vector<int>{} : active_dofs_;
@@ -242,6 +263,7 @@ class UnitLoadSolver {
     stale_ = true;
     if (s.stale) {
       constraints_ = s.constraints;
+      preload_ = s.preload;
       allocate(s.capacity);
       factorizations_ = s.result.factorizations;
       return;
@@ -259,6 +281,7 @@ class UnitLoadSolver {
       require(c.bond >= 0 && c.bond < bonds.size(), "checkpoint: a change names no bond");
     for (auto c = s.changes.rbegin(); c != s.changes.rend(); ++c) set(c->bond, c->before);
     constraints_ = s.factored_from;
+    preload_ = s.preload_factored_from;
     factor(model);
     allocate(s.capacity);
     capacity_at_factor_ = s.capacity;
@@ -293,8 +316,8 @@ class UnitLoadSolver {
     z_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(active_dofs_.size()), c);
     g_ = Eigen::MatrixXd::Zero(c, c);
     l_ = Eigen::MatrixXd::Zero(c, c);
-    a_ = Eigen::VectorXd::Zero(c);
-    y0_ = Eigen::VectorXd::Zero(c);
+    a_ = Eigen::MatrixXd::Zero(c, right_hand_sides());
+    y0_ = Eigen::MatrixXd::Zero(c, right_hand_sides());
   }
 
   void change_terms(const Model& model,
@@ -334,7 +357,7 @@ class UnitLoadSolver {
     int na = 0;
     Eigen::MatrixXd v;      // na x q: the columns of V
     Eigen::VectorXd w;      // q: the weights W
-    Eigen::VectorXd a, y0;  // q: a and V^T u0
+    Eigen::MatrixXd a, y0;  // q x right_hand_sides(): a and V^T u0 of each right-hand side
   };
 
   // The columns of bond b's change `removed`; false if there are none (the load does not reach
@@ -351,16 +374,24 @@ class UnitLoadSolver {
     out.na = na;
     if (na == 0) return false;  // the load does not reach this bond's dofs
 
-    // Delta K on the active dofs, its right-hand side part (Delta K)_fp g, and the scaling D.
+    // Delta K on the active dofs, its right-hand side part (Delta K)_fp g (and for the preload
+    // (Delta K)_fp g_0 - (Delta K q^)_f), and the scaling D.
     Eigen::MatrixXd m(na, na);
-    Eigen::VectorXd db = Eigen::VectorXd::Zero(na), d(na);
+    Eigen::MatrixXd db = Eigen::MatrixXd::Zero(na, right_hand_sides());
+    Eigen::VectorXd d(na);
+    const Eigen::Vector3d offset =
+        preloaded_ ? Eigen::Vector3d(model.bonds.free_offset.row(b).transpose().matrix())
+                   : Eigen::Vector3d::Zero();
     for (int r = 0; r < na; ++r) {
       for (int c = 0; c < na; ++c) m(r, c) = k(local[r], local[c]);
       for (int c = 0; c < 12; ++c) {
         const int particle = dofs[c] / kDofsPerParticle, component = dofs[c] % kDofsPerParticle;
-        if (constraints_.fixed(particle, component))
-          db(r) += k(local[r], c) * constraints_.value(particle, component);
+        if (!constraints_.fixed(particle, component)) continue;
+        db(r, 0) += k(local[r], c) * constraints_.value(particle, component);
+        if (preloaded_) db(r, 1) += k(local[r], c) * preload_(particle, component);
       }
+      if (preloaded_)
+        for (int c = 0; c < 3; ++c) db(r, 1) -= k(local[r], 6 + c) * offset(c);
       d(r) = m(r, r) > 0 ? 1 / std::sqrt(m(r, r)) : 1.0;
     }
     const Eigen::MatrixXd scaled = d.asDiagonal() * m * d.asDiagonal();
@@ -378,9 +409,9 @@ class UnitLoadSolver {
       out.w(e) = eigen.eigenvalues()(kept[e]);
     }
     out.v = d.cwiseInverse().asDiagonal() * qk;
-    out.a = qk.transpose() * d.cwiseProduct(db);
-    Eigen::VectorXd u0_local(na);
-    for (int r = 0; r < na; ++r) u0_local(r) = u0_(dofs[local[r]]);
+    out.a = qk.transpose() * d.asDiagonal() * db;
+    Eigen::MatrixXd u0_local(na, right_hand_sides());
+    for (int r = 0; r < na; ++r) u0_local.row(r) = u0_.row(dofs[local[r]]);
     out.y0 = out.v.transpose() * u0_local;
     return true;
   }
@@ -454,8 +485,8 @@ class UnitLoadSolver {
     l_.block(r0, 0, q, r0) = x.transpose();
     l_.block(0, r0, r0, q).setZero();
     l_.block(r0, r0, q, q) = l22;
-    a_.segment(r0, q) = change.a;
-    y0_.segment(r0, q) = change.y0;
+    a_.middleRows(r0, q) = change.a;
+    y0_.middleRows(r0, q) = change.y0;
     terms_.push_back(std::move(term));
     rank_ = r0 + q;
     return true;
@@ -477,25 +508,34 @@ class UnitLoadSolver {
     l.topLeftCorner(old, old) = l_.topLeftCorner(old, old);
     g_.swap(g);
     l_.swap(l);
-    a_.conservativeResize(capacity);
-    y0_.conservativeResize(capacity);
+    a_.conservativeResize(capacity, right_hand_sides());
+    y0_.conservativeResize(capacity, right_hand_sides());
   }
+
+  // The right-hand sides: the unit load, and the preload.
+  Eigen::Index right_hand_sides() const { return preloaded_ ? 2 : 1; }
 
   void factor(Model& model) {
     factored_from_ = constraints_;
+    preload_factored_from_ = preload_;
     history_.clear();
     system_ = std::make_unique<StaticSystem>(model, constraints_, settings_);
     ++factorizations_;
     constraints_ = system_->constraints();  // with the pins of the first factorization
-    system_->solve(model, constraints_.value);
     const Particles& p = model.particles;
     const int n = p.size();
-    u0_.resize(kDofsPerParticle * n);
-    for (int i = 0; i < n; ++i)
-      for (int c = 0; c < 3; ++c) {
-        u0_(kDofsPerParticle * i + c) = p.displacement(i, c);
-        u0_(kDofsPerParticle * i + 3 + c) = p.rotation(i, c);
-      }
+    u0_.resize(kDofsPerParticle * n, right_hand_sides());
+    for (Eigen::Index column = 0; column < right_hand_sides(); ++column) {
+      if (column == 0)
+        system_->solve(model, constraints_.value, false);  // the unit load alone
+      else
+        system_->solve(model, preload_, true);  // the preload and the free offsets
+      for (int i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) {
+          u0_(kDofsPerParticle * i + c, column) = p.displacement(i, c);
+          u0_(kDofsPerParticle * i + 3 + c, column) = p.rotation(i, c);
+        }
+    }
     const std::vector<int>& free = system_->free_dofs();
     free_count_ = static_cast<int>(free.size());
     free_of_dof_.assign(kDofsPerParticle * n, -1);
@@ -520,20 +560,26 @@ class UnitLoadSolver {
     auto prescribed = [&](int dof) {
       return constraints_.fixed(dof / kDofsPerParticle, dof % kDofsPerParticle);
     };
-    auto value = [&](int dof) {
-      return constraints_.value(dof / kDofsPerParticle, dof % kDofsPerParticle);
+    auto value = [&](int dof) {  // non-zero in either right-hand side
+      const int i = dof / kDofsPerParticle, c = dof % kDofsPerParticle;
+      return constraints_.value(i, c) != 0 || (preloaded_ && preload_(i, c) != 0);
     };
     for (int b = 0; b < model.bonds.size(); ++b) {
       if (model.bonds.is_broken(b)) continue;
       const std::array<int, 12> bd = bond_dofs(model.bonds, b);
       const Matrix12d k = symmetric_bond_stiffness(bond_parameters(model.bonds, b));
+      const Eigen::Vector3d offset =
+          preloaded_ ? Eigen::Vector3d(model.bonds.free_offset.row(b).transpose().matrix())
+                     : Eigen::Vector3d::Zero();
       for (int r = 0; r < 12; ++r) {
         if (prescribed(bd[r])) continue;
+        // The free offset's load K q^ (on the second particle's translation) reaches row r.
+        if (k.row(r).segment<3>(6).dot(offset) != 0) sets.join(bd[r], source);
         for (int c = 0; c < 12; ++c) {
           if (k(r, c) == 0) continue;
           if (!prescribed(bd[c]))
             sets.join(bd[r], bd[c]);
-          else if (value(bd[c]) != 0)
+          else if (value(bd[c]))
             sets.join(bd[r], source);
         }
       }
@@ -550,12 +596,14 @@ class UnitLoadSolver {
     z_.resize(0, 0);
     g_.resize(0, 0);
     l_.resize(0, 0);
-    a_.resize(0);
-    y0_.resize(0);
+    a_.resize(0, right_hand_sides());
+    y0_.resize(0, right_hand_sides());
   }
 
   StaticSettings settings_;
   DofConstraints constraints_;
+  DofArray preload_;  // the prescribed values at load factor 0 (preloaded_)
+  bool preloaded_ = false;
   bool refactor_every_change_ = false;
   int max_rank_ = 0;
   std::unique_ptr<StaticSystem> system_;
@@ -563,7 +611,7 @@ class UnitLoadSolver {
   bool active_stale_ = true;
   int factorizations_ = 0;
   int free_count_ = 0;
-  Eigen::VectorXd u0_;               // every dof
+  Eigen::MatrixXd u0_;               // every dof, a column per right-hand side
   std::vector<int> free_of_dof_;     // dof -> free index of system_, or -1
   std::vector<int> active_dofs_;     // active index -> dof
   std::vector<int> active_of_dof_;   // dof -> active index, or -1
@@ -571,10 +619,11 @@ class UnitLoadSolver {
   int rank_ = 0;
   std::vector<Term> terms_;
   Eigen::MatrixXd z_, g_, l_;  // Z (active dofs x capacity), G and L (capacity x capacity)
-  Eigen::VectorXd a_, y0_;
+  Eigen::MatrixXd a_, y0_;     // capacity x right_hand_sides()
   // For checkpoints: the constraints the last factorization was given, the columns its arrays
   // had then, and the changes since.
   DofConstraints factored_from_;
+  DofArray preload_factored_from_;
   long capacity_at_factor_ = 0;
   std::vector<EventChange> history_;
 };
@@ -588,6 +637,25 @@ struct UnitState {
   std::vector<BondState> mode;
   std::vector<double> ductility;    // kappa_u of each bond at this mix (softening_ductility)
   std::vector<double> bond_energy;  // each bond's strain energy at unit load [J]
+  // With a preload (bond_events.hpp, "Preload"): the preload's state's energy, reaction and
+  // forces, and the cross terms, so that the state at lambda holds
+  // preload_energy + lambda cross_energy + lambda^2 energy (and so each bond).
+  bool preloaded = false;
+  double preload_energy = 0, cross_energy = 0, preload_reaction = 0;
+  DofArray preload_force;
+  std::vector<double> bond_preload_energy, bond_cross_energy;
+
+  // The energy, the reaction and bond b's energy at load factor lambda.
+  double energy_at(double lambda) const {
+    return preload_energy + lambda * cross_energy + lambda * lambda * energy;
+  }
+  double reaction_at(double lambda) const { return preload_reaction + lambda * reaction; }
+  double bond_energy_at(int b, double lambda) const {
+    const auto k = static_cast<std::size_t>(b);
+    if (!preloaded) return lambda * lambda * bond_energy[k];
+    return bond_preload_energy[k] + lambda * bond_cross_energy[k] +
+           lambda * lambda * bond_energy[k];
+  }
 };
 
 // Whether a bond of `ductility` (its kappa_u at the unit solution's mix: softening_ductility)
@@ -609,8 +677,49 @@ double failure_kappa(const Bonds& bonds, int b, double ductility, const EventSet
   return softening_ratio(bonds.damage(b), ductility);
 }
 
-void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reaction_dofs,
-              const EventSettings& settings, UnitState& s) {
+// Adds a bond's response to the generalized forces on its ends.
+void add_response(const BondResponse& r, int i, int j, DofArray& force) {
+  for (int c = 0; c < 3; ++c) {
+    force(i, c) += r.force_on_first(c);
+    force(j, c) -= r.force_on_first(c);
+    force(i, 3 + c) += r.torque_on_first(c);
+    force(j, 3 + c) += r.torque_on_second(c);
+  }
+}
+
+// Bond b's critical load factor under a preload: its stresses grow from those of the preload's
+// state `p` (its free offset included) along those of the unit state `u` (without), and it fails
+// where they reach U = kappa (bond_events.hpp, "Preload"); `unit` are its unit stresses.
+CriticalLoad preloaded_critical_load(const Bonds& bonds, int b, const BondParameters& params,
+                                     const Eigen::VectorXd& p, const Eigen::VectorXd& u,
+                                     const BondStresses& unit, const BondStrength& strength,
+                                     double kappa) {
+  const int i = bonds.first(b), j = bonds.second(b);
+  auto stresses_at = [&](double lambda) {
+    return intact_stresses(bond_stresses(params, bonds.strength_radius(b),
+                                         segment(p, i, 0) + lambda * segment(u, i, 0),
+                                         segment(p, i, 3) + lambda * segment(u, i, 3),
+                                         segment(p, j, 0) + lambda * segment(u, j, 0),
+                                         segment(p, j, 3) + lambda * segment(u, j, 3)),
+                           bonds.damage(b));
+  };
+  CriticalLoad c;
+  c.factor = first_failure_factor(
+      [&](double lambda) { return utilisation(stresses_at(lambda), strength).ratio / kappa; },
+      critical_load(unit, strength, kappa).factor);
+  if (!std::isfinite(c.factor)) return c;
+  // The mode there: the law's own at that state (which reaches kappa at factor 1).
+  const BondStresses at = stresses_at(c.factor);
+  c.mode = critical_load(at, strength, kappa).mode;
+  if (c.mode == BondState::kIntact) c.mode = utilisation(at, strength).mode;
+  if (c.mode == BondState::kIntact) c.mode = BondState::kBrokenTension;
+  return c;
+}
+
+// The unit-load equilibrium `u` (and with a preload its state `preloaded`, else null) into `s`:
+// energies, forces, the reaction and each bond's critical load factor.
+void evaluate(const Model& model, const Eigen::VectorXd& u, const Eigen::VectorXd* preloaded,
+              const DofFlags& reaction_dofs, const EventSettings& settings, UnitState& s) {
   const Bonds& bonds = model.bonds;
   const int n = model.particles.size(), m = bonds.size();
   s.energy = 0;
@@ -619,31 +728,52 @@ void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reac
   s.mode.assign(m, BondState::kIntact);
   s.ductility.assign(m, 1.0);
   s.bond_energy.assign(m, 0.0);
+  s.preloaded = preloaded != nullptr;
+  if (s.preloaded) {
+    s.preload_energy = s.cross_energy = 0;
+    s.preload_force = DofArray::Zero(n, kDofsPerParticle);
+    s.bond_preload_energy.assign(m, 0.0);
+    s.bond_cross_energy.assign(m, 0.0);
+  }
   for (int b = 0; b < m; ++b) {
     if (bonds.is_broken(b)) continue;
     const int i = bonds.first(b), j = bonds.second(b);
-    const BondParameters params = bond_parameters(bonds, b);
+    const BondParameters params = bond_parameters(bonds, b);  // its free offset with it
+    BondParameters unit_params = params;
+    unit_params.free_offset.setZero();
     const Eigen::Vector3d ui = segment(u, i, 0), ti = segment(u, i, 3);
     const Eigen::Vector3d uj = segment(u, j, 0), tj = segment(u, j, 3);
-    const BondResponse r = parallel_bond_response(params, ui, ti, uj, tj);
+    const BondResponse r = parallel_bond_response(unit_params, ui, ti, uj, tj);
     s.energy += r.energy;
     s.bond_energy[b] = r.energy;
-    for (int c = 0; c < 3; ++c) {
-      s.force(i, c) += r.force_on_first(c);
-      s.force(j, c) -= r.force_on_first(c);
-      s.force(i, 3 + c) += r.torque_on_first(c);
-      s.force(j, 3 + c) += r.torque_on_second(c);
+    add_response(r, i, j, s.force);
+    if (s.preloaded) {
+      const Eigen::VectorXd& p = *preloaded;
+      const Eigen::Vector3d pui = segment(p, i, 0), pti = segment(p, i, 3);
+      const Eigen::Vector3d puj = segment(p, j, 0), ptj = segment(p, j, 3);
+      const BondResponse rp = parallel_bond_response(params, pui, pti, puj, ptj);
+      const double both =
+          parallel_bond_response(params, pui + ui, pti + ti, puj + uj, ptj + tj).energy;
+      const auto k = static_cast<std::size_t>(b);
+      s.bond_preload_energy[k] = rp.energy;
+      s.bond_cross_energy[k] = both - rp.energy - r.energy;
+      s.preload_energy += rp.energy;
+      s.cross_energy += s.bond_cross_energy[k];
+      add_response(rp, i, j, s.preload_force);
     }
     if (!std::isfinite(bonds.tensile_strength(b)) && !std::isfinite(bonds.cohesion(b))) continue;
     const BondStresses stresses = intact_stresses(
-        bond_stresses(params, bonds.strength_radius(b), ui, ti, uj, tj), bonds.damage(b));
+        bond_stresses(unit_params, bonds.strength_radius(b), ui, ti, uj, tj), bonds.damage(b));
     const BondStrength strength = bond_strength(bonds, b);
     // kappa_u: Bonds::ductility, or for a mixed-mode bond that of the unit solution's mix, which
     // every load factor of this equilibrium shares.
     const double ductility = softening_ductility(stresses, strength);
+    const double kappa = failure_kappa(bonds, b, ductility, settings);
     const CriticalLoad critical =
-        critical_load(stresses, strength, failure_kappa(bonds, b, ductility, settings));
-    if (critical.factor > 0) {
+        s.preloaded
+            ? preloaded_critical_load(bonds, b, params, *preloaded, u, stresses, strength, kappa)
+            : critical_load(stresses, strength, kappa);
+    if (critical.factor > 0 || (s.preloaded && critical.factor == 0)) {
       s.factor[b] = critical.factor;
       s.mode[b] = critical.mode;
       s.ductility[b] = ductility;
@@ -651,6 +781,7 @@ void evaluate(const Model& model, const Eigen::VectorXd& u, const DofFlags& reac
   }
   // The support's reaction is K u on its dof: minus the bonds' generalized force there.
   s.reaction = -(s.force * reaction_dofs.cast<double>()).sum();
+  if (s.preloaded) s.preload_reaction = -(s.preload_force * reaction_dofs.cast<double>()).sum();
 }
 
 // The bond that fails next: the smallest finite critical factor, ties to the lowest index.
@@ -675,11 +806,28 @@ void write_state(Particles& p, double lambda, const Eigen::VectorXd& u, const Do
     }
 }
 
+// Writes the state of a preload (u_p, its forces) plus lambda (u, force) into the particles.
+void write_state(Particles& p, double lambda, const Eigen::VectorXd& u, const DofArray& force,
+                 const Eigen::VectorXd& preload_u, const DofArray& preload_force) {
+  for (int i = 0; i < p.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      p.displacement(i, c) =
+          preload_u(kDofsPerParticle * i + c) + lambda * u(kDofsPerParticle * i + c);
+      p.rotation(i, c) =
+          preload_u(kDofsPerParticle * i + 3 + c) + lambda * u(kDofsPerParticle * i + 3 + c);
+      p.force(i, c) = preload_force(i, c) + lambda * force(i, c);
+      p.torque(i, c) = preload_force(i, 3 + c) + lambda * force(i, 3 + c);
+    }
+}
+
 // After a break: fixes the pieces that came loose (bond_events.hpp, "Pieces that come loose").
 // `clusters` is the number of intact-bond clusters before the break. Returns whether
 // `constraints` changed.
+// With a preload (`preload_u` its state, non-null), the pieces are fixed where it put them at
+// load factor 0 as well (into `preload`).
 bool fix_loose_pieces(const Model& model, const Eigen::VectorXd& u, int& clusters,
-                      DofConstraints& constraints) {
+                      DofConstraints& constraints, const Eigen::VectorXd* preload_u,
+                      DofArray& preload) {
   std::vector<int> label;
   const int count = intact_clusters(model, label);
   if (count <= clusters) return false;
@@ -698,13 +846,24 @@ bool fix_loose_pieces(const Model& model, const Eigen::VectorXd& u, int& cluster
       for (int c = 0; c < kDofsPerParticle; ++c)
         if (!constraints.fixed(i, c)) {
           constraints.fix(i, static_cast<Dof>(c), u(kDofsPerParticle * i + c));
+          if (preload_u) preload(i, c) = (*preload_u)(kDofsPerParticle * i + c);
           changed = true;
         }
     } else if (!held[k]) {
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero(), preload_mean = Eigen::Vector3d::Zero();
       for (int i : members[k]) mean += segment(u, i, 0);
+      if (preload_u)
+        for (int i : members[k]) preload_mean += segment(*preload_u, i, 0);
       mean /= static_cast<double>(members[k].size());
-      for (int i : members[k]) constraints.fix_particle(i, mean, Eigen::Vector3d::Zero());
+      preload_mean /= static_cast<double>(members[k].size());
+      for (int i : members[k]) {
+        constraints.fix_particle(i, mean, Eigen::Vector3d::Zero());
+        if (!preload_u) continue;
+        for (int c = 0; c < 3; ++c) {
+          preload(i, c) = preload_mean(c);
+          preload(i, 3 + c) = 0;
+        }
+      }
       changed = true;
     }
   }
@@ -716,6 +875,7 @@ bool fix_loose_pieces(const Model& model, const Eigen::VectorXd& u, int& cluster
   held_together.bonds = model.bonds.select(intact);
   for (const PinnedDof& pin : rigid_mode_pins(held_together, constraints)) {
     constraints.fix(pin.particle, pin.dof, 0.0);
+    if (preload_u) preload(pin.particle, static_cast<int>(pin.dof)) = 0;
     changed = true;
   }
   return changed;
@@ -732,7 +892,13 @@ class EventLoop {
         reaction_dofs_(reaction_dofs),
         settings_(settings),
         start_(start),
-        solver_(settings, unit) {
+        preloaded_(model.bonds.has_free_offsets() ||
+                   (settings.preload.size() > 0 && (settings.preload != 0).any())),
+        solver_(settings, unit,
+                settings.preload.size() > 0
+                    ? settings.preload
+                    : DofArray(DofArray::Zero(model.particles.size(), kDofsPerParticle)),
+                preloaded_) {
     std::vector<int> label;
     clusters_ = intact_clusters(model, label);
     const Bonds& bonds = model.bonds;
@@ -760,6 +926,10 @@ class EventLoop {
     clusters_ = r.clusters;
     broken_ = r.broken;
     critical_u_ = r.critical_u;
+    critical_preload_u_ = r.critical_preload_u;
+    critical_preload_force_ = r.critical_preload_force;
+    previous_preload_energy_ = r.previous_preload_energy;
+    previous_cross_energy_ = r.previous_cross_energy;
     critical_force_ = r.critical_force;
     critical_lambda_ = r.critical_lambda;
     first_energy_ = r.first_energy;
@@ -775,10 +945,8 @@ class EventLoop {
     while (true) {
       if (!solve()) break;
       ++result_.solves;
-      evaluate(model_, u_, reaction_dofs_, settings_, state_);
-      if (events_ > 0)
-        result_.dissipated_energy +=
-            critical_lambda_ * critical_lambda_ * (previous_energy_ - state_.energy);
+      evaluate(model_, u_, preloaded_ ? &preload_u_ : nullptr, reaction_dofs_, settings_, state_);
+      if (events_ > 0) result_.dissipated_energy += released_energy();
       if (!pending_stop_.empty()) {
         result_.stop = pending_stop_;
         break;
@@ -829,11 +997,11 @@ class EventLoop {
   // found a mechanism.
   bool solve() {
     if (events_ == 0) {
-      solver_.solve(model_, u_);  // errors here are the caller's: bad constraints
+      solver_.solve(model_, u_, preload_u_);  // errors here are the caller's: bad constraints
       return true;
     }
     try {
-      solver_.solve(model_, u_);
+      solver_.solve(model_, u_, preload_u_);
     } catch (const Error& e) {  // a factorization after breaks found a mechanism
       result_.stop = "failed";
       result_.message = e.what();
@@ -843,6 +1011,24 @@ class EventLoop {
   }
 
   static constexpr double kNever = std::numeric_limits<double>::infinity();
+
+  // The energy the last event released at fixed grips: the strain energy at its critical state
+  // less that of the new equilibrium at the same load factor.
+  double released_energy() const {
+    const double l = critical_lambda_;
+    const double unit = l * l * (previous_energy_ - state_.energy);
+    if (!preloaded_) return unit;
+    return (previous_preload_energy_ - state_.preload_energy) +
+           l * (previous_cross_energy_ - state_.cross_energy) + unit;
+  }
+
+  // The particles at load factor lambda of the current equilibrium.
+  void write_current_state(double lambda) {
+    if (preloaded_)
+      write_state(model_.particles, lambda, u_, state_.force, preload_u_, state_.preload_force);
+    else
+      write_state(model_.particles, lambda, u_, state_.force);
+  }
 
   // A site whose crack opens next (material-point failure): the particle (-1: none), its load
   // factor, the bonds across its crack plane (normal `normal`) and how they break.
@@ -872,6 +1058,15 @@ class EventLoop {
     return bonds;
   }
 
+  // The strain energy of `bonds` (those not broken) at load factor lambda [J].
+  double bonds_energy_at(const std::vector<int>& bonds, double lambda) const {
+    if (!preloaded_) return lambda * lambda * bonds_energy(bonds);
+    double e = 0;
+    for (int b : bonds)
+      if (!model_.bonds.is_broken(b)) e += state_.bond_energy_at(b, lambda);
+    return e;
+  }
+
   // The strain energy of `bonds` (those not broken) at the unit-load solution [J].
   double bonds_energy(const std::vector<int>& bonds) const {
     double e = 0;
@@ -891,10 +1086,21 @@ class EventLoop {
       const SofteningCrack& c = softening_[k];
       const std::vector<int> bonds = unbroken(c);
       if (bonds.empty()) continue;
-      const double intact = bonds_energy(bonds) / (1 - model_.bonds.damage(bonds.front()));
+      const double stiffness = 1 - model_.bonds.damage(bonds.front());
+      const double intact = bonds_energy(bonds) / stiffness;
       if (!(intact > 0)) continue;
       const double kappa = failure_kappa(model_.bonds, bonds.front(), c.ductility, settings_);
-      factor[k] = kappa * std::sqrt(c.peak_energy / intact);
+      if (preloaded_) {  // the intact energy, quadratic in lambda, reaches kappa^2 W_peak
+        double pre = 0, cross = 0;
+        for (int b : bonds) {
+          pre += state_.bond_preload_energy[static_cast<std::size_t>(b)];
+          cross += state_.bond_cross_energy[static_cast<std::size_t>(b)];
+        }
+        factor[k] = first_quadratic_crossing(pre / stiffness, cross / stiffness, intact,
+                                             kappa * kappa * c.peak_energy);
+      } else {
+        factor[k] = kappa * std::sqrt(c.peak_energy / intact);
+      }
       smallest = std::min(smallest, factor[k]);
     }
     Tooth tooth;
@@ -933,7 +1139,7 @@ class EventLoop {
   // first tooth; returns the event.
   EventPoint crack(const SiteCrack& site) {
     const double lambda = site.load_factor;
-    const double energy = lambda * lambda * bonds_energy(site.bonds);  // W_peak
+    const double energy = bonds_energy_at(site.bonds, lambda);  // W_peak
     const double area = crack_share(site);
     const double g = fracture_energy(site.failure_mode);
     const bool softening = settings_.material_point->softening;
@@ -981,7 +1187,7 @@ class EventLoop {
     site.tooth = c.teeth;
     const int breaking = breaks ? static_cast<int>(bonds.size()) : 0;
     const EventPoint point = critical_state(bonds.front(), lambda, breaking, &site);
-    const double energy = lambda * lambda * bonds_energy(bonds);
+    const double energy = bonds_energy_at(bonds, lambda);
     change_site(bonds, breaks, point, crack_bond_state(c.mode));
     ++c.teeth;
     if (!breaks) {
@@ -1000,9 +1206,7 @@ class EventLoop {
     SiteCrack crack;
     if (!settings_.material_point) return crack;
     const MaterialPointFailure& mp = *settings_.material_point;
-    write_state(model_.particles, 1.0, u_, state_.force);
-    std::vector<SiteFailure> sites = site_failures(model_.particles, model_.bonds, mp.ply_angles,
-                                                   mp.criterion, mp.material, mp.strength_factors);
+    std::vector<SiteFailure> sites = site_failures_now(mp);
     // A particle whose translation is prescribed is held by a grip: its site does not fail (a
     // coupon's grips, like a test's tabs, are not its gauge).
     const DofFlags& held = solver_.constraints().fixed;
@@ -1033,6 +1237,22 @@ class EventLoop {
     return crack;
   }
 
+  // Every site's failure at the current equilibrium: as its unit-load stress scales, or with a
+  // preload as its stress grows from the preload's along the unit load's.
+  std::vector<SiteFailure> site_failures_now(const MaterialPointFailure& mp) {
+    write_state(model_.particles, 1.0, u_, state_.force);
+    if (!preloaded_)
+      return site_failures(model_.particles, model_.bonds, mp.ply_angles, mp.criterion, mp.material,
+                           mp.strength_factors);
+    const std::vector<PlyStress> unit =
+        site_ply_stresses(model_.particles, model_.bonds, mp.ply_angles, mp.material, {}, false);
+    write_current_state(0.0);
+    const std::vector<PlyStress> preload =
+        site_ply_stresses(model_.particles, model_.bonds, mp.ply_angles, mp.material);
+    return preloaded_site_failures(model_.particles, preload, unit, mp.ply_angles, mp.criterion,
+                                   mp.material, mp.strength_factors);
+  }
+
   // The critical state at load factor lambda at which bond b fails (with `breaking` bonds broken
   // in the event): logged in the path (and the peak), and shown to EventSettings::on_event.
   EventPoint critical_state(int b, double lambda, int breaking, const SiteCrack* site = nullptr) {
@@ -1046,13 +1266,19 @@ class EventLoop {
     }
     point.event = events_;
     point.load_factor = lambda;
-    point.reaction = lambda * state_.reaction;
+    point.reaction = state_.reaction_at(lambda);
     point.bond = b;
-    point.strain_energy = lambda * lambda * state_.energy;
+    point.strain_energy = state_.energy_at(lambda);
     critical_u_ = u_;
     critical_force_ = state_.force;
     critical_lambda_ = lambda;
     previous_energy_ = state_.energy;
+    if (preloaded_) {
+      critical_preload_u_ = preload_u_;
+      critical_preload_force_ = state_.preload_force;
+      previous_preload_energy_ = state_.preload_energy;
+      previous_cross_energy_ = state_.cross_energy;
+    }
     point.broken = broken_ + breaking;
     result_.path.push_back(point);
     const int index = static_cast<int>(result_.path.size()) - 1;
@@ -1061,7 +1287,7 @@ class EventLoop {
       peak_reaction_ = std::abs(point.reaction);
     }
     if (settings_.on_event) {
-      write_state(model_.particles, lambda, u_, state_.force);
+      write_current_state(lambda);
       settings_.on_event(model_, point);
     }
     return point;
@@ -1147,7 +1373,10 @@ class EventLoop {
                       bonds.lever_first(b) * bonds.normal.row(b).transpose().matrix();
     result_.breaks.push_back(record);
     DofConstraints constraints = solver_.constraints();
-    if (fix_loose_pieces(model_, u_, clusters_, constraints)) solver_.set_constraints(constraints);
+    DofArray preload = solver_.preload();
+    if (fix_loose_pieces(model_, u_, clusters_, constraints, preloaded_ ? &preload_u_ : nullptr,
+                         preload))
+      solver_.set_constraints(constraints, preload);
   }
 
   // Progress, the stop rules that end the run at its next solve, and the checkpoint.
@@ -1195,6 +1424,10 @@ class EventLoop {
     s.clusters = clusters_;
     s.critical_u = critical_u_;
     s.critical_force = critical_force_;
+    s.critical_preload_u = critical_preload_u_;
+    s.critical_preload_force = critical_preload_force_;
+    s.previous_preload_energy = previous_preload_energy_;
+    s.previous_cross_energy = previous_cross_energy_;
     s.critical_lambda = critical_lambda_;
     s.first_energy = first_energy_;
     s.first_reaction = first_reaction_;
@@ -1218,10 +1451,13 @@ class EventLoop {
   // Leaves the model at the last critical state (at the unit-load solution if no bond was
   // loaded).
   void finish() {
-    if (events_ > 0)
+    if (events_ > 0 && preloaded_)
+      write_state(model_.particles, critical_lambda_, critical_u_, critical_force_,
+                  critical_preload_u_, critical_preload_force_);
+    else if (events_ > 0)
       write_state(model_.particles, critical_lambda_, critical_u_, critical_force_);
     else
-      write_state(model_.particles, 1.0, u_, state_.force);
+      write_current_state(1.0);
     result_.factorizations = solver_.factorizations();
     result_.softening_sites = static_cast<int>(softening_.size());
     result_.wall_seconds = seconds_since(start_);
@@ -1234,17 +1470,22 @@ class EventLoop {
   const DofFlags& reaction_dofs_;
   const EventSettings& settings_;
   Clock::time_point start_;
+  bool preloaded_ = false;  // bond_events.hpp, "Preload"
   UnitLoadSolver solver_;
   EventsResult result_;
   int clusters_ = 0;
   int broken_ = 0;
   long events_ = 0;
-  Eigen::VectorXd u_;  // the unit-load solution
-  UnitState state_;    // and what it gives
+  Eigen::VectorXd u_;          // the unit-load solution
+  Eigen::VectorXd preload_u_;  // the preload's state (preloaded_)
+  UnitState state_;            // and what they give
   // The last critical state.
   Eigen::VectorXd critical_u_;
   DofArray critical_force_;
+  Eigen::VectorXd critical_preload_u_;
+  DofArray critical_preload_force_;
   double critical_lambda_ = 1, first_energy_ = -1, previous_energy_ = 0, peak_reaction_ = 0;
+  double previous_preload_energy_ = 0, previous_cross_energy_ = 0;
   double first_reaction_ = 0;  // |reaction| of the first unit-load solution
   std::string pending_stop_;   // ends the run at the next solve
   double last_progress_ = 0;
@@ -1257,10 +1498,12 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
                         const EventSettings& settings, const EventsState* resume) {
   const auto start = Clock::now();
   settings.validate();
-  require(!model.bonds.has_free_offsets(),
-          "events: the bonds carry free offsets (cure stresses, thermal.delta_T), which the events "
-          "solver does not take yet (its load factor scales every bond's state from zero); the "
-          "static solver and the reference backend take them");
+  const int n = model.particles.size();
+  require(settings.preload.size() == 0 ||
+              (settings.preload.rows() == n && settings.preload.cols() == kDofsPerParticle),
+          fmt::format("events: the preload has {} x {} values for {} particles",
+                      settings.preload.rows(), settings.preload.cols(), n));
+  require(settings.preload.allFinite(), "events: the preload has a non-finite value");
   check_inputs(model, unit, reaction_dofs, settings.material_point.has_value());
   EventLoop loop(model, unit, reaction_dofs, settings, start);
   if (resume) loop.resume(*resume);
@@ -1285,6 +1528,22 @@ DofConstraints read_constraints(CheckpointReader& in) {
     in.corrupt("the constraints' values have the wrong size");
   std::copy(value.begin(), value.end(), c.value.data());
   return c;
+}
+
+void write_dof_array(CheckpointWriter& out, const DofArray& a) {
+  out.u64(static_cast<std::uint64_t>(a.rows()));
+  out.doubles({a.data(), static_cast<std::size_t>(a.size())});
+}
+
+DofArray read_dof_array(CheckpointReader& in, const char* what) {
+  const std::uint64_t rows = in.u64();
+  if (rows > (1ull << 31)) in.corrupt(fmt::format("{} for {} particles", what, rows));
+  const std::vector<double> values = in.doubles();
+  if (values.size() != rows * kDofsPerParticle)
+    in.corrupt(fmt::format("{} have the wrong size", what));
+  DofArray a(static_cast<Eigen::Index>(rows), kDofsPerParticle);
+  std::copy(values.begin(), values.end(), a.data());
+  return a;
 }
 
 }  // namespace
@@ -1349,6 +1608,13 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
     for (double v : {c.fracture_angle, c.ductility, c.peak_energy, c.area}) out.f64(v);
     out.i64(c.teeth);
   }
+  // The preload (bond_events.hpp, "Preload"; empty arrays without one).
+  out.doubles({s.critical_preload_u.data(), static_cast<std::size_t>(s.critical_preload_u.size())});
+  write_dof_array(out, s.critical_preload_force);
+  out.f64(s.previous_preload_energy);
+  out.f64(s.previous_cross_energy);
+  write_dof_array(out, s.preload);
+  write_dof_array(out, s.preload_factored_from);
 }
 
 EventsState read_events_state(CheckpointReader& in) {
@@ -1434,6 +1700,14 @@ EventsState read_events_state(CheckpointReader& in) {
     c.teeth = static_cast<int>(in.i64());
     s.softening.push_back(std::move(c));
   }
+  const std::vector<double> preload_u = in.doubles();
+  s.critical_preload_u = Eigen::Map<const Eigen::VectorXd>(
+      preload_u.data(), static_cast<Eigen::Index>(preload_u.size()));
+  s.critical_preload_force = read_dof_array(in, "the preload's critical forces");
+  s.previous_preload_energy = in.f64();
+  s.previous_cross_energy = in.f64();
+  s.preload = read_dof_array(in, "the preload's values");
+  s.preload_factored_from = read_dof_array(in, "the preload's factored values");
   if (s.events < 0 || s.capacity < 0 || s.result.path.size() != static_cast<std::size_t>(s.events))
     in.corrupt(
         fmt::format("an events state of {} events with {} points", s.events, s.result.path.size()));

@@ -65,6 +65,17 @@
 ///   cannot soften without snap-back) opens brittle, and EventsResult::brittle_sites counts it.
 ///   While its crack softens a site is not judged again; the sites beside it read their strain
 ///   without the softening bonds (contacts/site_failure.hpp).
+/// - Preload (cure stresses, issue 33). Where the model's bonds carry free offsets
+///   (Bonds::free_offset) or EventSettings::preload prescribes non-zero values, the state at load
+///   factor lambda is u_p + lambda u_1: u_p the equilibrium under the offsets and the preload's
+///   prescribed values (the cured specimen held in the grips), u_1 that under the unit prescribed
+///   values alone; both come from one factor and its updates. Each bond's and each site's
+///   critical load factor is then the smallest lambda >= 0 at which its state reaches its
+///   strength (core/preloaded_failure.hpp: 0 where the preload alone fails it), a softening
+///   crack's next tooth the root of its bonds' energy, a quadratic in lambda; the reactions, the
+///   energies and the states the path reports are those of u_p + lambda u_1. A mixed-mode bond
+///   softens with the ductility of its unit solution's mix, as without a preload. The stop rules
+///   read the unit solution (the coupon's stiffness), as without.
 /// - Damage energy. EventsResult::crack_energy sums, over the events, the strain energy that the
 ///   bonds changed in each event lose at its critical state (at fixed displacements): the energy
 ///   their damage dissipates, whatever the rest of the coupon releases as it re-equilibrates.
@@ -181,6 +192,11 @@ struct EventSettings {
   std::function<void(const Model&, const EventsState&)> on_checkpoint;
   /// Failure at the material point besides the bonds' own (none: bond by bond only).
   std::optional<MaterialPointFailure> material_point;
+  /// The prescribed dofs' values at load factor 0 (one row per particle, Dof columns, read where
+  /// the unit load fixes a dof; empty: zero): with the bonds' free offsets, the state before the
+  /// load (see the file comment, "Preload"), such as the grips holding a cured coupon where its
+  /// cure left it.
+  DofArray preload;
   /// Throws plydem::Error naming the first bad setting.
   void validate() const;
 };
@@ -243,16 +259,24 @@ struct EventsState {
   int clusters = 0;
   Eigen::VectorXd critical_u;
   DofArray critical_force;
+  /// With a preload: its state and forces at the last critical state (empty without).
+  Eigen::VectorXd critical_preload_u;
+  DofArray critical_preload_force;
   double critical_lambda = 1, first_energy = -1, previous_energy = 0, peak_reaction = 0;
+  /// With a preload: the preload's and the cross term of the energy before the last event
+  /// (previous_energy is the unit load's).
+  double previous_preload_energy = 0, previous_cross_energy = 0;
   double first_reaction = 0;
   std::string pending_stop;
   /// The path, breaks, peak, solves, factorizations and dissipated energy so far.
   EventsResult result;
   // The unit-load solver.
-  DofConstraints constraints;    ///< the current constraints
-  DofConstraints factored_from;  ///< those given to the last factorization
-  bool stale = true;             ///< the next solve factors afresh
-  bool active_stale = true;      ///< and finds the active dofs again
+  DofConstraints constraints;      ///< the current constraints
+  DofConstraints factored_from;    ///< those given to the last factorization
+  DofArray preload;                ///< the current prescribed values at load factor 0
+  DofArray preload_factored_from;  ///< those of the last factorization
+  bool stale = true;               ///< the next solve factors afresh
+  bool active_stale = true;        ///< and finds the active dofs again
   std::vector<int> active_dofs;
   long capacity = 0;  ///< columns of the update's arrays after the last factorization
   std::vector<EventChange> changes;       ///< since the last factorization (none when stale)

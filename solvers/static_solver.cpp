@@ -712,6 +712,11 @@ void StaticSystem::solve_free_in_place(Eigen::MatrixXd& b) const {
 }
 
 StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
+  return solve(model, values, true);
+}
+
+StaticResult StaticSystem::solve(Model& model, const DofArray& values,
+                                 bool with_free_offsets) const {
   const Impl& m = *impl_;
   Particles& p = model.particles;
   require(p.size() == m.n && model.bonds.size() == m.bonds,
@@ -759,7 +764,7 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values) const {
     for (int d = 0; d < m.dofs; ++d)
       if (m.free_index[d] >= 0) b(m.free_index[d]) = -m.s(m.free_index[d]) * k_u(d);
   }
-  if (model.bonds.has_free_offsets()) {
+  if (with_free_offsets && model.bonds.has_free_offsets()) {
     const Eigen::VectorXd g0 = free_offset_load(model);
     for (int f = 0; f < nf; ++f) b(f) += m.s(f) * g0(m.free_dofs[f]);
   }

@@ -222,6 +222,10 @@ class StaticSystem {
   /// factor solves exactly whatever the state. Throws plydem::Error for values of the wrong size
   /// or non-finite ones, or (CG) no convergence.
   StaticResult solve(Model& model, const DofArray& values) const;
+  /// The same with the bonds' free offsets as a load (what solve() does) or
+  /// without them (false: the state's response to the prescribed values alone, whose sum with
+  /// the offsets' own response is the state of both; the events solver's unit load).
+  StaticResult solve(Model& model, const DofArray& values, bool with_free_offsets) const;
 
   /// Factorizations done (1 for the direct method once the constructor returned; 0 for CG) and
   /// solves so far.

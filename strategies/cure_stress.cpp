@@ -58,12 +58,37 @@ std::vector<Eigen::Vector3d> clt_thermal_ply_stresses(const std::vector<Ply>& pl
   return stresses;
 }
 
-std::vector<Eigen::Vector3d> solve_cure(Model& model, const std::vector<Ply>& plies, double delta_T,
-                                        double half) {
+namespace {
+
+// The free laminate's cure into `model` (solve_cure, cured_preload).
+void solve_free_cure(Model& model, const std::vector<Ply>& plies, double delta_T) {
   set_cure_offsets(model, plies, delta_T);
   StaticSettings settings;
   settings.pin_rigid_modes = true;
   solve_static(model, DofConstraints(model.particles.size()), settings);
+}
+
+}  // namespace
+
+DofArray cured_preload(Model& model, const std::vector<Ply>& plies, double delta_T,
+                       const DofFlags& held) {
+  const Particles& p = model.particles;
+  require(held.rows() == p.size() && held.cols() == kDofsPerParticle,
+          fmt::format("cured preload: {} x {} held flags for {} particles", held.rows(),
+                      held.cols(), p.size()));
+  solve_free_cure(model, plies, delta_T);
+  DofArray preload = DofArray::Zero(p.size(), kDofsPerParticle);
+  for (int i = 0; i < p.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      if (held(i, c)) preload(i, c) = p.displacement(i, c);
+      if (held(i, 3 + c)) preload(i, 3 + c) = p.rotation(i, c);
+    }
+  return preload;
+}
+
+std::vector<Eigen::Vector3d> solve_cure(Model& model, const std::vector<Ply>& plies, double delta_T,
+                                        double half) {
+  solve_free_cure(model, plies, delta_T);
   const Particles& p = model.particles;
   const std::vector<Eigen::Matrix3d> stress = particle_stresses(p, model.bonds);
   const Eigen::Vector3d low = p.reference_position.colwise().minCoeff().transpose().matrix();

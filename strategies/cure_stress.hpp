@@ -17,6 +17,7 @@
 
 #include "core/elasticity.hpp"
 #include "core/model.hpp"
+#include "solvers/static_solver.hpp"
 
 namespace plydem {
 
@@ -45,5 +46,14 @@ std::vector<Eigen::Vector3d> clt_thermal_ply_stresses(const std::vector<Ply>& pl
 /// static solve do, or for a ply with no particle in the centre.
 std::vector<Eigen::Vector3d> solve_cure(Model& model, const std::vector<Ply>& plies, double delta_T,
                                         double half);
+
+/// A cured coupon held where its cure left it: set_cure_offsets, the free laminate's cure (the
+/// static solve with only the rigid-body modes pinned, the state written into `model`), and that
+/// state's value at every dof `held` flags (one row per particle, Dof columns; zero elsewhere):
+/// the preload of an events run (solvers/bond_events.hpp, EventSettings::preload), whose grips
+/// then hold the cured coupon carrying nothing before the load. Throws plydem::Error as
+/// set_cure_offsets and the static solve do, or for `held` of another size.
+DofArray cured_preload(Model& model, const std::vector<Ply>& plies, double delta_T,
+                       const DofFlags& held);
 
 }  // namespace plydem

@@ -25,6 +25,7 @@
 #include "core/material.hpp"
 #include "solvers/bond_events.hpp"
 #include "solvers/explicit_integrator.hpp"
+#include "strategies/cure_stress.hpp"
 #include "strategies/registry.hpp"
 #include "support/coupon_fixtures.hpp"
 
@@ -334,10 +335,22 @@ bool same_path(const std::vector<EventPoint>& a, const std::vector<EventPoint>& 
 TEST_CASE("an events run resumed from its checkpoints gives the same events to the bit") {
   // Brittle bonds, softening bonds, and sites that crack at the material point (each crack's
   // bonds in one update of the factor), brittle (ductility 0) and softening (-1: the cracks'
-  // teeth and their state in the checkpoint).
-  for (const double ductility : {1.0, 3.0, 0.0, -1.0}) {
+  // teeth and their state in the checkpoint); softening bonds and sites again with a cure
+  // (the coupon cooled by 40 K, held by its grips: the preload's state in the checkpoint).
+  struct Case {
+    double ductility, cooling;
+  };
+  for (const Case& c :
+       {Case{1, 0}, Case{3, 0}, Case{0, 0}, Case{-1, 0}, Case{3, -40}, Case{-1, -40}}) {
+    const double ductility = c.ductility;
     CAPTURE(ductility);
-    const Model built = events_coupon(std::max(ductility, 0.0));
+    CAPTURE(c.cooling);
+    Model built = events_coupon(std::max(ductility, 0.0));
+    if (c.cooling != 0) {
+      const Material eglass = load_material("eglass-my750");
+      const double angle = ductility > 0 ? 0.0 : std::numbers::pi / 2;
+      set_cure_offsets(built, {Ply{eglass, angle, 0.2e-3}}, c.cooling);
+    }
     DofConstraints unit;
     DofFlags reaction;
     grip_constraints(built, 0.1e-3, 1e-6, unit, reaction);
@@ -420,9 +433,9 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
       stale += saved[k].stale ? 1 : 0;
     }
     MESSAGE(
-        fmt::format("ductility {}: {} events, {} factorizations, resumed from {} checkpoints "
-                    "({} right before a factorization)",
-                    ductility, whole.path.size(), whole.factorizations, resumed, stale));
+        fmt::format("ductility {}, cooling {} K: {} events, {} factorizations, resumed from {} "
+                    "checkpoints ({} right before a factorization)",
+                    ductility, c.cooling, whole.path.size(), whole.factorizations, resumed, stale));
     CHECK(stale > 0);
     CHECK(resumed - stale > (ductility > 0 ? 2 : 1));
   }

@@ -24,6 +24,7 @@
 #include "core/units.hpp"
 #include "solvers/plastic_shear.hpp"
 #include "strategies/boundary_cells.hpp"
+#include "strategies/cure_stress.hpp"
 #include "strategies/registry.hpp"
 
 namespace plydem {
@@ -270,6 +271,16 @@ void StrengthSettings::validate() const {
   require(std::isfinite(edge_band_diameters) && edge_band_diameters >= 0,
           "the gauge's edge band must be >= 0 diameters");
   strength_options.validate();
+  require(std::isfinite(delta_T) && std::abs(delta_T) <= 500,
+          fmt::format("thermal.delta_T must be a temperature change of at most 500 K, got {} K",
+                      delta_T));
+  require(delta_T == 0 || coupon.material.thermal_expansion_given,
+          fmt::format("thermal.delta_T = {} K needs the material's thermal expansion: material "
+                      "'{}' gives no alpha1, alpha2",
+                      delta_T, coupon.material.name));
+  require(delta_T == 0 || method == StrengthMethod::kEvents,
+          "thermal.delta_T (cure stresses) is taken by the events method only: the explicit "
+          "kernels refuse the bonds' free offsets (use --method events)");
   require(
       load != StrengthLoad::kCompression || effective_failure_criterion() != PlyFailureModel::kBond,
       "compression (--load compression) needs failure at the material point "
@@ -339,6 +350,7 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
     h.add("scatter_plies", plies);
   }
   if (s.scatter_per_crack_site) h.add("scatter_per", "crack site");
+  if (s.delta_T != 0) h.add("delta_T", exact(s.delta_T));
   h.add("seed", fmt::format("{}", s.seed));
   h.add("friction", exact(s.strength_options.friction_coefficient));
   h.add("softening", s.strength_options.softening ? "true" : "false");
@@ -668,6 +680,7 @@ struct StrengthCurve {
 
   StrengthResult& result;
   const GaugeSection& gauge;
+  GaugeStrain preload;  // the gauge's strain before the load (a cured coupon's), subtracted
   bool record_snapshots = false;
   double sign = 1;     // stresses and strains along the load: -1 in compression
   bool shear = false;  // tau_xy against gamma_xy
@@ -703,7 +716,8 @@ struct StrengthCurve {
   void on_event(const Model& state, const EventPoint& point,
                 std::span<const Eigen::Vector3d> free_offsets = {}) {
     const GaugeStrain fit = fit_gauge_strain(state.particles, gauge.particles);
-    result.strain.push_back(sign * (shear ? fit.gamma_xy : fit.exx));
+    result.strain.push_back(sign *
+                            (shear ? fit.gamma_xy - preload.gamma_xy : fit.exx - preload.exx));
     result.stress.push_back(shear ? gauge_shear_stress(state, free_offsets)
                                   : sign * point.reaction / gauge.cross_section);
     result.nominal_strain.push_back(point.load_factor * kUnitNominalStrain);
@@ -976,9 +990,10 @@ EventsResult run_to_failure(const StrengthSettings& s,
                             const std::function<void(const EventProgress&)>& progress,
                             const StaticSettings& grip_settings, const UnitLoading& loading,
                             Model& model, StrengthCurve& curve,
-                            std::optional<MaterialPointFailure> material_point) {
+                            std::optional<MaterialPointFailure> material_point, DofArray preload) {
   EventSettings events = s.events;
   events.material_point = std::move(material_point);
+  events.preload = std::move(preload);
   events.static_settings.pin_rigid_modes = grip_settings.pin_rigid_modes;
   events.static_settings.linear_solver = grip_settings.linear_solver;
   events.on_progress = progress;
@@ -1246,6 +1261,17 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
   }
 
   StrengthCurve curve(result, loading.gauge, s.record_snapshots, s.load);
+  // The cure: the grips hold the cured coupon where its free cure left it, and the strains are
+  // measured from there.
+  DofArray preload;
+  if (s.delta_T != 0) {
+    require(!follows_shear_curve(s),
+            "thermal.delta_T (cure stresses) is not taken by the plastic shear run (a material "
+            "with a shear_curve in shear at the material point): leave it out");
+    preload = cured_preload(*model, plies, s.delta_T, loading.unit.fixed);
+    curve.preload = fit_gauge_strain(model->particles, loading.gauge.particles);
+  }
+  result.delta_T = s.delta_T;
   const bool at_material_points = material_point.has_value();
   const EventsResult run =
       follows_shear_curve(s) ? run_plastic(s, progress_, grip_settings, loading, *model, curve,
@@ -1254,7 +1280,7 @@ StrengthResult StrengthTest::run(SpecimenBuilder& builder) const {
           ? run_explicit(s, progress_, loading, failure_load_factor(specimen_calibrations, result),
                          *model, curve, std::move(material_point))
           : run_to_failure(s, progress_, grip_settings, loading, *model, curve,
-                           std::move(material_point));
+                           std::move(material_point), std::move(preload));
   require(!at_material_points || run.stop != "no bond loaded",
           fmt::format("failure at the material point left the coupon carrying load with no site "
                       "that can crack, after {} events: its peak would not be a strength (use "

@@ -132,6 +132,12 @@ struct StrengthSettings {
   /// bonds that cross it; assign_bond_strengths) instead of per bond: transverse cracks that run
   /// through their band, as a cross-ply's 90° cracks do.
   bool scatter_per_crack_site = false;
+  /// thermal.delta_T, `--delta-T`: the temperature change from stress-free to test [K] (cure
+  /// cooling: negative; 0 = none). Each bond's free offset is its plies' thermal strain
+  /// (strategies/cure_stress.hpp), the grips hold the coupon where its free cure left it
+  /// (cured_preload), and the load adds to that state (solvers/bond_events.hpp, "Preload"); the
+  /// strains are measured from it. The events method only; the material's alpha1, alpha2 needed.
+  double delta_T = 0;
   StrengthOptions strength_options;  ///< friction coefficient, softening
   /// How the ply fails (`--failure-criterion`); unset = the material's failure_criterion. `bond`:
   /// bond by bond with the parallel-bond law; a lamina criterion: at the material point
@@ -245,6 +251,7 @@ struct StrengthResult {
   StrengthLoad load = StrengthLoad::kTension;
   double weibull_modulus = 0;  ///< as used (0 = no scatter)
   std::uint64_t seed = 1;
+  double delta_T = 0;  ///< the cure's temperature change [K] (StrengthSettings::delta_T; 0: none)
 
   /// The failure criterion the run used (StrengthSettings::effective_failure_criterion).
   PlyFailureModel failure_criterion = PlyFailureModel::kBond;

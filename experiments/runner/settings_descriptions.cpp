@@ -611,6 +611,23 @@ void add_events(SettingsDescription<S>& d) {
 }
 
 // The method, the strengths' scatter and the bonds' law.
+// The cure the test starts from (strategies/cure_stress.hpp).
+void add_strength_cure(SettingsDescription<StrengthSettings>& d) {
+  d.number(
+       "delta_T", [](auto& s) -> auto& { return s.delta_T; })
+      .with_flag("--delta-T")
+      .with_key("thermal.delta_T")
+      .with_python("delta_T")
+      .validated(
+          "finite, at most 500 K either way, the material's alpha1 and alpha2 given, the events "
+          "method (StrengthSettings::validate)")
+      .with_help(
+          "the temperature change from stress-free to test [K] (cure cooling: negative; 0 = "
+          "none): each bond's free offset is its plies' thermal strain, the grips hold the coupon "
+          "where its free cure left it, and the load adds to that state; strains are measured "
+          "from it");
+}
+
 void add_strength_law(SettingsDescription<StrengthSettings>& d) {
   d.add(
        "method", SettingType::kText,
@@ -839,6 +856,7 @@ SettingsDescription<StrengthSettings> make_strength_settings() {
   add_strength_coupon(d);
   add_solves(d);
   add_strength_law(d);
+  add_strength_cure(d);
   add_interface_strength(d, true);
   add_events(d);
   add_strength_explicit(d);
