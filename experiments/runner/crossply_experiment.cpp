@@ -219,11 +219,6 @@ const std::vector<std::pair<std::string, std::string>>& crossply_own_keys() {
        {"fem.element_mm", "CalculiX's in-plane element size [mm]; 0 = half a particle diameter"},
        {"fem.elements_per_ply", "CalculiX's elements through each ply; default 2"},
        {"fem.threads", "threads CalculiX may use; default 1"},
-       {"thermal.delta_T",
-        "the temperature change from stress-free to test [K] (cure cooling: negative): the cure "
-        "stresses beside CLT's on a square coupon of the laminate, and the references with them "
-        "(the failure test itself runs without: the events solver does not take them yet); "
-        "default 0"},
        {"maps.load_fractions",
         "the crack maps' loads, fractions of each laminate's peak, each in (0, 1]; default [0.1, "
         "0.25, 0.5, 1.0]"},
@@ -281,7 +276,10 @@ CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentConte
                         origin, g_ic, reference.name, reference.strength.G_matrix));
     reference.strength.G_matrix = g_ic;
   }
-  const double delta_T = c.number("thermal.delta_T", 0);
+  // thermal.delta_T (the strength command's key): every laminate runs with it and without, so the
+  // base settings run without it.
+  const double delta_T = base.delta_T;
+  base.delta_T = 0;
   require(std::isfinite(delta_T) && std::abs(delta_T) <= 500,
           fmt::format("{}: thermal.delta_T must be a temperature change of at most 500 K, got {} K",
                       origin, delta_T));
@@ -316,6 +314,9 @@ struct LaminateRun {
   /// square coupon of the laminate, DEM and CLT, one row per ply (empty without a cure).
   std::vector<Eigen::Vector3d> cure_dem, cure_clt;
   double cure_coupon = 0;  ///< that coupon's side [m]
+  /// thermal.delta_T: the same laminate pulled to failure from its cured state (at the finest
+  /// size; its own CalculiX and cure check left out), else null.
+  std::shared_ptr<const LaminateRun> cured;
 };
 
 // The cure of the laminate on a square coupon five laminate thicknesses wide (the crossply
@@ -335,8 +336,10 @@ void solve_laminate_cure(const CrossplySettings& cs, SpecimenBuilder& builder, L
   run.cure_coupon = square.coupon.length;
 }
 
+// `delta_T`: the cure the run starts from (0: none; the cured run of a laminate).
 LaminateRun run_laminate(const CrossplySettings& cs, std::size_t k, double diameter,
-                         SpecimenBuilder& builder, const CalculixAvailability& ccx) {
+                         SpecimenBuilder& builder, const CalculixAvailability& ccx,
+                         double delta_T = 0) {
   LaminateRun run;
   run.text = cs.layups[k];
   run.diameter = diameter;
@@ -348,11 +351,13 @@ LaminateRun run_laminate(const CrossplySettings& cs, std::size_t k, double diame
   s = cs.base;
   s.coupon.particle_diameter = diameter;
   s.layup = parse_layup(text);
+  s.delta_T = delta_T;
   if (cs.scatter_ninety)
     for (int p = m; p < m + 2 * n; ++p) s.scatter_plies.push_back(p);
   s.validate();
-  spdlog::info("{}: {} in tension to failure ({:g} mm particles)", cs.name, text,
-               diameter / kMetresPerMm);
+  spdlog::info("{}: {} in tension to failure ({:g} mm particles{})", cs.name, text,
+               diameter / kMetresPerMm,
+               delta_T != 0 ? fmt::format(", cured at {:g} K", delta_T) : "");
   StrengthTest test(s);
   test.on_progress([&](const EventProgress& p) {
     spdlog::info("{}: {} events, {} broken, peak {:.4g} N, {:.0f} s", text, p.events, p.broken,
@@ -381,6 +386,8 @@ LaminateRun run_laminate(const CrossplySettings& cs, std::size_t k, double diame
   run.traction_free_density = ninety_density(peak_planes, x_begin, x_end, true);
   if (!run.finest) {
     run.fem_same.skipped = "a coarser particle size: CalculiX runs at the finest";
+  } else if (delta_T != 0) {
+    run.fem_same.skipped = "the cured run: CalculiX runs with the uncured run's cracks";
   } else if (!ccx.available) {
     run.fem_same.skipped = ccx.message;
   } else {
@@ -392,7 +399,11 @@ LaminateRun run_laminate(const CrossplySettings& cs, std::size_t k, double diame
     run.fem_same = fem_cracked_stiffness(peak_planes, ninety, specimen, x_begin,
                                          s.coupon.particle_diameter, cs.fem);
   }
-  if (cs.delta_T != 0 && run.finest) solve_laminate_cure(cs, builder, run);
+  if (cs.delta_T != 0 && run.finest && delta_T == 0) {
+    solve_laminate_cure(cs, builder, run);
+    run.cured = std::make_shared<const LaminateRun>(
+        run_laminate(cs, k, diameter, builder, ccx, cs.delta_T));
+  }
   return run;
 }
 
@@ -576,6 +587,7 @@ struct LaminateTargets {
   double free_density = 0;                 ///< traction-free cracks per m at the peak
   double dem_grips = NAN, fem = NAN;       ///< E/E0 between the grips: DEM, CalculiX same cracks
   double strength_ratio = NAN;             ///< strength over the fibre-failure bound
+  double onset_strain_cured = NAN;         ///< DEM, pulled from the cured state
 };
 
 // The laminate's onset, saturation and strength beside the fracture-mechanics references: its
@@ -604,6 +616,21 @@ void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& ru
       onset_rows("in-situ camanho with cure", refs.in_situ_onset_cure);
       onset_rows("energy isolated crack with cure", refs.isolated_onset_cure);
     }
+  }
+  if (run.cured) {  // the same laminate pulled from its cured state
+    const LaminateRun& cured = *run.cured;
+    const CrackOnset cured_onset = find_onset(cured);
+    if (cured_onset.found) {
+      row("onset_stress", "dem with cure", cured_onset.stress * kMPaPerPa, "MPa");
+      row("onset_strain", "dem with cure", 100 * cured_onset.strain, "%");
+      targets.onset_strain_cured = cured_onset.strain;
+    }
+    StiffnessSamples cured_samples = sample_stiffness(cured);
+    row("saturation_crack_density", "dem with cure", cured_samples.last_density * kMetresPerMm,
+        "1/mm");
+    row("strength", "dem with cure", cured.result.strength * kMPaPerPa, "MPa");
+    cured_samples.density_against_stress.label += " with cure";
+    density_curves.push_back(cured_samples.density_against_stress);
   }
   const double layer = 2 * refs.d;
   row("saturation_crack_density", "dem", samples.last_density * kMetresPerMm, "1/mm");
@@ -668,6 +695,15 @@ void report_cure(const LaminateRun& run, const CrackingReferences& refs, const R
     return to_ply_axes(s(0), s(1), s(2), angle);
   };
   const double half_pi = std::numbers::pi / 2;
+  auto onset_text = [](const LaminateRun* r) {
+    if (!r) return std::string("-");
+    const CrackOnset onset = find_onset(*r);
+    return onset.found
+               ? fmt::format("{:.1f} ({:.3f}%)", onset.stress * kMPaPerPa, 100 * onset.strain)
+               : std::string("no crack");
+  };
+  const LaminateRun* cured = run.cured.get();
+  const double cured_density = cured ? sample_stiffness(*cured).last_density : 0.0;
   const PlyStress dem0 = in_ply(run.cure_dem[0], 0), clt0 = in_ply(run.cure_clt[0], 0);
   const PlyStress dem90 = in_ply(run.cure_dem[static_cast<std::size_t>(run.m)], half_pi);
   const PlyStress clt90 = in_ply(run.cure_clt[static_cast<std::size_t>(run.m)], half_pi);
@@ -682,7 +718,9 @@ void report_cure(const LaminateRun& run, const CrackingReferences& refs, const R
        mpa(dem0.sigma1), mpa(clt0.sigma1),
        fmt::format("{:+.2f}%", 100 * (dem0.sigma1 / clt0.sigma1 - 1)), mpa(refs.clt_yt_cure),
        refs.energy ? mpa(refs.in_situ_onset_cure) : "-",
-       refs.energy ? mpa(refs.isolated_onset_cure) : "-"});
+       refs.energy ? mpa(refs.isolated_onset_cure) : "-", onset_text(run.cured.get()),
+       onset_text(&run), cured ? fmt::format("{:.2f}", cured_density * kMetresPerMm) : "-",
+       cured ? mpa(cured->result.strength) : "-"});
 }
 
 // The laminate's crack maps per ply at maps.load_fractions of its peak and its final state.
@@ -893,6 +931,10 @@ std::string targets_markdown(const CrossplySettings& cs, const std::vector<Lamin
     const double ratio = thin->onset_strain / thick->onset_strain;
     add("onset strain n = 1 ≥ 1.4 × n = 4", thin->text + " / " + thick->text,
         fmt::format("{:.2f}", ratio), ratio >= 1.4);
+    const double cured = thin->onset_strain_cured / thick->onset_strain_cured;
+    if (std::isfinite(cured))
+      add("onset strain n = 1 ≥ 1.4 × n = 4, with cure", thin->text + " / " + thick->text,
+          fmt::format("{:.2f}", cured), cured >= 1.4);
   }
   for (const LaminateTargets& x : t) {
     const double product = x.density * x.layer;
@@ -994,8 +1036,10 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
       markdown_row({"laminate", "square coupon (mm)", "90° sigma2 DEM (MPa)", "90° sigma2 CLT",
                     "DEM vs CLT", "0° sigma1 DEM (MPa)", "0° sigma1 CLT", "DEM vs CLT",
                     "onset at YT with cure (MPa)", "in-situ onset with cure",
-                    "isolated-crack onset with cure"}) +
-      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+                    "isolated-crack onset with cure", "DEM onset with cure (MPa, strain %)",
+                    "DEM onset without", "cracks/mm at the peak with cure",
+                    "strength with cure (MPa)"}) +
+      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
   std::vector<LaminateTargets> targets;
   for (const LaminateRun& run : runs) {
     if (!run.finest) continue;
@@ -1067,8 +1111,14 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
         "pinned; the stresses are the plies' mean particle stresses within half a laminate "
         "thickness of its centre, beside CLT's thermal ply stresses of the same laminate. The "
         "onsets *with cure* are the laminate stresses at which the 90° stress, CLT's cure stress "
-        "included, reaches each criterion. The failure test above runs without the cure: the "
-        "events solver does not take the bonds' free offsets yet.\n\n{}\n",
+        "included, reaches each criterion. *DEM with cure*: the same laminate (same strengths and "
+        "scatter) pulled to failure from its cured state: its grips hold the coupon where its "
+        "free cure left it, the load adds to that state (solvers/bond_events.hpp, \"Preload\"), "
+        "and the strains are measured from it (rows of source `dem with cure`); the sections "
+        "above are the uncured runs'. The cure lowers each onset by about its 90° sigma2 over "
+        "k90, most for the thinnest 90° layer, whose cure stress is the largest: brittle sites "
+        "with strength scatter have no in-situ strengthening to offset it, so with the cure "
+        "the thin laminates crack first.\n\n{}\n",
         cs.delta_T, cs.base.coupon.material.alpha1, cs.base.coupon.material.alpha2, cure_table);
   md += "## Each laminate\n\n" + sections;
   return out;
