@@ -913,6 +913,12 @@ class EventLoop {
             r.constraints.fixed.rows() == n && r.constraints.value.rows() == n &&
             (r.stale || (r.factored_from.fixed.rows() == n && r.factored_from.value.rows() == n)),
         fmt::format("events: the state to resume is for another model ({} particles here)", n));
+    require(
+        !preloaded_ || (r.preload.rows() == n && (r.stale || r.preload_factored_from.rows() == n) &&
+                        (r.events == 0 || (r.critical_preload_u.size() == kDofsPerParticle * n &&
+                                           r.critical_preload_force.rows() == n))),
+        "events: the state to resume has no preload, and the model's bonds carry free offsets "
+        "(or the settings a preload): it is another run's");
     result_.path = r.result.path;
     result_.breaks = r.result.breaks;
     result_.peak = r.result.peak;

@@ -356,7 +356,7 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
     grip_constraints(built, 0.1e-3, 1e-6, unit, reaction);
     EventSettings settings;
     settings.static_settings.pin_rigid_modes = true;
-    settings.max_events = ductility > 1 ? 300 : 2000;
+    settings.max_events = ductility > 1 ? (c.cooling != 0 ? 120 : 300) : 2000;
     settings.max_update_rank = 24;  // several refactorizations along the way
     if (ductility <= 0) {
       MaterialPointFailure sites;
@@ -394,10 +394,13 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
     settings.checkpoint_every = 0;
     int resumed = 0, stale = 0;
     TempFile file("events");
+    // With the cure, fewer (its preload's state goes through the same reads and writes).
+    const int most_stale = c.cooling != 0 ? 2 : 6;
     for (std::size_t k = 0; k < saved.size(); ++k) {
       // At most six right before a factorization, every 40th event, the last but one.
-      const bool pick = saved.size() < 25 || k % 40 == 5 || k + 2 == saved.size() ||
-                        (saved[k].stale && stale < 6);
+      const bool pick = (c.cooling == 0 && (saved.size() < 25 || k % 40 == 5)) ||
+                        k + 2 == saved.size() || (c.cooling != 0 && k == saved.size() / 2) ||
+                        (saved[k].stale && stale < most_stale);
       if (!pick) continue;
       CAPTURE(saved[k].events);
       CheckpointWriter w;
@@ -437,7 +440,7 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
                     "checkpoints ({} right before a factorization)",
                     ductility, c.cooling, whole.path.size(), whole.factorizations, resumed, stale));
     CHECK(stale > 0);
-    CHECK(resumed - stale > (ductility > 0 ? 2 : 1));
+    CHECK(resumed - stale > (c.cooling != 0 ? 0 : (ductility > 0 ? 2 : 1)));
   }
 }
 

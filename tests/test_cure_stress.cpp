@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/units.hpp"
+#include "experiments/output/strength_report.hpp"
 #include "experiments/protocols/strength.hpp"
 #include "solvers/bond_events.hpp"
 #include "solvers/static_solver.hpp"
@@ -168,6 +169,8 @@ TEST_CASE("a cured [0/90]s coupon: strains from the cured state, its first crack
   CHECK((plain_onset - cured_onset) * k90 / cure_sigma2 < 1.15);
   CHECK(cured.delta_T == kCooling);
   CHECK(plain.delta_T == 0);
+  CHECK(strength_json(cured, s)["delta_T"] == kCooling);
+  CHECK(format_strength_table(cured, s).find("cured: cooled by 100 K") != std::string::npos);
 }
 
 TEST_CASE("cure stresses refuse what they cannot take, naming it") {

@@ -121,6 +121,11 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
       r.layup.empty() ? "" : " per ply", s.coupon.particle_diameter * kMmPerMetre, r.particles,
       r.bonds, s.strength_options.softening ? "linear-softening bonds" : "brittle bonds",
       scatter_text(r));
+  if (r.delta_T != 0)
+    out += fmt::format(
+        "cured: {} by {:g} K from stress-free (thermal.delta_T), the grips holding the coupon "
+        "where its free cure left it; strains from the cured state\n",
+        r.delta_T < 0 ? "cooled" : "heated", std::abs(r.delta_T));
   if (r.load == StrengthLoad::kCompression)
     out += "stresses and strains along the load: positive in compression\n";
   if (r.load == StrengthLoad::kShear)
@@ -280,6 +285,7 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   j["friction_coefficient"] = s.strength_options.friction_coefficient;
   j["weibull_modulus"] = r.weibull_modulus;
   if (r.weibull_modulus > 0) j["seed"] = r.seed;
+  j["delta_T"] = r.delta_T;  // [K], the cure the test started from (0: none)
   j["stop"] = r.stop;
   add_failure_model_json(r, j);
   j["factorizations"] = r.factorizations;
