@@ -335,13 +335,13 @@ bool same_path(const std::vector<EventPoint>& a, const std::vector<EventPoint>& 
 TEST_CASE("an events run resumed from its checkpoints gives the same events to the bit") {
   // Brittle bonds, softening bonds, and sites that crack at the material point (each crack's
   // bonds in one update of the factor), brittle (ductility 0) and softening (-1: the cracks'
-  // teeth and their state in the checkpoint); softening bonds and sites again with a cure
-  // (the coupon cooled by 40 K, held by its grips: the preload's state in the checkpoint).
+  // teeth and their state in the checkpoint); softening sites again with a cure (the coupon
+  // cooled by 40 K, held by its grips: the preload's state in the checkpoint; the bonds' roots
+  // under a preload are test_bond_events.cpp's).
   struct Case {
     double ductility, cooling;
   };
-  for (const Case& c :
-       {Case{1, 0}, Case{3, 0}, Case{0, 0}, Case{-1, 0}, Case{3, -40}, Case{-1, -40}}) {
+  for (const Case& c : {Case{1, 0}, Case{3, 0}, Case{0, 0}, Case{-1, 0}, Case{-1, -40}}) {
     const double ductility = c.ductility;
     CAPTURE(ductility);
     CAPTURE(c.cooling);
@@ -356,7 +356,7 @@ TEST_CASE("an events run resumed from its checkpoints gives the same events to t
     grip_constraints(built, 0.1e-3, 1e-6, unit, reaction);
     EventSettings settings;
     settings.static_settings.pin_rigid_modes = true;
-    settings.max_events = ductility > 1 ? (c.cooling != 0 ? 120 : 300) : 2000;
+    settings.max_events = ductility > 1 ? 300 : 2000;
     settings.max_update_rank = 24;  // several refactorizations along the way
     if (ductility <= 0) {
       MaterialPointFailure sites;

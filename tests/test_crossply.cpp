@@ -196,14 +196,11 @@ TEST_CASE("plydem run crossply at the material point: traction-free cracks, 0 de
   // transverse cracks (bond by bond every column of the quick coupon cracked: 10 per mm, none
   // traction-free), and the 0 deg plies carry the laminate on towards the ply-discount bound of
   // last-ply failure, XT / 2 for [0/90]s of equal plies (measured 0.87 of it; bond by bond 0.55).
-  // With a cure (the sanitizer build's run of the cured path: the quick shipped config's case
-  // runs in the release build only): the same laminate's cured run cracks first earlier.
   const fs::path dir = fresh_directory("crossply_material_point");
   std::ofstream(dir / "mp.toml")
       << kMaterialPointConfig
       << "[coupon]\nlength_mm = 2\nwidth_mm = 0.5\nthickness_mm = 0.2\ndiameter_mm = 0.1\n"
-         "[interface]\ntransverse_shear = true\n[thermal]\ndelta_T = -100\n[quick]\n"
-         "layups = [\"[0/90]s\"]\n";
+         "[interface]\ntransverse_shear = true\n[quick]\nlayups = [\"[0/90]s\"]\n";
   RunOptions options;
   options.config = dir / "mp.toml";
   options.out_dir = dir / "out";
@@ -221,9 +218,6 @@ TEST_CASE("plydem run crossply at the material point: traction-free cracks, 0 de
   CHECK(density < 0.6 * 10);  // fewer than every column (0.1 mm particles)
   CHECK(free == doctest::Approx(density));
   CHECK(strength * 1e6 > 0.8 * 0.5 * m.strength.XT);
-  REQUIRE(rows.count("[0/90]s|onset_stress|dem with cure") == 1);
-  CHECK(rows.at("[0/90]s|onset_stress|dem with cure") < rows.at("[0/90]s|onset_stress|dem"));
-  CHECK(rows.count("[0/90]s|strength|dem with cure") == 1);
 }
 
 TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming it") {
