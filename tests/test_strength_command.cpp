@@ -589,10 +589,9 @@ TEST_CASE("strength test at the material point: the crack picture draws each sit
 }
 
 TEST_CASE("strength test at the material point: softening cracks dissipate G over their area") {
-  for (double angle : {90.0, 0.0}) {
-    check_crack_energy(eglass(), angle, 0.1e-3);
-    check_crack_energy(carbon_ply(), angle, 0.1e-3);
-  }
+  // E-glass across the fibres, the carbon ply along them (the other two: the finer case's).
+  check_crack_energy(eglass(), 90, 0.1e-3);
+  check_crack_energy(carbon_ply(), 0, 0.1e-3);
   // Brittle, the same crack dissipates what its bonds held at the peak: far less than G w t here
   // (the characteristic length E2 G / YT^2 is 3 mm, the sites 0.1 mm).
   const StrengthSettings s = crack_coupon(eglass(), 90, 0.1e-3);
@@ -656,6 +655,8 @@ TEST_CASE("finer particles: at the material point, YT, XC, YC, S12 and off axis 
   check_crack_energy(eglass(), 90, 0.05e-3);
   check_crack_energy(eglass(), 0, 0.05e-3);
   check_crack_energy(carbon_ply(), 90, 0.05e-3);
+  check_crack_energy(eglass(), 0, 0.1e-3);
+  check_crack_energy(carbon_ply(), 90, 0.1e-3);
   // E-glass's 0 deg coupon at 0.1 mm only: at 0.05 mm its splits after the peak take 5 s.
   check_compression_peaks(
       {{eglass(), 90, 0.05e-3}, {carbon_ply(), 0, 0.05e-3}, {carbon_ply(), 90, 0.05e-3}});
