@@ -961,6 +961,7 @@ class EventLoop {
         first_energy_ = state_.energy;
         first_reaction_ = std::abs(state_.reaction);
       }
+      result_.final_stiffness_ratio = std::abs(state_.reaction) / first_reaction_;
       if (failed_at_material_point()) {
         result_.stop = "failed";
         break;
@@ -1011,6 +1012,7 @@ class EventLoop {
     } catch (const Error& e) {  // a factorization after breaks found a mechanism
       result_.stop = "failed";
       result_.message = e.what();
+      result_.final_stiffness_ratio = 0;
       return false;
     }
     return true;

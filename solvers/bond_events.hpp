@@ -81,6 +81,7 @@
 ///   their damage dissipates, whatever the rest of the coupon releases as it re-equilibrates.
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -234,6 +235,10 @@ struct EventsResult {
   /// Sites whose crack was still softening when the run stopped (their energy so far is in
   /// crack_energy, their area not in crack_area).
   int softening_sites = 0;
+  /// The coupon's stiffness after the last event (its reaction at unit load) over the intact
+  /// coupon's: how far the run followed the damage (0 where a factorization found a mechanism,
+  /// NaN before the first solve).
+  double final_stiffness_ratio = std::numeric_limits<double>::quiet_NaN();
   double wall_seconds = 0;
 };
 

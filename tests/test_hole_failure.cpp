@@ -241,6 +241,19 @@ TEST_CASE("plydem run hole_failure.toml --quick: notched below unnotched, Kt, ma
   const double final_state = rows.at("notched|broken bonds at final|dem square");
   CHECK(half <= peak);
   CHECK(peak < final_state);
+  // Both plates followed to final failure (stop_fraction 0.02: the grip force and the plate's
+  // stiffness below 2% of theirs), not stopped by max_events nor at half the peak.
+  std::ifstream report_file(dir / "report.md");
+  const std::string report(std::istreambuf_iterator<char>(report_file), {});
+  std::size_t failed = 0;
+  for (std::size_t at = report.find("events (stopped: failed)"); at != std::string::npos;
+       at = report.find("events (stopped: failed)", at + 1))
+    ++failed;
+  CHECK(failed == 2);
+  for (const char* plate : {"notched", "unnotched"}) {
+    INFO(plate);
+    CHECK(rows.at(fmt::format("{}|final stiffness over intact|dem square", plate)) < 0.02);
+  }
   for (const char* file :
        {"report.md", "hole_failure_notched_cracks.csv", "vtu/hole_failure_notched.pvd",
         "vtu/hole_failure_unnotched.pvd", "vtu/hole_failure_damage_maps.pvd"}) {

@@ -287,6 +287,7 @@ nlohmann::json strength_json(const StrengthResult& r, const StrengthSettings& s)
   if (r.weibull_modulus > 0) j["seed"] = r.seed;
   j["delta_T"] = r.delta_T;  // [K], the cure the test started from (0: none)
   j["stop"] = r.stop;
+  j["final_stiffness_ratio"] = finite_or_null(r.final_stiffness_ratio);
   add_failure_model_json(r, j);
   j["factorizations"] = r.factorizations;
   j["solves"] = r.solves;

@@ -1149,6 +1149,7 @@ void take_events_result(const EventsResult& run, StrengthResult& result) {
   result.crack_fracture_energy = run.crack_fracture_energy;
   result.brittle_sites = run.brittle_sites;
   result.softening_sites = run.softening_sites;
+  result.final_stiffness_ratio = run.final_stiffness_ratio;
   const std::size_t peak = static_cast<std::size_t>(result.peak) + 1;
   result.strength = result.stress[peak];
   result.strain_at_peak = result.strain[peak];

@@ -271,6 +271,9 @@ struct StrengthResult {
   double crack_fracture_energy = 0;
   int brittle_sites = 0;
   int softening_sites = 0;  ///< still softening at the stop (EventsResult::softening_sites)
+  /// The events method's: the coupon's stiffness after the last event over the intact coupon's
+  /// (EventsResult::final_stiffness_ratio); NaN by the explicit method.
+  double final_stiffness_ratio = std::numeric_limits<double>::quiet_NaN();
   /// In-plane shear of a material with a shear_curve (solvers/plastic_shear.hpp): its points
   /// beside the simulated curve (a ply at 0 or 90 deg, where gamma_xy is gamma12; empty
   /// otherwise), the fitted law's exponent eta and the sites' plastic work [J].

@@ -115,6 +115,9 @@ ExperimentOutput strength_output(const StrengthResult& r, const fs::path& out_di
     row(fmt::format("broken bonds {} tension", b.family), dem, b.tension, "1");
     row(fmt::format("broken bonds {} shear", b.family), dem, b.shear, "1");
   }
+  // How far past the peak the run went (events): the coupon's stiffness after the last event
+  // over the intact coupon's.
+  row("final stiffness over intact", dem, r.final_stiffness_ratio, "1");
   row("events", dem, static_cast<double>(r.events), "1");
   row("energy released", dem, r.dissipated_energy, "J");
   row("wall time", dem, r.wall_seconds, "s");
