@@ -186,6 +186,14 @@ TEST_CASE("plydem run crossply.toml --quick: first-ply failure, cracks and stiff
     CHECK(fem < 1.0);
     CHECK(fem > m.E1 / (m.E1 + m.E2));
     CHECK(report.find("E/E0 CalculiX, same cracks") != std::string::npos);
+    // The mesh twice as coarse is stiffer (the crack tips' error), and the extrapolation to a
+    // fine mesh, 2 R(h) - R(2h), softer than the config's mesh.
+    const double coarse =
+        rows.at("[0/90]s|stiffness ratio at peak between grips|calculix same cracks coarse mesh");
+    const double extrapolated =
+        rows.at("[0/90]s|stiffness ratio at peak between grips|calculix same cracks extrapolated");
+    CHECK(coarse > fem);
+    CHECK(extrapolated == doctest::Approx(2 * fem - coarse).epsilon(1e-9));
   } else {
     CHECK(report.find("CalculiX not run") != std::string::npos);
   }

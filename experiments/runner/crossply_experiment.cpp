@@ -120,11 +120,31 @@ double ninety_density(const std::vector<std::vector<CrackPlane>>& planes, double
 }
 
 // CalculiX of the cross-ply with the DEM's transverse cracks cut in: its axial stiffness between
-// the grips over the intact laminate's.
+// the grips over the intact laminate's, on the config's mesh and extrapolated to a fine one.
+//
+// The crack tips make the cracked stiffness converge at first order in the element size: on a
+// [0/90_2]s coupon 4 x 0.5 mm with 3 or 8 cracks cut by hand through the 90° layer or staggered
+// through half of it (0.1 mm particles; C3D8I at 1, 2 and 4 elements per ply, 0.1, 0.05 and
+// 0.025 mm), K/K0 fell by 0.0163, 0.0081 (aligned, 3), 0.0191, 0.0088 (aligned, 8), 0.0330,
+// 0.0145 and 0.0433, 0.0172 (staggered) as the mesh halved: each difference about half the one
+// before (ratios 2.0 to 2.5). So the mesh the config names (h) is stiff by about the difference
+// to the mesh twice as coarse (2h), and Richardson's extrapolation 2 R(h) - R(2h) removes it:
+// from 1 and 2 elements per ply it gives 0.730, 0.637, 0.816 and 0.685 where the 2 and 4
+// per ply give 0.730, 0.638, 0.820 and 0.694. Where the change shrank only 2.5-fold per halving
+// (the slowest measured), the limit lies nearer R(h): R(h) - (R(2h) - R(h)) / 1.5.
+constexpr double kSlowestHalving = 2.5;
+
 struct FemCrackedStiffness {
   std::string skipped;  ///< why it did not run ("" when it did)
   int cracks = 0;       ///< FEM cracks cut
-  double ratio = 1;     ///< K cracked / K intact
+  double ratio = 1;     ///< K cracked / K intact on the config's mesh (h)
+  /// The same on the mesh twice as coarse (2h: half the elements per ply); NaN where the config's
+  /// elements per ply are odd.
+  double coarse_ratio = NAN;
+  /// 2 ratio - coarse_ratio: Richardson's first-order extrapolation to h -> 0 (NaN as above).
+  double extrapolated = NAN;
+  /// The extrapolation where the change shrinks kSlowestHalving-fold per halving of the mesh.
+  double extrapolated_slow = NAN;
 };
 
 // The 90° plies' crack planes gathered across the plies: planes of different 90° plies within a
@@ -163,10 +183,21 @@ FemCrackedStiffness fem_cracked_stiffness(const std::vector<std::vector<CrackPla
     k = j;
   }
   out.cracks = static_cast<int>(cracked.cracks.size());
-  const FemSolution whole = run_calculix(intact, settings);
-  const FemSolution cut = run_calculix(cracked, settings);
-  out.ratio =
-      (cut.reaction_force / cut.end_displacement) / (whole.reaction_force / whole.end_displacement);
+  auto ratio_on = [&](const FemSettings& mesh) {
+    const FemSolution whole = run_calculix(intact, mesh);
+    const FemSolution cut = run_calculix(cracked, mesh);
+    return (cut.reaction_force / cut.end_displacement) /
+           (whole.reaction_force / whole.end_displacement);
+  };
+  out.ratio = ratio_on(settings);
+  if (settings.mesh.elements_per_ply % 2 == 0) {
+    FemSettings coarse = settings;
+    coarse.mesh.elements_per_ply /= 2;
+    coarse.mesh.element_size *= 2;
+    out.coarse_ratio = ratio_on(coarse);
+    out.extrapolated = 2 * out.ratio - out.coarse_ratio;
+    out.extrapolated_slow = out.ratio - (out.coarse_ratio - out.ratio) / (kSlowestHalving - 1);
+  }
   return out;
 }
 
@@ -585,9 +616,12 @@ struct LaminateTargets {
   double layer = 0;                        ///< the 90° layer's thickness [m]
   double band_low = NAN, band_high = NAN;  ///< crack multiplication at the DEM's strength [1/m]
   double free_density = 0;                 ///< traction-free cracks per m at the peak
-  double dem_grips = NAN, fem = NAN;       ///< E/E0 between the grips: DEM, CalculiX same cracks
-  double strength_ratio = NAN;             ///< strength over the fibre-failure bound
-  double onset_strain_cured = NAN;         ///< DEM, pulled from the cured state
+  double dem_grips = NAN;                  ///< E/E0 between the grips: DEM
+  /// CalculiX with the same cracks: extrapolated to a fine mesh where it could be (else NaN), and
+  /// on the config's mesh.
+  double fem_extrapolated = NAN, fem_extrapolated_slow = NAN, fem = NAN;
+  double strength_ratio = NAN;      ///< strength over the fibre-failure bound
+  double onset_strain_cured = NAN;  ///< DEM, pulled from the cured state
 };
 
 // The laminate's onset, saturation and strength beside the fracture-mechanics references: its
@@ -799,18 +833,19 @@ void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const f
   double fpf = NAN;
   for (const CriterionStrength& cs : r.theory)
     if (cs.criterion == FailureCriterion::kMaxStress && cs.strength) fpf = *cs.strength;
-  table += markdown_row({text, fmt::format("{:.2f}", r.first_failure_stress * kMPaPerPa),
-                         fmt::format("{:.2f}", fpf * kMPaPerPa),
-                         fmt::format("{:+.2f}%", 100 * (r.first_failure_stress / fpf - 1)),
-                         fmt::format("{:.1f}", r.strength * kMPaPerPa),
-                         fmt::format("{:.3f}", r.strain_at_peak * 100),
-                         fmt::format("{:.3g}", last_density * kMetresPerMm),
-                         fmt::format("{:.3g}", traction_free_density * kMetresPerMm),
-                         fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
-                         fmt::format("{:.3f}", hashin_ratio), fmt::format("{:.3f}", discount),
-                         fmt::format("{:.3f}", dem_grips),
-                         fem_same.skipped.empty() ? fmt::format("{:.3f}", fem_same.ratio) : "-",
-                         fmt::format("{}", fem_same.cracks), fmt::format("{}", r.events)});
+  table += markdown_row(
+      {text, fmt::format("{:.2f}", r.first_failure_stress * kMPaPerPa),
+       fmt::format("{:.2f}", fpf * kMPaPerPa),
+       fmt::format("{:+.2f}%", 100 * (r.first_failure_stress / fpf - 1)),
+       fmt::format("{:.1f}", r.strength * kMPaPerPa), fmt::format("{:.3f}", r.strain_at_peak * 100),
+       fmt::format("{:.3g}", last_density * kMetresPerMm),
+       fmt::format("{:.3g}", traction_free_density * kMetresPerMm),
+       fmt::format("{:.3f}", last_ratio), fmt::format("{:.3f}", lag_ratio),
+       fmt::format("{:.3f}", hashin_ratio), fmt::format("{:.3f}", discount),
+       fmt::format("{:.3f}", dem_grips),
+       fem_same.skipped.empty() ? fmt::format("{:.3f}", fem_same.ratio) : "-",
+       std::isfinite(fem_same.extrapolated) ? fmt::format("{:.3f}", fem_same.extrapolated) : "-",
+       fmt::format("{}", fem_same.cracks), fmt::format("{}", r.events)});
   auto row = [&](const std::string& quantity, const std::string& source, double value,
                  const std::string& unit) {
     if (std::isfinite(value)) out.rows.push_back({name, text, quantity, source, value, unit});
@@ -827,13 +862,21 @@ void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const f
       traction_free_density * kMetresPerMm, "1/mm");
   if (fem_same.skipped.empty()) {
     row("stiffness ratio at peak between grips", "calculix same cracks", fem_same.ratio, "1");
+    row("stiffness ratio at peak between grips", "calculix same cracks coarse mesh",
+        fem_same.coarse_ratio, "1");
+    row("stiffness ratio at peak between grips", "calculix same cracks extrapolated",
+        fem_same.extrapolated, "1");
     row("cracks cut in calculix", "calculix same cracks", fem_same.cracks, "1");
   }
   targets.emplace_back();
   const CrackingReferences refs = cracking_references(cs, run);
   report_fracture_mechanics(cs, run, refs, samples, row, fracture_table, density_curves,
                             targets.back());
-  if (fem_same.skipped.empty()) targets.back().fem = fem_same.ratio;
+  if (fem_same.skipped.empty()) {
+    targets.back().fem = fem_same.ratio;
+    targets.back().fem_extrapolated = fem_same.extrapolated;
+    targets.back().fem_extrapolated_slow = fem_same.extrapolated_slow;
+  }
   if (!run.cure_dem.empty()) report_cure(run, refs, row, cure_table);
 }
 
@@ -919,7 +962,7 @@ std::string targets_why(const CrossplySettings& cs) {
 std::string targets_markdown(const CrossplySettings& cs, const std::vector<LaminateTargets>& t) {
   std::string table =
       markdown_row({"target", "laminate", "measured", "met"}) + "|---|---|--:|---|\n";
-  bool missed = false;
+  bool missed = false, stiffness_missed = false;
   auto add = [&](const std::string& target, const std::string& text, const std::string& value,
                  bool met) {
     table += markdown_row({target, text, value, met ? "yes" : "**no**"});
@@ -949,8 +992,18 @@ std::string targets_markdown(const CrossplySettings& cs, const std::vector<Lamin
         fmt::format("{:.2f} of {:.2f} /mm", x.free_density * kMetresPerMm,
                     x.density * kMetresPerMm),
         x.free_density >= x.density);
-    if (std::isfinite(x.fem) && std::isfinite(x.dem_grips))
-      add("stiffness within 3% of CalculiX, same cracks", x.text,
+    if (std::isfinite(x.fem_extrapolated) && std::isfinite(x.dem_grips)) {
+      // Met where both extrapolations (first order, and the slowest convergence measured) are.
+      const double first = x.dem_grips / x.fem_extrapolated - 1;
+      const double slow = x.dem_grips / x.fem_extrapolated_slow - 1;
+      add("stiffness within 3% of CalculiX, same cracks (extrapolated to a fine mesh)", x.text,
+          fmt::format("{:+.1f}% ({:+.1f}% at the slowest convergence measured; on the config's "
+                      "mesh {:+.1f}%)",
+                      100 * first, 100 * slow, 100 * (x.dem_grips / x.fem - 1)),
+          std::abs(first) <= 0.03 && std::abs(slow) <= 0.03);
+      stiffness_missed = stiffness_missed || std::abs(first) > 0.03 || std::abs(slow) > 0.03;
+    } else if (std::isfinite(x.fem) && std::isfinite(x.dem_grips))
+      add("stiffness within 3% of CalculiX, same cracks (the config's mesh)", x.text,
           fmt::format("{:+.1f}%", 100 * (x.dem_grips / x.fem - 1)),
           std::abs(x.dem_grips / x.fem - 1) <= 0.03);
     add("strength ≥ 0.8 of the fibre-failure bound", x.text,
@@ -964,6 +1017,13 @@ std::string targets_markdown(const CrossplySettings& cs, const std::vector<Lamin
       "shows the path).\n\n" +
       table + "\n";
   if (missed) md += targets_why(cs) + "\n\n";
+  if (stiffness_missed)
+    md +=
+        "The stiffness: the DEM's plies are one particle layer each, so a crack that ends inside "
+        "the 90° layer (the cracks of its plies at different x) is softer than the continuum's: "
+        "on [0/90_2]s with cracks cut by hand (tests/test_cracked_laminate.cpp's coupon, "
+        "CalculiX at 4 elements per ply), 3 and 8 cracks through the whole 90° layer gave "
+        "-2.5% and -3.5% against CalculiX, staggered through half of it -4.6% and -6.5%.\n\n";
   return md;
 }
 
@@ -1019,8 +1079,8 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
                     "90° transverse cracks per mm at the peak", "of which traction-free, per mm",
                     "E/E0 DEM", "E/E0 shear lag", "E/E0 Hashin variational", "E/E0 ply discount",
                     "E/E0 DEM between the grips", "E/E0 CalculiX, same cracks",
-                    "cracks cut in CalculiX", "events"}) +
-      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+                    "E/E0 CalculiX, same cracks, h → 0", "cracks cut in CalculiX", "events"}) +
+      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
   std::string fem_notes;
   std::string sections;
   std::vector<Curve> curves;
@@ -1090,7 +1150,13 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
       "laminate between the grips (C3D8I, {:g} mm elements, {} per ply, ends moved along x and "
       "free laterally) with the DEM's transverse crack planes at the peak cut in "
       "(traction-free; planes of different 90° plies within a quarter diameter of each other "
-      "one crack through them), over the intact laminate's. {}\n\n{}{}\n{}\n",
+      "one crack through them), over the intact laminate's. The crack tips make CalculiX's "
+      "cracked stiffness converge at first order in the element size (each halving of the mesh "
+      "halves the change, measured at 1, 2 and 4 elements per ply): *h → 0* is Richardson's "
+      "extrapolation 2 R(h) − R(2h), with R(2h) CalculiX at twice the element size and half the "
+      "elements per ply (left out where the elements per ply are odd); where the change shrank "
+      "only 2.5-fold per halving, the slowest measured, the limit is R(h) − (R(2h) − R(h)) / 1.5, "
+      "which the stiffness target reads too. {}\n\n{}{}\n{}\n",
       100 * kSpanningFraction, fem.mesh.element_size / kMetresPerMm, fem.mesh.elements_per_ply,
       base.interface.transverse_shear
           ? "The plies carry the laminate's transverse shear (G13, G23; interface "
