@@ -1063,6 +1063,38 @@ std::string fracture_mechanics_markdown(const CrossplySettings& cs, const std::s
   return md;
 }
 
+// The report's tables, their header rows: the summary, the fracture mechanics and the cure.
+struct CrossplyTables {
+  std::string summary, fracture, cure;
+};
+
+CrossplyTables crossply_table_headers() {
+  CrossplyTables t;
+  t.summary =
+      markdown_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
+                    "DEM vs it", "strength (MPa)", "strain at peak (%)",
+                    "90° transverse cracks per mm at the peak", "of which traction-free, per mm",
+                    "E/E0 DEM", "E/E0 shear lag", "E/E0 Hashin variational", "E/E0 ply discount",
+                    "E/E0 DEM between the grips", "E/E0 CalculiX, same cracks",
+                    "E/E0 CalculiX, same cracks, h → 0", "cracks cut in CalculiX", "events"}) +
+      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+  t.fracture =
+      markdown_row({"laminate", "90° layer (mm)", "onset DEM (MPa, strain)", "90° plies at YT, CLT",
+                    "in-situ strength (Camanho 2006)", "isolated crack at G_Ic",
+                    "cracks per mm at the peak, DEM", "× 90° layer thickness",
+                    "crack multiplication 1/L* – 2/L* at the DEM's strength", "strength DEM (MPa)",
+                    "fibre-failure bound (MPa)", "DEM / bound"}) +
+      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+  t.cure = markdown_row({"laminate", "square coupon (mm)", "90° sigma2 DEM (MPa)", "90° sigma2 CLT",
+                         "DEM vs CLT", "0° sigma1 DEM (MPa)", "0° sigma1 CLT", "DEM vs CLT",
+                         "onset at YT with cure (MPa)", "in-situ onset with cure",
+                         "isolated-crack onset with cure", "DEM onset with cure (MPa, strain %)",
+                         "DEM onset without", "cracks/mm at the peak with cure",
+                         "strength with cure (MPa)"}) +
+           "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+  return t;
+}
+
 ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<LaminateRun>& runs,
                                  const ExperimentContext& context) {
   const std::string& name = cs.name;
@@ -1073,33 +1105,14 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
   ExperimentOutput out;
   out.title =
       fmt::format("Transverse cracking of cross-plies: {} ({})", material.name, base.strategy);
-  std::string table =
-      markdown_row({"laminate", "first failure DEM (MPa)", "first-ply failure, max-stress (MPa)",
-                    "DEM vs it", "strength (MPa)", "strain at peak (%)",
-                    "90° transverse cracks per mm at the peak", "of which traction-free, per mm",
-                    "E/E0 DEM", "E/E0 shear lag", "E/E0 Hashin variational", "E/E0 ply discount",
-                    "E/E0 DEM between the grips", "E/E0 CalculiX, same cracks",
-                    "E/E0 CalculiX, same cracks, h → 0", "cracks cut in CalculiX", "events"}) +
-      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+  CrossplyTables tables = crossply_table_headers();
+  std::string& table = tables.summary;
+  std::string& fracture_table = tables.fracture;
+  std::string& cure_table = tables.cure;
   std::string fem_notes;
   std::string sections;
   std::vector<Curve> curves;
-  std::string fracture_table =
-      markdown_row({"laminate", "90° layer (mm)", "onset DEM (MPa, strain)", "90° plies at YT, CLT",
-                    "in-situ strength (Camanho 2006)", "isolated crack at G_Ic",
-                    "cracks per mm at the peak, DEM", "× 90° layer thickness",
-                    "crack multiplication 1/L* – 2/L* at the DEM's strength", "strength DEM (MPa)",
-                    "fibre-failure bound (MPa)", "DEM / bound"}) +
-      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
   std::vector<Curve> density_curves;
-  std::string cure_table =
-      markdown_row({"laminate", "square coupon (mm)", "90° sigma2 DEM (MPa)", "90° sigma2 CLT",
-                    "DEM vs CLT", "0° sigma1 DEM (MPa)", "0° sigma1 CLT", "DEM vs CLT",
-                    "onset at YT with cure (MPa)", "in-situ onset with cure",
-                    "isolated-crack onset with cure", "DEM onset with cure (MPa, strain %)",
-                    "DEM onset without", "cracks/mm at the peak with cure",
-                    "strength with cure (MPa)"}) +
-      "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
   std::vector<LaminateTargets> targets;
   for (const LaminateRun& run : runs) {
     if (!run.finest) continue;
