@@ -186,6 +186,9 @@ std::string format_strength_table(const StrengthResult& r, const StrengthSetting
     out += fmt::format(
         "\n{} events (stopped: {}), {} factorizations, {} solves, energy released {:.4g} J\n",
         r.events, r.stop, r.factorizations, r.solves, r.dissipated_energy);
+    if (std::isfinite(r.final_stiffness_ratio))
+      out += fmt::format("stiffness after the last event: {:.4g} of the intact coupon's\n",
+                         r.final_stiffness_ratio);
   }
   out += fmt::format("building {:.2f} s, wall time {:.2f} s\n", r.build_seconds, r.wall_seconds);
   return out;
