@@ -328,6 +328,25 @@ KindSettings crossply_kind_settings() {
           crossply_own_keys()};
 }
 
+// The secant stiffness (the path unloads to the origin) against the 90° crack density at up to
+// kStiffnessSamples critical states, over the free length between the grips.
+struct StiffnessSamples {
+  Curve dem;
+  /// The 90° crack density [1/mm] against the largest laminate stress reached so far [MPa], up to
+  /// the peak.
+  Curve density_against_stress;
+  std::string csv;                          ///< STEM_crack_planes.csv
+  double last_density = 0, last_ratio = 1;  ///< at the last sample up to the peak
+};
+
+// The DEM's first transverse crack: the first critical state at which a 90° crack plane spans
+// kSpanningFraction of the width. Its stress and strain are the largest the load reached before
+// (a load-controlled test had to reach it: the crack's last bond broke at the state before).
+struct CrackOnset {
+  bool found = false;
+  double stress = NAN, strain = NAN;  ///< [Pa], gauge strain
+};
+
 // One laminate pulled to failure, its 90° plies' cracks at the peak and CalculiX with them cut in.
 struct LaminateRun {
   std::string text;     ///< the layup as written
@@ -348,7 +367,12 @@ struct LaminateRun {
   /// thermal.delta_T: the same laminate pulled to failure from its cured state (at the finest
   /// size; its own CalculiX and cure check left out), else null.
   std::shared_ptr<const LaminateRun> cured;
+  CrackOnset onset;          ///< find_onset, once the run is done
+  StiffnessSamples samples;  ///< sample_stiffness, once the run is done
 };
+
+CrackOnset find_onset(const LaminateRun& run);
+StiffnessSamples sample_stiffness(const LaminateRun& run);
 
 // The cure of the laminate on a square coupon five laminate thicknesses wide (the crossply
 // coupon is narrower than the laminate is thick: its free edges reach everywhere), its plies'
@@ -430,6 +454,8 @@ LaminateRun run_laminate(const CrossplySettings& cs, std::size_t k, double diame
     run.fem_same = fem_cracked_stiffness(peak_planes, ninety, specimen, x_begin,
                                          s.coupon.particle_diameter, cs.fem);
   }
+  run.onset = find_onset(run);
+  run.samples = sample_stiffness(run);
   if (cs.delta_T != 0 && run.finest && delta_T == 0) {
     solve_laminate_cure(cs, builder, run);
     run.cured = std::make_shared<const LaminateRun>(
@@ -449,17 +475,6 @@ std::vector<LaminateRun> run_crossply(const CrossplySettings& cs, const Experime
       runs.push_back(run_laminate(cs, k, diameter, builder, ccx));
   return runs;
 }
-
-// The secant stiffness (the path unloads to the origin) against the 90° crack density at up to
-// kStiffnessSamples critical states, over the free length between the grips.
-struct StiffnessSamples {
-  Curve dem;
-  /// The 90° crack density [1/mm] against the largest laminate stress reached so far [MPa], up to
-  /// the peak.
-  Curve density_against_stress;
-  std::string csv;                          ///< STEM_crack_planes.csv
-  double last_density = 0, last_ratio = 1;  ///< at the last sample up to the peak
-};
 
 StiffnessSamples sample_stiffness(const LaminateRun& run) {
   const std::string& text = run.text;
@@ -571,14 +586,6 @@ CrackingReferences cracking_references(const CrossplySettings& cs, const Laminat
   return r;
 }
 
-// The DEM's first transverse crack: the first critical state at which a 90° crack plane spans
-// kSpanningFraction of the width. Its stress and strain are the largest the load reached before
-// (a load-controlled test had to reach it: the crack's last bond broke at the state before).
-struct CrackOnset {
-  bool found = false;
-  double stress = NAN, strain = NAN;  ///< [Pa], gauge strain
-};
-
 CrackOnset find_onset(const LaminateRun& run) {
   const StrengthResult& r = run.result;
   const std::size_t states = r.stress.size();
@@ -634,7 +641,7 @@ void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& ru
                                std::vector<Curve>& density_curves, LaminateTargets& targets) {
   const StrengthResult& r = run.result;
   const Material& material = cs.reference_material;
-  const CrackOnset onset = find_onset(run);
+  const CrackOnset& onset = run.onset;
   auto onset_rows = [&](const std::string& source, double stress) {
     row("onset_stress", source, stress * kMPaPerPa, "MPa");
     row("onset_strain", source, 100 * stress / refs.ex, "%");
@@ -653,13 +660,13 @@ void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& ru
   }
   if (run.cured) {  // the same laminate pulled from its cured state
     const LaminateRun& cured = *run.cured;
-    const CrackOnset cured_onset = find_onset(cured);
+    const CrackOnset& cured_onset = cured.onset;
     if (cured_onset.found) {
       row("onset_stress", "dem with cure", cured_onset.stress * kMPaPerPa, "MPa");
       row("onset_strain", "dem with cure", 100 * cured_onset.strain, "%");
       targets.onset_strain_cured = cured_onset.strain;
     }
-    StiffnessSamples cured_samples = sample_stiffness(cured);
+    StiffnessSamples cured_samples = cured.samples;
     row("saturation_crack_density", "dem with cure", cured_samples.last_density * kMetresPerMm,
         "1/mm");
     row("strength", "dem with cure", cured.result.strength * kMPaPerPa, "MPa");
@@ -731,13 +738,13 @@ void report_cure(const LaminateRun& run, const CrackingReferences& refs, const R
   const double half_pi = std::numbers::pi / 2;
   auto onset_text = [](const LaminateRun* r) {
     if (!r) return std::string("-");
-    const CrackOnset onset = find_onset(*r);
+    const CrackOnset& onset = r->onset;
     return onset.found
                ? fmt::format("{:.1f} ({:.3f}%)", onset.stress * kMPaPerPa, 100 * onset.strain)
                : std::string("no crack");
   };
   const LaminateRun* cured = run.cured.get();
-  const double cured_density = cured ? sample_stiffness(*cured).last_density : 0.0;
+  const double cured_density = cured ? cured->samples.last_density : 0.0;
   const PlyStress dem0 = in_ply(run.cure_dem[0], 0), clt0 = in_ply(run.cure_clt[0], 0);
   const PlyStress dem90 = in_ply(run.cure_dem[static_cast<std::size_t>(run.m)], half_pi);
   const PlyStress clt90 = in_ply(run.cure_clt[static_cast<std::size_t>(run.m)], half_pi);
@@ -801,7 +808,7 @@ void report_laminate(const CrossplySettings& cs, const LaminateRun& run, const f
   out.files.insert(out.files.end(), one.files.begin(), one.files.end());
   sections += one.report_markdown;
   const double b = m * t, d = n * t;
-  const StiffnessSamples samples = sample_stiffness(run);
+  const StiffnessSamples& samples = run.samples;
   const double last_density = samples.last_density, last_ratio = samples.last_ratio;
   curves.push_back(samples.dem);
   const fs::path planes_file = fs::path(stem + "_crack_planes.csv");
@@ -888,7 +895,7 @@ struct SizeFigures {
 };
 
 SizeFigures size_figures(const LaminateRun& run) {
-  return {find_onset(run), sample_stiffness(run).last_density, run.result.strength};
+  return {run.onset, run.samples.last_density, run.result.strength};
 }
 
 // Each laminate at every particle size (coupon.diameters_mm): the coarser sizes' rows (source
