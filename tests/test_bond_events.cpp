@@ -98,6 +98,43 @@ Model hex2d_coupon(double length, double width, double diameter, double ply_angl
   return strategy->build(spec).model;
 }
 
+// Five particles in a row along x, d apart, joined by four bonds of different stiffness and
+// strength, the left end held and the right one pulled `travel` along x at unit load; the bond
+// that breaks first in series (the smallest sigma_c pi R^2), its force, and the chain's compliance
+// sum 1 / k_n, by hand.
+struct Chain {
+  static constexpr double d = 1e-4, travel = 1e-6;
+  Model model;
+  DofConstraints unit{5};
+  DofFlags reaction = flags_for(5);
+  int weakest = 0;
+  double weakest_force = kInf, compliance = 0;
+};
+
+Chain chain() {
+  Chain c;
+  std::vector<Eigen::Vector3d> x;
+  for (int i = 0; i < 5; ++i) x.emplace_back(i * Chain::d, 0, 0);
+  c.model = particles_at(x, 0.5 * Chain::d);
+  const std::vector<double> kn = {1e6, 2e6, 1.5e6, 3e6}, radius = {2e-5, 2.5e-5, 1.8e-5, 2.2e-5},
+                            tensile = {60e6, 40e6, 50e6, 45e6};
+  std::vector<BondSpec> specs;
+  for (int b = 0; b < 4; ++b) {
+    specs.push_back({b, b + 1, kn[b], 0.5e6, 1e-3, 1e-3, radius[b], tensile[b], 80e6, 1});
+    c.compliance += 1 / kn[b];
+    const double force = tensile[b] * kPi * radius[b] * radius[b];
+    if (force < c.weakest_force) {
+      c.weakest_force = force;
+      c.weakest = b;
+    }
+  }
+  add_bonds(c.model, specs);
+  c.unit.fix_particle(0);
+  c.unit.fix_particle(4, {Chain::travel, 0, 0});
+  c.reaction(4, 0) = true;
+  return c;
+}
+
 bool in_grip(const Model& m, int i, double d) {
   const Particles& p = m.particles;
   const double x = p.reference_position(i, 0);
@@ -108,38 +145,16 @@ bool in_grip(const Model& m, int i, double d) {
 }  // namespace
 
 TEST_CASE("a chain in series breaks at its weakest bond at the load factor computed by hand") {
-  const double d = 1e-4, travel = 1e-6;
-  std::vector<Eigen::Vector3d> x;
-  for (int i = 0; i < 5; ++i) x.emplace_back(i * d, 0, 0);
-  Model m = particles_at(x, 0.5 * d);
-  const std::vector<double> kn = {1e6, 2e6, 1.5e6, 3e6}, radius = {2e-5, 2.5e-5, 1.8e-5, 2.2e-5},
-                            tensile = {60e6, 40e6, 50e6, 45e6};
-  std::vector<BondSpec> specs;
-  for (int b = 0; b < 4; ++b)
-    specs.push_back({b, b + 1, kn[b], 0.5e6, 1e-3, 1e-3, radius[b], tensile[b], 80e6, 1});
-  add_bonds(m, specs);
-  DofConstraints unit(5);
-  unit.fix_particle(0);
-  unit.fix_particle(4, {travel, 0, 0});
-  DofFlags reaction = flags_for(5);
-  reaction(4, 0) = true;
-
   // In series every bond carries F = k_eff u with 1 / k_eff = sum 1 / k_n: the bond with the
   // smallest sigma_c pi R^2 breaks first, at lambda = sigma_c A / (k_eff travel).
-  double compliance = 0;
-  for (double k : kn) compliance += 1 / k;
-  int weakest = 0;
-  double weakest_force = kInf;
-  for (int b = 0; b < 4; ++b) {
-    const double force = tensile[b] * kPi * radius[b] * radius[b];
-    if (force < weakest_force) {
-      weakest_force = force;
-      weakest = b;
-    }
-  }
+  Chain c = chain();
+  Model& m = c.model;
+  const double d = Chain::d, travel = Chain::travel, compliance = c.compliance;
+  const double weakest_force = c.weakest_force;
+  const int weakest = c.weakest;
   const double lambda = weakest_force * compliance / travel;
 
-  const EventsResult r = run_events(m, unit, reaction);
+  const EventsResult r = run_events(m, c.unit, c.reaction);
   REQUIRE(r.path.size() == 1);
   CHECK(r.path[0].bond == weakest);
   CHECK(relative(r.path[0].load_factor, lambda) < 1e-12);
@@ -172,38 +187,18 @@ TEST_CASE("a chain under a preload and free offsets breaks where the load comput
   // lambda = (F_c / k_eff - p0 + sum q) / travel, the reaction is F, the strain energy
   // F^2 / (2 k_eff). An offset larger than the preload's stretch leaves the chain in compression
   // before the load; one that stretches it past F_c breaks the weakest bond at lambda = 0.
-  const double d = 1e-4, travel = 1e-6;
-  std::vector<Eigen::Vector3d> x;
-  for (int i = 0; i < 5; ++i) x.emplace_back(i * d, 0, 0);
-  const std::vector<double> kn = {1e6, 2e6, 1.5e6, 3e6}, radius = {2e-5, 2.5e-5, 1.8e-5, 2.2e-5},
-                            tensile = {60e6, 40e6, 50e6, 45e6};
-  double compliance = 0, weakest_force = kInf;
-  int weakest = 0;
-  for (int b = 0; b < 4; ++b) {
-    compliance += 1 / kn[b];
-    const double force = tensile[b] * kPi * radius[b] * radius[b];
-    if (force < weakest_force) {
-      weakest_force = force;
-      weakest = b;
-    }
-  }
+  const double travel = Chain::travel;
   struct Case {
     double preload, offset;  // p0 and each of the two bonds' offset q, in travels
   };
   for (const Case& c : {Case{0.05, 0.0}, Case{0.04, -0.02}, Case{-0.4, 0.25}, Case{0.15, 0.0}}) {
     CAPTURE(c.preload);
     CAPTURE(c.offset);
-    Model m = particles_at(x, 0.5 * d);
-    std::vector<BondSpec> specs;
-    for (int b = 0; b < 4; ++b)
-      specs.push_back({b, b + 1, kn[b], 0.5e6, 1e-3, 1e-3, radius[b], tensile[b], 80e6, 1});
-    add_bonds(m, specs);
+    Chain held = chain();
+    Model& m = held.model;
+    const double compliance = held.compliance, weakest_force = held.weakest_force;
+    const int weakest = held.weakest;
     for (int b : {0, 2}) m.bonds.free_offset(b, 0) = c.offset * travel;
-    DofConstraints unit(5);
-    unit.fix_particle(0);
-    unit.fix_particle(4, {travel, 0, 0});
-    DofFlags reaction = flags_for(5);
-    reaction(4, 0) = true;
     EventSettings settings;
     settings.preload = DofArray::Zero(5, kDofsPerParticle);
     settings.preload(4, 0) = c.preload * travel;
@@ -211,7 +206,7 @@ TEST_CASE("a chain under a preload and free offsets breaks where the load comput
     const double before = c.preload * travel - 2 * c.offset * travel;  // stretch less offsets
     const double lambda = std::max(0.0, (weakest_force * compliance - before) / travel);
     const double force = (before + lambda * travel) / compliance;
-    const EventsResult r = run_events(m, unit, reaction, settings);
+    const EventsResult r = run_events(m, held.unit, held.reaction, settings);
     REQUIRE(r.path.size() == 1);
     CHECK(r.path[0].bond == weakest);
     CHECK(std::abs(r.path[0].load_factor - lambda) < 1e-12 * std::max(1.0, lambda));
