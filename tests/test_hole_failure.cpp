@@ -70,6 +70,12 @@ fs::path config_path() {
   return fs::path(PLYDEM_TEST_DATA_DIR) / ".." / ".." / "experiments" / "hole_failure.toml";
 }
 
+// The whole text of a file the run wrote (its report).
+std::string file_text(const fs::path& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
 }  // namespace
 
 TEST_CASE("the hole's stress concentration: isotropic 3, Heywood's width factor, bad constants") {
@@ -243,8 +249,7 @@ TEST_CASE("plydem run hole_failure.toml --quick: notched below unnotched, Kt, ma
   CHECK(peak < final_state);
   // Both plates followed to final failure (stop_fraction 0.02: the grip force and the plate's
   // stiffness below 2% of theirs), not stopped by max_events nor at half the peak.
-  std::ifstream report_file(dir / "report.md");
-  const std::string report(std::istreambuf_iterator<char>(report_file), {});
+  const std::string report = file_text(dir / "report.md");
   std::size_t failed = 0;
   for (std::size_t at = report.find("events (stopped: failed)"); at != std::string::npos;
        at = report.find("events (stopped: failed)", at + 1))
@@ -296,9 +301,7 @@ SizesRun run_at_sizes(const std::string& diameters_mm, const std::string& label)
   options.config = dir / "sizes.toml";
   options.out_dir = dir / "out";
   run_experiment(options);
-  std::ifstream report(dir / "out" / "report.md");
-  return {rows_of(dir / "out" / "results.csv"),
-          std::string(std::istreambuf_iterator<char>(report), {})};
+  return {rows_of(dir / "out" / "results.csv"), file_text(dir / "out" / "report.md")};
 }
 
 // The notched ratio of the finest size (source `dem square`) over the coarser one's, less one.
