@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -716,6 +717,36 @@ CriticalLoad preloaded_critical_load(const Bonds& bonds, int b, const BondParame
   return c;
 }
 
+// Bond b's responses at an equilibrium: to the unit solution `u` (without its free offset), and
+// with a preload (`preloaded`, else null) to the preload's state (with it) and the cross term of
+// its energy, so that its energy at lambda is preload + lambda cross + lambda^2 unit.
+struct BondEquilibrium {
+  BondParameters params, unit_params;  // the bond's, and without its free offset
+  BondResponse unit, preload;
+  double cross_energy = 0;
+};
+
+BondEquilibrium bond_equilibrium(const Bonds& bonds, int b, const Eigen::VectorXd& u,
+                                 const Eigen::VectorXd* preloaded) {
+  BondEquilibrium e;
+  const int i = bonds.first(b), j = bonds.second(b);
+  e.params = bond_parameters(bonds, b);
+  e.unit_params = e.params;
+  e.unit_params.free_offset.setZero();
+  const Eigen::Vector3d ui = segment(u, i, 0), ti = segment(u, i, 3);
+  const Eigen::Vector3d uj = segment(u, j, 0), tj = segment(u, j, 3);
+  e.unit = parallel_bond_response(e.unit_params, ui, ti, uj, tj);
+  if (!preloaded) return e;
+  const Eigen::VectorXd& p = *preloaded;
+  const Eigen::Vector3d pui = segment(p, i, 0), pti = segment(p, i, 3);
+  const Eigen::Vector3d puj = segment(p, j, 0), ptj = segment(p, j, 3);
+  e.preload = parallel_bond_response(e.params, pui, pti, puj, ptj);
+  const double both =
+      parallel_bond_response(e.params, pui + ui, pti + ti, puj + uj, ptj + tj).energy;
+  e.cross_energy = both - e.preload.energy - e.unit.energy;
+  return e;
+}
+
 // The unit-load equilibrium `u` (and with a preload its state `preloaded`, else null) into `s`:
 // energies, forces, the reaction and each bond's critical load factor.
 void evaluate(const Model& model, const Eigen::VectorXd& u, const Eigen::VectorXd* preloaded,
@@ -738,29 +769,22 @@ void evaluate(const Model& model, const Eigen::VectorXd& u, const Eigen::VectorX
   for (int b = 0; b < m; ++b) {
     if (bonds.is_broken(b)) continue;
     const int i = bonds.first(b), j = bonds.second(b);
-    const BondParameters params = bond_parameters(bonds, b);  // its free offset with it
-    BondParameters unit_params = params;
-    unit_params.free_offset.setZero();
+    const BondEquilibrium e = bond_equilibrium(bonds, b, u, preloaded);
+    const BondParameters& params = e.params;  // its free offset with it
+    const BondParameters& unit_params = e.unit_params;
+    s.energy += e.unit.energy;
+    s.bond_energy[b] = e.unit.energy;
+    add_response(e.unit, i, j, s.force);
+    if (s.preloaded) {
+      const auto k = static_cast<std::size_t>(b);
+      s.bond_preload_energy[k] = e.preload.energy;
+      s.bond_cross_energy[k] = e.cross_energy;
+      s.preload_energy += e.preload.energy;
+      s.cross_energy += e.cross_energy;
+      add_response(e.preload, i, j, s.preload_force);
+    }
     const Eigen::Vector3d ui = segment(u, i, 0), ti = segment(u, i, 3);
     const Eigen::Vector3d uj = segment(u, j, 0), tj = segment(u, j, 3);
-    const BondResponse r = parallel_bond_response(unit_params, ui, ti, uj, tj);
-    s.energy += r.energy;
-    s.bond_energy[b] = r.energy;
-    add_response(r, i, j, s.force);
-    if (s.preloaded) {
-      const Eigen::VectorXd& p = *preloaded;
-      const Eigen::Vector3d pui = segment(p, i, 0), pti = segment(p, i, 3);
-      const Eigen::Vector3d puj = segment(p, j, 0), ptj = segment(p, j, 3);
-      const BondResponse rp = parallel_bond_response(params, pui, pti, puj, ptj);
-      const double both =
-          parallel_bond_response(params, pui + ui, pti + ti, puj + uj, ptj + tj).energy;
-      const auto k = static_cast<std::size_t>(b);
-      s.bond_preload_energy[k] = rp.energy;
-      s.bond_cross_energy[k] = both - rp.energy - r.energy;
-      s.preload_energy += rp.energy;
-      s.cross_energy += s.bond_cross_energy[k];
-      add_response(rp, i, j, s.preload_force);
-    }
     if (!std::isfinite(bonds.tensile_strength(b)) && !std::isfinite(bonds.cohesion(b))) continue;
     const BondStresses stresses = intact_stresses(
         bond_stresses(unit_params, bonds.strength_radius(b), ui, ti, uj, tj), bonds.damage(b));
@@ -782,6 +806,27 @@ void evaluate(const Model& model, const Eigen::VectorXd& u, const Eigen::VectorX
   // The support's reaction is K u on its dof: minus the bonds' generalized force there.
   s.reaction = -(s.force * reaction_dofs.cast<double>()).sum();
   if (s.preloaded) s.preload_reaction = -(s.preload_force * reaction_dofs.cast<double>()).sum();
+}
+
+// The strain energies of an equilibrium: at unit load (`u`), and with a preload (`preloaded`, or
+// null) the preload's own and the cross term, so that the state at lambda holds
+// preload + lambda cross + lambda^2 unit (as UnitState).
+struct EquilibriumEnergies {
+  double unit = 0, cross = 0, preload = 0;
+};
+
+EquilibriumEnergies equilibrium_energies(const Model& model, const Eigen::VectorXd& u,
+                                         const Eigen::VectorXd* preloaded) {
+  const Bonds& bonds = model.bonds;
+  EquilibriumEnergies e;
+  for (int b = 0; b < bonds.size(); ++b) {
+    if (bonds.is_broken(b)) continue;
+    const BondEquilibrium bond = bond_equilibrium(bonds, b, u, preloaded);
+    e.unit += bond.unit.energy;
+    e.preload += bond.preload.energy;
+    e.cross += bond.cross_energy;
+  }
+  return e;
 }
 
 // The bond that fails next: the smallest finite critical factor, ties to the lowest index.
@@ -929,6 +974,10 @@ class EventLoop {
     result_.crack_fracture_energy = r.result.crack_fracture_energy;
     result_.brittle_sites = r.result.brittle_sites;
     softening_ = r.softening;
+    layer_energy_factors_.clear();
+    for (const EventsState::LayerEnergyFactor& f : r.layer_energy_factors)
+      layer_energy_factors_[{f.site, f.side}] = {f.factor, f.event};
+    layer_bounds_hold_ = r.layer_bounds_hold;
     clusters_ = r.clusters;
     broken_ = r.broken;
     critical_u_ = r.critical_u;
@@ -976,10 +1025,12 @@ class EventLoop {
       const Tooth tooth = critical_tooth();
       const SiteCrack site = critical_site();
       if (tooth.crack >= 0 && tooth.load_factor <= std::min(site.load_factor, bond_factor)) {
+        layer_bounds_hold_ = false;
         after_event(soften(static_cast<std::size_t>(tooth.crack), tooth.load_factor));
         continue;
       }
       if (site.particle >= 0 && site.load_factor < bond_factor) {
+        layer_bounds_hold_ = layer_bounds_hold_ && site.area >= 0;
         after_event(crack(site));
         continue;
       }
@@ -992,6 +1043,7 @@ class EventLoop {
       const EventPoint point = critical_state(b, state_.factor[b], breaks ? 1 : 0);
       lose_energy(point.load_factor * point.load_factor * state_.bond_energy[b] *
                   (breaks ? 1.0 : 1.0 - settings_.tooth_stiffness_ratio));
+      layer_bounds_hold_ = false;
       fail(b, breaks, point, state_.mode[b]);
       after_event(point);
     }
@@ -1049,6 +1101,7 @@ class EventLoop {
     PlyFailureMode failure_mode = PlyFailureMode::kMatrixTension;
     double fracture_angle = 0;  // [rad]
     int tooth = 0;              // a softening crack's tooth (EventPoint::site_tooth)
+    double area = -1;           // a layer's crack: its area [m^2] (-1: the site's share)
   };
 
   // The softening crack whose next tooth comes first: its index in softening_ (-1: none) and its
@@ -1119,6 +1172,7 @@ class EventLoop {
 
   // Site `site`'s share of its crack plane (bond_events.hpp, "Softening sites") [m^2].
   double crack_share(const SiteCrack& site) const {
+    if (site.area >= 0) return site.area;
     return plydem::crack_share(model_.particles, model_.bonds, site.particle, site.normal);
   }
 
@@ -1211,9 +1265,16 @@ class EventLoop {
   // The site that fails first at the unit-load solution, passing over those whose crack is open
   // already (ties: the lowest particle index, within kTieTolerance).
   SiteCrack critical_site() {
-    SiteCrack crack;
-    if (!settings_.material_point) return crack;
+    if (!settings_.material_point) return {};
     const MaterialPointFailure& mp = *settings_.material_point;
+    std::vector<SiteFailure> sites = judged_sites(mp);
+    if (mp.coupled) return critical_layer_crack(mp, sites);
+    return site_crack(next_opening_site(model_.particles, model_.bonds, sites, kTieTolerance));
+  }
+
+  // Every site's failure at the current equilibrium (site_failures_now), less the sites that are
+  // not judged: held by a grip, or beside a softening crack.
+  std::vector<SiteFailure> judged_sites(const MaterialPointFailure& mp) {
     std::vector<SiteFailure> sites = site_failures_now(mp);
     // A particle whose translation is prescribed is held by a grip: its site does not fail (a
     // coupon's grips, like a test's tabs, are not its gauge).
@@ -1233,7 +1294,12 @@ class EventLoop {
         sites[static_cast<std::size_t>(model_.bonds.second(b))].failure.load_factor = kNever;
       }
     }
-    OpeningSite opening = next_opening_site(model_.particles, model_.bonds, sites, kTieTolerance);
+    return sites;
+  }
+
+  // The crack of an opening site (none where opening.particle is -1).
+  static SiteCrack site_crack(OpeningSite opening) {
+    SiteCrack crack;
     if (opening.particle < 0) return crack;
     crack.particle = opening.particle;
     crack.load_factor = opening.site.failure.load_factor;
@@ -1243,6 +1309,195 @@ class EventLoop {
     crack.failure_mode = opening.site.failure.mode;
     crack.fracture_angle = opening.site.failure.fracture_angle;
     return crack;
+  }
+
+  // Leguillon's coupled criterion (MaterialPointFailure::coupled): the sites in order of their
+  // stress criterion's load factor; a fibre site's crack opens as it would alone, a matrix site's
+  // crack runs through its layer (layer_crack) at the larger of its weakest site's stress factor
+  // and the factor at which that crack releases its fracture energy (layer_energy_factor, one
+  // factorization each). The first of those, ties to the first judged.
+  //
+  // A layer's energy factor found at an earlier event is kept as a lower bound of its current
+  // one: cracks elsewhere shield it (it releases less at a given load once its neighbours have
+  // cracked), so a layer whose bound is no smaller than the best crack found so far is passed
+  // over, and the others are found again, in order of their bounds (lazy evaluation).
+  SiteCrack critical_layer_crack(const MaterialPointFailure& mp, std::vector<SiteFailure>& sites) {
+    if (!layer_bounds_hold_) layer_energy_factors_.clear();
+    layer_bounds_hold_ = true;
+    SiteCrack best;
+    std::vector<std::pair<double, SiteCrack>> deferred;  // (bound, layer crack)
+    auto settle = [&](double below) {
+      while (true) {
+        auto first =
+            std::min_element(deferred.begin(), deferred.end(),
+                             [](const auto& a, const auto& b) { return a.first < b.first; });
+        if (first == deferred.end() || !(first->first < below) ||
+            !(first->first < best.load_factor))
+          return;
+        SiteCrack layer = std::move(first->second);
+        deferred.erase(first);
+        energy_factor_now(mp, layer);
+        if (layer.load_factor < best.load_factor * (1 - kTieTolerance)) best = std::move(layer);
+      }
+    };
+    while (true) {
+      OpeningSite opening = next_opening_site(model_.particles, model_.bonds, sites, kTieTolerance);
+      const double stress = opening.particle < 0 ? kNever : opening.site.failure.load_factor;
+      settle(stress);
+      if (opening.particle < 0 || stress > best.load_factor * (1 + kTieTolerance)) break;
+      const PlyFailureMode mode = opening.site.failure.mode;
+      if (mode == PlyFailureMode::kFibreTension || mode == PlyFailureMode::kFibreCompression) {
+        if (stress < best.load_factor) best = site_crack(std::move(opening));
+        break;  // every crack after it comes at a larger factor
+      }
+      SiteCrack layer = layer_crack(mp, site_crack(std::move(opening)), sites);
+      if (layer.bonds.empty()) continue;
+      const auto known = layer_energy_factors_.find(layer_key(layer));
+      if (known != layer_energy_factors_.end() && known->second.second < events_) {
+        deferred.emplace_back(std::max(stress, known->second.first), std::move(layer));
+        continue;
+      }
+      energy_factor_now(mp, layer);
+      if (layer.load_factor < best.load_factor * (1 - kTieTolerance)) best = std::move(layer);
+    }
+    return best;
+  }
+
+  // A layer crack's key: its first site and its normal's side.
+  static std::pair<int, int> layer_key(const SiteCrack& layer) {
+    const Eigen::Vector3d& n = layer.normal;
+    const int axis = n.x() != 0 ? 0 : (n.y() != 0 ? 1 : 2);
+    return {layer.particle, n(axis) > 0 ? axis + 1 : -(axis + 1)};
+  }
+
+  // Sets a layer crack's load factor: the larger of its stress factor and its energy factor at
+  // the current equilibrium (found now, or earlier at this event).
+  void energy_factor_now(const MaterialPointFailure& mp, SiteCrack& layer) {
+    const std::pair<int, int> key = layer_key(layer);
+    auto found = layer_energy_factors_.find(key);
+    if (found == layer_energy_factors_.end() || found->second.second != events_) {
+      const double factor =
+          layer_energy_factor(layer.bonds, mp.material.strength.G_matrix * layer.area);
+      found = layer_energy_factors_.insert_or_assign(key, std::make_pair(factor, events_)).first;
+    }
+    const std::pair<double, long>& known = found->second;
+    layer.load_factor = std::max(layer.load_factor, known.first);
+  }
+
+  // The crack of `site` through its layer: the sites joined to it by intact bonds, in plies of
+  // its ply's angle, on its crack plane (within a quarter of its radius along the normal), each
+  // opening bonds_across_crack on the same side, with the interface bonds between those plies
+  // that cross the plane; its area, the sites' shares. Its sites are not judged again in `sites`;
+  // its particle is its first site (the lowest index), its load factor the site's.
+  SiteCrack layer_crack(const MaterialPointFailure& mp, SiteCrack site,
+                        std::vector<SiteFailure>& sites) {
+    const Particles& p = model_.particles;
+    const Bonds& bonds = model_.bonds;
+    const Eigen::Vector3d n = site.normal;
+    auto x = [&](int i) -> Eigen::Vector3d { return p.reference_position.row(i).transpose(); };
+    auto angle = [&](int i) { return mp.ply_angles[static_cast<std::size_t>(p.ply(i))]; };
+    const Eigen::Vector3d xs = x(site.particle);
+    const double tolerance = 0.25 * p.radius(site.particle);
+    std::vector<int> members{site.particle};
+    std::vector<char> seen(static_cast<std::size_t>(p.size()), 0);
+    seen[static_cast<std::size_t>(site.particle)] = 1;
+    const std::vector<std::vector<std::pair<int, int>>>& near = neighbours();
+    for (std::size_t k = 0; k < members.size(); ++k) {
+      for (const auto& [j, b] : near[static_cast<std::size_t>(members[k])]) {
+        if (seen[static_cast<std::size_t>(j)] || bonds.is_broken(b)) continue;
+        if (angle(j) != angle(site.particle) || std::abs(n.dot(x(j) - xs)) > tolerance) continue;
+        seen[static_cast<std::size_t>(j)] = 1;
+        if (!std::isfinite(sites[static_cast<std::size_t>(j)].failure.load_factor)) continue;
+        members.push_back(j);
+      }
+    }
+    std::vector<int> across;
+    double area = 0;
+    std::vector<char> member_ply(static_cast<std::size_t>(p.ply.maxCoeff() + 1), 0);
+    for (int m : members) {
+      sites[static_cast<std::size_t>(m)].failure.load_factor = kNever;
+      member_ply[static_cast<std::size_t>(p.ply(m))] = 1;
+      const std::vector<int> own = bonds_across_crack(p, bonds, m, n);
+      if (own.empty()) continue;
+      across.insert(across.end(), own.begin(), own.end());
+      area += plydem::crack_share(p, bonds, m, n);
+    }
+    for (int b = 0; b < bonds.size(); ++b) {
+      if (!bonds.is_interface(b) || bonds.is_broken(b)) continue;
+      const int i = bonds.first(b), j = bonds.second(b);
+      if (!member_ply[static_cast<std::size_t>(p.ply(i))] ||
+          !member_ply[static_cast<std::size_t>(p.ply(j))])
+        continue;
+      const double si = n.dot(x(i) - xs), sj = n.dot(x(j) - xs);
+      if (std::min(si, sj) <= tolerance && std::max(si, sj) > tolerance) across.push_back(b);
+    }
+    std::erase_if(across, [&](int b) { return bonds.damage(b) > 0; });
+    std::sort(across.begin(), across.end());
+    across.erase(std::unique(across.begin(), across.end()), across.end());
+    site.bonds = std::move(across);
+    site.area = area;
+    site.particle = *std::min_element(members.begin(), members.end());
+    return site;
+  }
+
+  // The smallest load factor at which opening `across` (every bond, at fixed grips) releases
+  // `target` [J]: the strain energy of the current equilibrium less that of the equilibrium
+  // without those bonds, quadratic in the load factor. 0 where the bonds hold a piece that would
+  // come loose.
+  double layer_energy_factor(const std::vector<int>& across, double target) {
+    Bonds& bonds = model_.bonds;
+    std::vector<std::array<double, 6>> saved;
+    for (int b : across) {
+      saved.push_back({bonds.normal_stiffness(b), bonds.shear_stiffness(b),
+                       bonds.bending_stiffness(b), bonds.twisting_stiffness(b), bonds.damage(b),
+                       static_cast<double>(bonds.state(b))});
+      bonds.normal_stiffness(b) = bonds.shear_stiffness(b) = 0;
+      bonds.bending_stiffness(b) = bonds.twisting_stiffness(b) = 0;
+      bonds.damage(b) = 1;
+      bonds.state(b) = static_cast<int>(BondState::kBrokenTension);
+    }
+    double factor = 0;
+    try {
+      StaticSettings direct = settings_.static_settings;
+      if (direct.method == StaticMethod::kAuto) direct.method = StaticMethod::kDirect;
+      const StaticSystem system(model_, solver_.constraints(), direct);
+      system.solve(model_, solver_.constraints().value, false);
+      const Eigen::VectorXd u = particle_state_vector(model_.particles);
+      Eigen::VectorXd pre;
+      if (preloaded_) {
+        system.solve(model_, solver_.preload(), true);
+        pre = particle_state_vector(model_.particles);
+      }
+      const EquilibriumEnergies e = equilibrium_energies(model_, u, preloaded_ ? &pre : nullptr);
+      factor =
+          first_quadratic_crossing(state_.preload_energy - e.preload, state_.cross_energy - e.cross,
+                                   state_.energy - e.unit, target);
+    } catch (const Error&) {  // a mechanism: the layer's crack would leave a piece unheld
+      factor = kNever;
+    }
+    for (std::size_t k = 0; k < across.size(); ++k) {
+      const int b = across[k];
+      bonds.normal_stiffness(b) = saved[k][0];
+      bonds.shear_stiffness(b) = saved[k][1];
+      bonds.bending_stiffness(b) = saved[k][2];
+      bonds.twisting_stiffness(b) = saved[k][3];
+      bonds.damage(b) = saved[k][4];
+      bonds.state(b) = static_cast<int>(saved[k][5]);
+    }
+    return factor;
+  }
+
+  // Each particle's bonded neighbours (particle, bond), broken bonds included, built once.
+  const std::vector<std::vector<std::pair<int, int>>>& neighbours() {
+    if (neighbours_.empty()) {
+      neighbours_.resize(static_cast<std::size_t>(model_.particles.size()));
+      for (int b = 0; b < model_.bonds.size(); ++b) {
+        const int i = model_.bonds.first(b), j = model_.bonds.second(b);
+        neighbours_[static_cast<std::size_t>(i)].emplace_back(j, b);
+        neighbours_[static_cast<std::size_t>(j)].emplace_back(i, b);
+      }
+    }
+    return neighbours_;
   }
 
   // Every site's failure at the current equilibrium: as its unit-load stress scales, or with a
@@ -1452,6 +1707,9 @@ class EventLoop {
     s.result.crack_fracture_energy = result_.crack_fracture_energy;
     s.result.brittle_sites = result_.brittle_sites;
     s.softening = softening_;
+    for (const auto& [key, known] : layer_energy_factors_)
+      s.layer_energy_factors.push_back({key.first, key.second, known.first, known.second});
+    s.layer_bounds_hold = layer_bounds_hold_;
     solver_.save(s);
     return s;
   }
@@ -1498,6 +1756,10 @@ class EventLoop {
   std::string pending_stop_;   // ends the run at the next solve
   double last_progress_ = 0;
   std::vector<SofteningCrack> softening_;  // the sites' cracks still softening, by site
+  std::vector<std::vector<std::pair<int, int>>> neighbours_;  // neighbours(), built once
+  // Each layer crack's energy factor (layer_key) and the event it was found at.
+  std::map<std::pair<int, int>, std::pair<double, long>> layer_energy_factors_;
+  bool layer_bounds_hold_ = true;  // every event since they were found opened a layer crack
 };
 
 }  // namespace
@@ -1623,6 +1885,14 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
   out.f64(s.previous_cross_energy);
   write_dof_array(out, s.preload);
   write_dof_array(out, s.preload_factored_from);
+  out.u64(s.layer_energy_factors.size());
+  for (const EventsState::LayerEnergyFactor& f : s.layer_energy_factors) {
+    out.i64(f.site);
+    out.i64(f.side);
+    out.f64(f.factor);
+    out.i64(f.event);
+  }
+  out.boolean(s.layer_bounds_hold);
 }
 
 EventsState read_events_state(CheckpointReader& in) {
@@ -1716,6 +1986,18 @@ EventsState read_events_state(CheckpointReader& in) {
   s.previous_cross_energy = in.f64();
   s.preload = read_dof_array(in, "the preload's values");
   s.preload_factored_from = read_dof_array(in, "the preload's factored values");
+  const std::uint64_t layers = in.u64();
+  for (std::uint64_t k = 0; k < layers; ++k) {
+    EventsState::LayerEnergyFactor f;
+    f.site = static_cast<int>(in.i64());
+    f.side = static_cast<int>(in.i64());
+    f.factor = in.f64();
+    f.event = in.i64();
+    if (f.site < 0 || f.side == 0 || std::abs(f.side) > 3)
+      in.corrupt("a layer crack's site or side is out of range");
+    s.layer_energy_factors.push_back(f);
+  }
+  s.layer_bounds_hold = in.boolean();
   if (s.events < 0 || s.capacity < 0 || s.result.path.size() != static_cast<std::size_t>(s.events))
     in.corrupt(
         fmt::format("an events state of {} events with {} points", s.events, s.result.path.size()));

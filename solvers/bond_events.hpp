@@ -65,6 +65,25 @@
 ///   cannot soften without snap-back) opens brittle, and EventsResult::brittle_sites counts it.
 ///   While its crack softens a site is not judged again; the sites beside it read their strain
 ///   without the softening bonds (contacts/site_failure.hpp).
+/// - Cracks through a layer (MaterialPointFailure::coupled, issue 33; Leguillon, Eur. J. Mech. A
+///   21 (2002) 61, the coupled stress and energy criterion of finite fracture mechanics). A
+///   matrix crack opens through its whole layer at once: the sites joined to the failing site by
+///   intact bonds, in plies of its ply's angle, on its crack plane (within a quarter of its radius
+///   along the normal), each opening bonds_across_crack on the same side, and the interface bonds
+///   between those plies that cross the plane; its area is the sites' shares. It opens at the
+///   larger of two load factors: its weakest site's (the stress criterion), and the one at which
+///   opening it at fixed grips releases G_matrix times its area (the energy criterion): the strain
+///   energy of the equilibrium less that of the equilibrium without its bonds, a quadratic in the
+///   load factor (a factorization of the stiffness without them). So a thin layer, which releases
+///   less than a thick one at the same stress, cracks later (the in-situ effect), and a new crack
+///   between two forms when it releases G_matrix (crack multiplication). A layer's crack that
+///   would leave a mechanism is not opened. Fibre modes open site by site as above. A layer's
+///   energy factor found at an earlier event is kept as a lower bound while only layer cracks
+///   open (a crack shields its neighbours), and found again when it would come first: a few
+///   factorizations per event rather than one per layer. The bound is not exact (a crack can
+///   unload one layer onto another); on the shipped crossply the path to the peak was the same
+///   with every layer found again at every event, and the path after it differed by a few bonds.
+///   Brittle cracks only (not with softening).
 /// - Preload (cure stresses, issue 33). Where the model's bonds carry free offsets
 ///   (Bonds::free_offset) or EventSettings::preload prescribes non-zero values, the state at load
 ///   factor lambda is u_p + lambda u_1: u_p the equilibrium under the offsets and the preload's
@@ -139,6 +158,10 @@ struct MaterialPointFailure {
   /// The sites' cracks soften to dissipate the material's G_fibre or G_matrix per unit area (see
   /// the file comment); false: they open brittle.
   bool softening = false;
+  /// Matrix cracks by Leguillon's coupled criterion (see the file comment, "Cracks through a
+  /// layer"): a matrix crack opens across its whole layer at once, when its weakest site meets the
+  /// stress criterion and the layer's crack releases G_matrix times its area at fixed grips.
+  bool coupled = false;
   /// Each site's strengths times its factor (by particle; empty: 1): strength scatter.
   std::vector<double> strength_factors = {};
 };
@@ -286,6 +309,16 @@ struct EventsState {
   long capacity = 0;  ///< columns of the update's arrays after the last factorization
   std::vector<EventChange> changes;       ///< since the last factorization (none when stale)
   std::vector<SofteningCrack> softening;  ///< the sites' cracks still softening
+  /// The coupled criterion's layer cracks' energy factors found so far, each with its layer (its
+  /// first site and its normal's side: +-(axis + 1)) and the event it was found at, and whether
+  /// they still bound the current ones (see the file comment, "Cracks through a layer").
+  struct LayerEnergyFactor {
+    int site = 0, side = 0;
+    double factor = 0;
+    long event = 0;
+  };
+  std::vector<LayerEnergyFactor> layer_energy_factors;
+  bool layer_bounds_hold = true;
 };
 
 void write_events_state(CheckpointWriter& out, const EventsState& state);

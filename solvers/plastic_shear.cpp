@@ -64,7 +64,7 @@ class PlasticShearRun {
     require(reaction_dofs.rows() == n && reaction_dofs.cols() == kDofsPerParticle,
             "plastic shear: the reaction dofs are not the model's");
     system_.solve(model_, unit.value);
-    unit_u_ = state_vector(model_.particles);
+    unit_u_ = particle_state_vector(model_.particles);
     u0_ = Eigen::VectorXd::Zero(unit_u_.size());
     const DofFlags& fixed = system_.constraints().fixed;
     judged_.assign(static_cast<std::size_t>(n), false);
@@ -136,16 +136,6 @@ class PlasticShearRun {
             "plastic shear solves the bonds' free offsets with one factor of the stiffness: the "
             "direct method only");
     return s;
-  }
-
-  static Eigen::VectorXd state_vector(const Particles& p) {
-    Eigen::VectorXd u(kDofsPerParticle * p.size());
-    for (int i = 0; i < p.size(); ++i)
-      for (int c = 0; c < 3; ++c) {
-        u(kDofsPerParticle * i + c) = p.displacement(i, c);
-        u(kDofsPerParticle * i + 3 + c) = p.rotation(i, c);
-      }
-    return u;
   }
 
   State state() const { return {gamma_, kappa_, yield_, u0_}; }

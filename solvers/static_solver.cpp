@@ -442,6 +442,16 @@ std::vector<PinnedDof> pin_rigid_modes(const Model& model, DofConstraints& const
   return pins;
 }
 
+Eigen::VectorXd particle_state_vector(const Particles& p) {
+  Eigen::VectorXd u(kDofsPerParticle * p.size());
+  for (int i = 0; i < p.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      u(kDofsPerParticle * i + c) = p.displacement(i, c);
+      u(kDofsPerParticle * i + 3 + c) = p.rotation(i, c);
+    }
+  return u;
+}
+
 namespace {
 
 // Generalized forces of the bonds, -K q, by the explicit kernel, in dof order.

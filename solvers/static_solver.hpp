@@ -250,4 +250,8 @@ class StaticSystem {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The particles' displacements and rotations as one vector in dof order (6 * particle +
+/// component: u_x, u_y, u_z, theta_x, theta_y, theta_z): a static solve's state as a vector.
+Eigen::VectorXd particle_state_vector(const Particles& p);
+
 }  // namespace plydem

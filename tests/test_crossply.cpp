@@ -15,7 +15,9 @@
 #include "core/material.hpp"
 #include "core/transverse_cracking.hpp"
 #include "experiments/fem/calculix.hpp"
+#include "experiments/protocols/strength.hpp"
 #include "experiments/runner/run_experiment.hpp"
+#include "strategies/laminate.hpp"
 #include "support/results_csv.hpp"
 #include "support/test_support.hpp"
 
@@ -226,6 +228,59 @@ TEST_CASE("plydem run crossply at the material point: traction-free cracks, 0 de
   CHECK(density < 0.6 * 10);  // fewer than every column (0.1 mm particles)
   CHECK(free == doctest::Approx(density));
   CHECK(strength * 1e6 > 0.8 * 0.5 * m.strength.XT);
+}
+
+TEST_CASE(
+    "the coupled criterion: the 90 deg layer's first crack releases G_Ic, at the in-situ "
+    "strength") {
+  // A [0/90]s coupon without scatter, 2 x 0.5 mm, 0.2 mm plies, 0.1 mm particles, Puck at the
+  // material point, G_matrix = 200 J/m^2, stopped after its first event: the crack through the
+  // 0.4 mm 90 deg layer opens at once (its 2 x 5 sites), when opening it at fixed grips releases
+  // G_Ic w (2t) -- the released energy the events solver measures after the event (its updated
+  // factor) against the area's fracture energy -- and at the laminate stress where the thin
+  // embedded layer's in-situ strength sqrt(8 G / (pi t Lambda22)) (Camanho et al. 2006, written
+  // out here) loads its 90 deg plies.
+  StrengthSettings s;
+  s.coupon.material = load_material("eglass-my750");
+  const double g = 200;
+  s.coupon.material.strength.G_matrix = g;
+  s.strategy = "square";
+  s.layup = parse_layup("[0/90]s");
+  s.coupon.length = 2e-3;
+  s.coupon.width = 0.5e-3;
+  s.coupon.thickness = 0.2e-3;
+  s.coupon.particle_diameter = 0.1e-3;
+  s.interface.transverse_shear = true;
+  s.failure_criterion = PlyFailureModel::kPuck;
+  s.weibull_modulus = 0;
+  s.coupled_criterion = true;
+  s.events.max_events = 1;
+  const StrengthResult r = StrengthTest(s).run();
+  REQUIRE(r.events == 1);
+  const double area = s.coupon.width * 2 * s.coupon.thickness;
+  CHECK(r.crack_area == doctest::Approx(area).epsilon(1e-9));
+  CHECK(r.crack_fracture_energy == doctest::Approx(g * area).epsilon(1e-9));
+  CHECK(r.dissipated_energy == doctest::Approx(g * area).epsilon(1e-6));
+  const Material& m = s.coupon.material;
+  const double q = 1 / (1 - m.nu12 * m.nu21());
+  const double q11 = m.E1 * q, q22 = m.E2 * q, q12 = m.nu12 * q22;
+  const double a11 = (q11 + q22) / 2, a12 = q12;
+  const double k90 = (q22 * a11 - q12 * a12) / (a11 * a11 - a12 * a12);
+  const double lambda22 = 2 * (1 / m.E2 - m.nu21() * m.nu21() / m.E1);
+  const double in_situ = std::sqrt(8 * g / (std::numbers::pi * 2 * s.coupon.thickness * lambda22));
+  MESSAGE("first crack at " << r.first_failure_stress * 1e-6 << " MPa, in-situ "
+                            << in_situ / k90 * 1e-6 << " MPa, YT " << m.strength.YT / k90 * 1e-6);
+  CHECK(r.first_failure_stress == doctest::Approx(in_situ / k90).epsilon(0.1));
+
+  // Refused: with softening (the coupled criterion's cracks open brittle) and without G_matrix.
+  StrengthSettings soft = s;
+  soft.strength_options.softening = true;
+  soft.coupon.material.strength.G_fibre = 12000;
+  CHECK_THROWS_WITH_AS(StrengthTest(soft).run(), doctest::Contains("coupled criterion"), Error);
+  StrengthSettings no_energy = s;
+  no_energy.coupon.material.strength.G_matrix = 0;
+  CHECK_THROWS_WITH_AS(StrengthTest(no_energy).run(), doctest::Contains("gives no G_matrix"),
+                       Error);
 }
 
 TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming it") {

@@ -225,6 +225,29 @@ void StrengthSettings::require_strengths_for(const std::string& purpose) const {
                       purpose, coupon.material.name, missing));
 }
 
+namespace {
+
+// The coupled criterion's needs: failure at the material point, brittle, by the events method,
+// with a matrix fracture energy.
+void require_coupled_criterion_inputs(const StrengthSettings& s) {
+  require(s.effective_failure_criterion() != PlyFailureModel::kBond,
+          "the coupled criterion (--coupled-criterion) decides matrix cracks at the material "
+          "point, and the plies fail bond by bond (give --failure-criterion puck, hashin, "
+          "max-stress or tsai-wu)");
+  require(!s.strength_options.softening,
+          "the coupled criterion (--coupled-criterion) opens brittle cracks, and --softening "
+          "makes them soften (leave out one of the two)");
+  require(s.coupon.material.strength.G_matrix > 0,
+          fmt::format("the coupled criterion (--coupled-criterion) opens a matrix crack when it "
+                      "releases G_matrix per unit area: material '{}' gives no G_matrix (J/m^2)",
+                      s.coupon.material.name));
+  require(s.method == StrengthMethod::kEvents,
+          "the coupled criterion (--coupled-criterion) is decided by the events method only "
+          "(use --method events)");
+}
+
+}  // namespace
+
 void StrengthSettings::validate() const {
   coupon.validate();
   require(std::isfinite(hole_diameter) && hole_diameter >= 0,
@@ -278,6 +301,7 @@ void StrengthSettings::validate() const {
           fmt::format("thermal.delta_T = {} K needs the material's thermal expansion: material "
                       "'{}' gives no alpha1, alpha2",
                       delta_T, coupon.material.name));
+  if (coupled_criterion) require_coupled_criterion_inputs(*this);
   require(delta_T == 0 || method == StrengthMethod::kEvents,
           "thermal.delta_T (cure stresses) is taken by the events method only: the explicit "
           "kernels refuse the bonds' free offsets (use --method events)");
@@ -351,6 +375,7 @@ CheckpointHeader strength_checkpoint_header(const StrengthSettings& s) {
   }
   if (s.scatter_per_crack_site) h.add("scatter_per", "crack site");
   if (s.delta_T != 0) h.add("delta_T", exact(s.delta_T));
+  if (s.coupled_criterion) h.add("coupled_criterion", "true");
   h.add("seed", fmt::format("{}", s.seed));
   h.add("friction", exact(s.strength_options.friction_coefficient));
   h.add("softening", s.strength_options.softening ? "true" : "false");
@@ -942,6 +967,7 @@ std::optional<MaterialPointFailure> material_point_failure(const StrengthSetting
   }
   f.material = s.coupon.material;
   f.softening = s.strength_options.softening;
+  f.coupled = s.coupled_criterion;
   for (const Ply& ply : plies) f.ply_angles.push_back(ply.angle);
   return f;
 }

@@ -139,6 +139,11 @@ struct StrengthSettings {
   /// strains are measured from it. The events method only; the material's alpha1, alpha2 needed.
   double delta_T = 0;
   StrengthOptions strength_options;  ///< friction coefficient, softening
+  /// `--coupled-criterion`: matrix cracks by Leguillon's coupled criterion at the material point
+  /// (MaterialPointFailure::coupled): each opens through its whole layer at once, when its
+  /// weakest site meets the lamina criterion and the layer's crack releases G_matrix per unit
+  /// area at fixed grips (finite fracture mechanics: the in-situ effect). Brittle sites only.
+  bool coupled_criterion = false;
   /// How the ply fails (`--failure-criterion`); unset = the material's failure_criterion. `bond`:
   /// bond by bond with the parallel-bond law; a lamina criterion: at the material point
   /// (EventSettings::material_point): each site's stress judged by the criterion in its ply's

@@ -307,6 +307,8 @@ CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentConte
                         origin, g_ic, reference.name, reference.strength.G_matrix));
     reference.strength.G_matrix = g_ic;
   }
+  // The coupled criterion's cracks release the references' G_Ic: one fracture energy for both.
+  if (base.coupled_criterion) base.coupon.material.strength.G_matrix = reference.strength.G_matrix;
   // thermal.delta_T (the strength command's key): every laminate runs with it and without, so the
   // base settings run without it.
   const double delta_T = base.delta_T;
@@ -949,6 +951,14 @@ std::string targets_why(const CrossplySettings& cs) {
            "thickness (no in-situ effect) and cracks form at the particle spacing wherever the "
            "stress allows; the diagonal bonds bridge them (not traction-free), and the 0° plies "
            "fail early beside them.";
+  if (cs.base.coupled_criterion)
+    return "The 90° layers crack by the coupled criterion (a crack through the whole layer when "
+           "its weakest site reaches the strength and opening it releases G_Ic at fixed grips), "
+           "so the onset and the crack multiplication follow fracture mechanics. Where the "
+           "density × thickness target is missed, compare the crack-multiplication band: near "
+           "the 0° plies' fibre failure the energy criterion itself multiplies the cracks of a "
+           "thick 90° layer to spacings shorter than its thickness. A 90° layer thicker than the "
+           "coupon is wide is also far from the references' plane strain.";
   if (!softening)
     return "The plies fail at the material point, brittle: a site cracks at its strength (YT "
            "times its Weibull factor), with no fracture energy, so the first crack follows the "

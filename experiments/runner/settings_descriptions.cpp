@@ -742,6 +742,29 @@ void add_strength_law(SettingsDescription<StrengthSettings>& d) {
           "material point, each site's crack softens so (default: brittle)");
 }
 
+// How a ply's matrix cracks open at the material point: site by site, or through a layer.
+void add_crack_criterion(SettingsDescription<StrengthSettings>& d) {
+  d.boolean(
+       "coupled_criterion", [](auto& s) -> auto& { return s.coupled_criterion; })
+      .with_flag("--coupled-criterion")
+      .with_key("coupled_criterion")
+      .with_python("coupled_criterion")
+      .with_help(
+          "matrix cracks at the material point by Leguillon's coupled criterion: each opens "
+          "through its whole layer at once, when its weakest site meets the lamina criterion and "
+          "the layer's crack releases G_matrix per unit area at fixed grips (the in-situ effect; "
+          "default: each site's crack opens alone at its strength)")
+      .only_if(
+          [](const StrengthSettings& s) {
+            return s.effective_failure_criterion() != PlyFailureModel::kBond;
+          },
+          "it is a setting of failure at the material point, and the plies fail bond by bond "
+          "(give {failure_criterion} puck, hashin, max-stress or tsai-wu)")
+      .only_if([](const StrengthSettings& s) { return !s.strength_options.softening; },
+               "the coupled criterion opens brittle cracks, and {softening} makes them soften "
+               "(leave out one of the two)");
+}
+
 // The grips, the edges' strengths, a hole, and what the strength test records.
 void add_strength_coupon(SettingsDescription<StrengthSettings>& d) {
   d.add(
@@ -856,6 +879,7 @@ SettingsDescription<StrengthSettings> make_strength_settings() {
   add_strength_coupon(d);
   add_solves(d);
   add_strength_law(d);
+  add_crack_criterion(d);
   add_strength_cure(d);
   add_interface_strength(d, true);
   add_events(d);
