@@ -291,6 +291,11 @@ TEST_CASE("a crossply config whose layup is not a cross-ply is refused, naming i
   options.out_dir = dir / "out";
   CHECK_THROWS_WITH_AS(run_experiment(options),
                        doctest::Contains("'[0/45]s' is not a cross-ply [0_m/90_n]s"), Error);
+  // The coupled criterion without a fracture energy (the built-in material gives no G_matrix).
+  std::ofstream(dir / "no_energy.toml") << kMaterialPointConfig << "coupled_criterion = true\n";
+  options.config = dir / "no_energy.toml";
+  CHECK_THROWS_WITH_AS(run_experiment(options), doctest::Contains("give references.G_Ic_J_m2"),
+                       Error);
 }
 
 TEST_CASE("plydem run crossply at two particle sizes: the finest reports, the coarser as dem d=") {

@@ -308,7 +308,14 @@ CrossplySettings parse_crossply(const ExperimentConfig& c, const ExperimentConte
     reference.strength.G_matrix = g_ic;
   }
   // The coupled criterion's cracks release the references' G_Ic: one fracture energy for both.
-  if (base.coupled_criterion) base.coupon.material.strength.G_matrix = reference.strength.G_matrix;
+  if (base.coupled_criterion) {
+    require(reference.strength.G_matrix > 0,
+            fmt::format("{}: coupled_criterion opens the 90° layers' cracks when they release "
+                        "G_Ic: give references.G_Ic_J_m2, or G_matrix in the material file "
+                        "(material '{}' gives none)",
+                        origin, reference.name));
+    base.coupon.material.strength.G_matrix = reference.strength.G_matrix;
+  }
   // thermal.delta_T (the strength command's key): every laminate runs with it and without, so the
   // base settings run without it.
   const double delta_T = base.delta_T;
