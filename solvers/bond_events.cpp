@@ -74,6 +74,25 @@ std::array<int, 12> bond_dofs(const Bonds& bonds, int b) {
   return dofs;
 }
 
+// A bond's changeable fields in EventChange's order: k_n, k_s, k_b, k_t, damage, state.
+void read_bond_fields(const Bonds& bonds, int b, double* v) {
+  v[0] = bonds.normal_stiffness(b);
+  v[1] = bonds.shear_stiffness(b);
+  v[2] = bonds.bending_stiffness(b);
+  v[3] = bonds.twisting_stiffness(b);
+  v[4] = bonds.damage(b);
+  v[5] = bonds.state(b);
+}
+
+void write_bond_fields(Bonds& bonds, int b, const double* v) {
+  bonds.normal_stiffness(b) = v[0];
+  bonds.shear_stiffness(b) = v[1];
+  bonds.bending_stiffness(b) = v[2];
+  bonds.twisting_stiffness(b) = v[3];
+  bonds.damage(b) = v[4];
+  bonds.state(b) = static_cast<int>(v[5]);
+}
+
 Matrix12d symmetric_bond_stiffness(const BondParameters& params) {
   const Matrix12d k = parallel_bond_stiffness(params);
   return 0.5 * (k + k.transpose());  // as the assembly does (solvers/stiffness_assembly.hpp)
@@ -270,14 +289,7 @@ class UnitLoadSolver {
       return;
     }
     Bonds& bonds = model.bonds;
-    auto set = [&](int b, const double* v) {
-      bonds.normal_stiffness(b) = v[0];
-      bonds.shear_stiffness(b) = v[1];
-      bonds.bending_stiffness(b) = v[2];
-      bonds.twisting_stiffness(b) = v[3];
-      bonds.damage(b) = v[4];
-      bonds.state(b) = static_cast<int>(v[5]);
-    };
+    auto set = [&](int b, const double* v) { write_bond_fields(bonds, b, v); };
     for (const EventChange& c : s.changes)
       require(c.bond >= 0 && c.bond < bonds.size(), "checkpoint: a change names no bond");
     for (auto c = s.changes.rbegin(); c != s.changes.rend(); ++c) set(c->bond, c->before);
@@ -1442,19 +1454,14 @@ class EventLoop {
 
   // The smallest load factor at which opening `across` (every bond, at fixed grips) releases
   // `target` [J]: the strain energy of the current equilibrium less that of the equilibrium
-  // without those bonds, quadratic in the load factor. 0 where the bonds hold a piece that would
-  // come loose.
+  // without those bonds, quadratic in the load factor. Never (+inf) where opening them would
+  // leave a mechanism.
   double layer_energy_factor(const std::vector<int>& across, double target) {
     Bonds& bonds = model_.bonds;
-    std::vector<std::array<double, 6>> saved;
-    for (int b : across) {
-      saved.push_back({bonds.normal_stiffness(b), bonds.shear_stiffness(b),
-                       bonds.bending_stiffness(b), bonds.twisting_stiffness(b), bonds.damage(b),
-                       static_cast<double>(bonds.state(b))});
-      bonds.normal_stiffness(b) = bonds.shear_stiffness(b) = 0;
-      bonds.bending_stiffness(b) = bonds.twisting_stiffness(b) = 0;
-      bonds.damage(b) = 1;
-      bonds.state(b) = static_cast<int>(BondState::kBrokenTension);
+    std::vector<std::array<double, 6>> saved(across.size());
+    for (std::size_t k = 0; k < across.size(); ++k) {
+      read_bond_fields(bonds, across[k], saved[k].data());
+      open_bond(bonds, across[k], BondState::kBrokenTension);
     }
     double factor = 0;
     try {
@@ -1475,15 +1482,8 @@ class EventLoop {
     } catch (const Error&) {  // a mechanism: the layer's crack would leave a piece unheld
       factor = kNever;
     }
-    for (std::size_t k = 0; k < across.size(); ++k) {
-      const int b = across[k];
-      bonds.normal_stiffness(b) = saved[k][0];
-      bonds.shear_stiffness(b) = saved[k][1];
-      bonds.bending_stiffness(b) = saved[k][2];
-      bonds.twisting_stiffness(b) = saved[k][3];
-      bonds.damage(b) = saved[k][4];
-      bonds.state(b) = static_cast<int>(saved[k][5]);
-    }
+    for (std::size_t k = 0; k < across.size(); ++k)
+      write_bond_fields(bonds, across[k], saved[k].data());
     return factor;
   }
 
@@ -1588,14 +1588,7 @@ class EventLoop {
     const BondParameters before = bond_parameters(bonds, b);
     EventChange change;
     change.bond = b;
-    auto fields = [&](double* v) {
-      v[0] = bonds.normal_stiffness(b);
-      v[1] = bonds.shear_stiffness(b);
-      v[2] = bonds.bending_stiffness(b);
-      v[3] = bonds.twisting_stiffness(b);
-      v[4] = bonds.damage(b);
-      v[5] = bonds.state(b);
-    };
+    auto fields = [&](double* v) { read_bond_fields(bonds, b, v); };
     fields(change.before);
     const double keep = breaks ? 0.0 : r;
     removed = before;
