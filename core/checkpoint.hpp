@@ -40,8 +40,9 @@ namespace plydem {
 /// sites' softening cracks, each event's tooth and the cracks' energy and area. 6: the bonds'
 /// free offsets (cure stresses). 7: the events solver's preload (its state at the last critical
 /// state, its energies and prescribed values). 8: the events solver's layer cracks' energy factors
-/// (the coupled criterion).
-inline constexpr std::uint32_t kCheckpointVersion = 8;
+/// (the coupled criterion). 9: without 8's flag that said whether those factors were kept (they
+/// are kept across every event).
+inline constexpr std::uint32_t kCheckpointVersion = 9;
 
 /// FNV-1a 64 of `bytes`, continuing from `hash`.
 std::uint64_t fnv1a64(std::string_view bytes, std::uint64_t hash = 0xcbf29ce484222325ull);

@@ -989,7 +989,6 @@ class EventLoop {
     layer_energy_factors_.clear();
     for (const EventsState::LayerEnergyFactor& f : r.layer_energy_factors)
       layer_energy_factors_[{f.site, f.side}] = {f.factor, f.event};
-    layer_bounds_hold_ = r.layer_bounds_hold;
     clusters_ = r.clusters;
     broken_ = r.broken;
     critical_u_ = r.critical_u;
@@ -1037,12 +1036,10 @@ class EventLoop {
       const Tooth tooth = critical_tooth();
       const SiteCrack site = critical_site();
       if (tooth.crack >= 0 && tooth.load_factor <= std::min(site.load_factor, bond_factor)) {
-        layer_bounds_hold_ = false;
         after_event(soften(static_cast<std::size_t>(tooth.crack), tooth.load_factor));
         continue;
       }
       if (site.particle >= 0 && site.load_factor < bond_factor) {
-        layer_bounds_hold_ = layer_bounds_hold_ && site.area >= 0;
         after_event(crack(site));
         continue;
       }
@@ -1055,7 +1052,6 @@ class EventLoop {
       const EventPoint point = critical_state(b, state_.factor[b], breaks ? 1 : 0);
       lose_energy(point.load_factor * point.load_factor * state_.bond_energy[b] *
                   (breaks ? 1.0 : 1.0 - settings_.tooth_stiffness_ratio));
-      layer_bounds_hold_ = false;
       fail(b, breaks, point, state_.mode[b]);
       after_event(point);
     }
@@ -1332,10 +1328,9 @@ class EventLoop {
   // A layer's energy factor found at an earlier event is kept as a lower bound of its current
   // one: cracks elsewhere shield it (it releases less at a given load once its neighbours have
   // cracked), so a layer whose bound is no smaller than the best crack found so far is passed
-  // over, and the others are found again, in order of their bounds (lazy evaluation).
+  // over, and the others are found again, in order of their bounds (lazy evaluation). Not a
+  // bound after fibre breaks (bond_events.hpp, "Cracks through a layer", says what it changes).
   SiteCrack critical_layer_crack(const MaterialPointFailure& mp, std::vector<SiteFailure>& sites) {
-    if (!layer_bounds_hold_) layer_energy_factors_.clear();
-    layer_bounds_hold_ = true;
     SiteCrack best;
     std::vector<std::pair<double, SiteCrack>> deferred;  // (bound, layer crack)
     auto settle = [&](double below) {
@@ -1702,7 +1697,6 @@ class EventLoop {
     s.softening = softening_;
     for (const auto& [key, known] : layer_energy_factors_)
       s.layer_energy_factors.push_back({key.first, key.second, known.first, known.second});
-    s.layer_bounds_hold = layer_bounds_hold_;
     solver_.save(s);
     return s;
   }
@@ -1752,7 +1746,6 @@ class EventLoop {
   std::vector<std::vector<std::pair<int, int>>> neighbours_;  // neighbours(), built once
   // Each layer crack's energy factor (layer_key) and the event it was found at.
   std::map<std::pair<int, int>, std::pair<double, long>> layer_energy_factors_;
-  bool layer_bounds_hold_ = true;  // every event since they were found opened a layer crack
 };
 
 }  // namespace
@@ -1885,7 +1878,6 @@ void write_events_state(CheckpointWriter& out, const EventsState& s) {
     out.f64(f.factor);
     out.i64(f.event);
   }
-  out.boolean(s.layer_bounds_hold);
 }
 
 EventsState read_events_state(CheckpointReader& in) {
@@ -1990,7 +1982,6 @@ EventsState read_events_state(CheckpointReader& in) {
       in.corrupt("a layer crack's site or side is out of range");
     s.layer_energy_factors.push_back(f);
   }
-  s.layer_bounds_hold = in.boolean();
   if (s.events < 0 || s.capacity < 0 || s.result.path.size() != static_cast<std::size_t>(s.events))
     in.corrupt(
         fmt::format("an events state of {} events with {} points", s.events, s.result.path.size()));
