@@ -3,9 +3,12 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "core/error.hpp"
 #include "experiments/output/external_tool.hpp"
+#include "experiments/output/figures.hpp"
 #include "experiments/runner/experiment.hpp"
 #include "support/test_support.hpp"
 
@@ -67,5 +70,42 @@ TEST_CASE("gnuplot draws a PNG, or plydem says plainly that it is missing") {
   CHECK(std::filesystem::file_size(dir / "line.png") > 100);
   CHECK_THROWS_WITH_AS(plydem::run_gnuplot("plot undefined_variable_xyz\n", dir, "bad.gp"),
                        doctest::Contains("gnuplot failed"), Error);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("plot_curves gives curves that belong together one colour, and each set its marker") {
+  const plydem::GnuplotAvailability gnuplot = plydem::gnuplot_availability();
+  if (!gnuplot.available) {
+    plydem::test::skip(gnuplot.message);
+    return;
+  }
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / fmt::format("plydem_curves_{}", ::getpid());
+  using plydem::Curve;
+  using plydem::Marker;
+  const std::vector<Curve> curves = {
+      {"model", {0, 1}, {0, 1}, true, 0, Marker::kDisc},
+      {"reference", {0, 1}, {0, 2}, false, 0},
+      {"model, coarser", {0, 1}, {0, 1.5}, true, 9, Marker::kCircle},  // 9: the palette's second
+      {"model, cured", {0, 1}, {0, 0.5}, true, 9, Marker::kSquare},
+      {"gnuplot's colour", {0, 1}, {1, 0}, false}};
+  const plydem::Figure figure = plydem::plot_curves(curves, dir, "curves", "t", "x", "y");
+  CHECK(std::filesystem::file_size(dir / "curves.png") > 100);
+  std::ifstream file(dir / "plots" / "curves.gp");
+  std::stringstream text;
+  text << file.rdbuf();
+  const std::string script = text.str();
+  auto occurrences = [&](const std::string& what) {
+    int n = 0;
+    for (auto at = script.find(what); at != std::string::npos; at = script.find(what, at + 1)) ++n;
+    return n;
+  };
+  CHECK(occurrences("lc rgb '#0072b2'") == 2);
+  CHECK(occurrences("lc rgb '#d55e00'") == 2);
+  CHECK(occurrences("lc rgb") == 4);  // the last curve's colour is gnuplot's
+  CHECK(occurrences("pt 7 ps 1.2 lw 2") == 1);
+  CHECK(occurrences("pt 6 ps 1.2 lw 1") == 1);
+  CHECK(occurrences("pt 5 ps 1.1 lw 2") == 1);
+  CHECK(occurrences("lines dt 2 lw 2") == 2);
   std::filesystem::remove_all(dir);
 }

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 
@@ -276,6 +277,34 @@ Figure plot_bond_states(const Model& model, const fs::path& out_dir, const std::
   return draw(out_dir, stem, data, script);
 }
 
+namespace {
+
+// gnuplot's style of a curve: its line, and a points curve's marker.
+std::string curve_style(const Curve& c) {
+  if (!c.points) return "lines dt 2 lw 2";
+  switch (c.marker) {
+    case Marker::kSquare:
+      return "linespoints pt 5 ps 1.1 lw 2";
+    case Marker::kCircle:
+      return "linespoints pt 6 ps 1.2 lw 1";
+    case Marker::kDisc:
+      break;
+  }
+  return "linespoints pt 7 ps 1.2 lw 2";
+}
+
+// A curve's colour (Okabe and Ito's eight, told apart with colour-blind vision too), or nothing:
+// gnuplot's sequence.
+std::string curve_colour(const Curve& c) {
+  static constexpr std::array<const char*, 8> kPalette = {
+      "#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#000000", "#f0e442"};
+  if (c.colour < 0) return "";
+  return fmt::format(" lc rgb '{}'",
+                     kPalette[static_cast<std::size_t>(c.colour) % kPalette.size()]);
+}
+
+}  // namespace
+
 Figure plot_curves(const std::vector<Curve>& curves, const fs::path& out_dir,
                    const std::string& stem, const std::string& title, const std::string& x_label,
                    const std::string& y_label, const PlotAxes& axes) {
@@ -301,9 +330,8 @@ Figure plot_curves(const std::vector<Curve>& curves, const fs::path& out_dir,
       data += fmt::format("{:.9g} {:.9g}\n", c.x[i], c.y[i]);
     }
     data += "\n\n";
-    plot += fmt::format("{}'{}.dat' index {} with {} title {}", index > 0 ? ", " : "", stem, index,
-                        c.points ? "linespoints pt 7 ps 1.2 lw 2" : "lines dt 2 lw 2",
-                        gp_quote(c.label));
+    plot += fmt::format("{}'{}.dat' index {} with {}{} title {}", index > 0 ? ", " : "", stem,
+                        index, curve_style(c), curve_colour(c), gp_quote(c.label));
     ++index;
   }
   if (index == 0) throw Error(fmt::format("figure {}: no curve has points", stem));

@@ -61,11 +61,22 @@ Figure plot_bond_states(const Model& model, const std::filesystem::path& out_dir
                         double x_end = 0, const std::vector<std::string>& ply_labels = {},
                         const std::vector<CrackTrace>& cracks = {});
 
+/// A points curve's marker in plot_curves.
+enum class Marker {
+  kDisc,    ///< filled
+  kSquare,  ///< filled
+  kCircle,  ///< open, on a thinner line: a second set of the same quantity (a coarser size)
+};
+
 /// One curve of plot_curves.
 struct Curve {
   std::string label;
   std::vector<double> x, y;  ///< in the units of the axes' labels
   bool points = true;        ///< points joined by lines; false: a plain (dashed) line
+  /// Curves that belong together (one laminate's model and references) share a colour: an index
+  /// into plot_curves' palette of eight (taken modulo 8); -1: gnuplot's own sequence.
+  int colour = -1;
+  Marker marker = Marker::kDisc;  ///< of a points curve
 };
 
 /// Axes of plot_curves beyond their labels.

@@ -641,6 +641,23 @@ struct LaminateTargets {
 // The laminate's onset, saturation and strength beside the fracture-mechanics references: its
 // results.csv rows (issue 33's names), its row of the fracture table and its curves of the crack
 // density against stress.
+// A laminate's colour in the figures: its place in the config's layups.
+int laminate_colour(const CrossplySettings& cs, const LaminateRun& run) {
+  const auto found = std::find(cs.layups.begin(), cs.layups.end(), run.text);
+  return static_cast<int>(found - cs.layups.begin());
+}
+
+// A run's crack density against stress in its laminate's colour: discs at the finest particle
+// size, open circles at a coarser one, its size in the label where the config names several.
+Curve size_density_curve(const CrossplySettings& cs, const LaminateRun& run) {
+  Curve curve = run.samples.density_against_stress;
+  curve.colour = laminate_colour(cs, run);
+  curve.marker = run.finest ? Marker::kDisc : Marker::kCircle;
+  if (cs.diameters.size() > 1)
+    curve.label += fmt::format(", {:g} mm particles", run.diameter / kMetresPerMm);
+  return curve;
+}
+
 template <class Row>
 void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& run,
                                const CrackingReferences& refs, const StiffnessSamples& samples,
@@ -649,6 +666,7 @@ void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& ru
   const StrengthResult& r = run.result;
   const Material& material = cs.reference_material;
   const CrackOnset& onset = run.onset;
+  const int colour = laminate_colour(cs, run);
   auto onset_rows = [&](const std::string& source, double stress) {
     row("onset_stress", source, stress * kMPaPerPa, "MPa");
     row("onset_strain", source, 100 * stress / refs.ex, "%");
@@ -678,6 +696,8 @@ void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& ru
     row("strength", "dem with cure", cured.result.strength * kMPaPerPa, "MPa");
     Curve density = cured.samples.density_against_stress;
     density.label += " with cure";
+    density.colour = colour;
+    density.marker = Marker::kSquare;
     density_curves.push_back(std::move(density));
   }
   const double layer = 2 * refs.d;
@@ -707,8 +727,8 @@ void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& ru
     isolated = fmt::format("{:.1f} ({:.3f}%)", refs.isolated_onset * kMPaPerPa,
                            100 * refs.isolated_onset / refs.ex);
     band_text = fmt::format("{:.2f} – {:.2f}", low * kMetresPerMm, high * kMetresPerMm);
-    Curve low_curve{fmt::format("1/L* {}", run.text), {}, {}, false};
-    Curve high_curve{fmt::format("2/L* {}", run.text), {}, {}, false};
+    Curve low_curve{fmt::format("1/L* {}", run.text), {}, {}, false, colour};
+    Curve high_curve{fmt::format("2/L* {}", run.text), {}, {}, false, colour};
     const double top = std::max(r.strength, refs.isolated_onset);
     for (int j = 0; j <= 80; ++j) {
       const double sigma = refs.isolated_onset + (top - refs.isolated_onset) * j / 80;
@@ -721,7 +741,7 @@ void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& ru
     density_curves.push_back(low_curve);
     density_curves.push_back(high_curve);
   }
-  density_curves.push_back(samples.density_against_stress);
+  density_curves.push_back(size_density_curve(cs, run));
   fracture_table += markdown_row(
       {run.text, fmt::format("{:.2f}", layer / kMetresPerMm),
        onset.found ? fmt::format("{:.1f} ({:.3f}%)", onset.stress * kMPaPerPa, 100 * onset.strain)
@@ -1141,6 +1161,8 @@ ExperimentOutput report_crossply(const CrossplySettings& cs, const std::vector<L
                     fracture_table, density_curves, cure_table, targets);
     sections += crack_maps_markdown(cs, run, context.out_dir, out);
   }
+  for (const LaminateRun& run : runs)
+    if (!run.finest) density_curves.push_back(size_density_curve(cs, run));
   const Figure density_figure =
       plot_curves(density_curves, context.out_dir, fmt::format("{}_crack_density", file_stem(name)),
                   fmt::format("{}: 90° crack density against the laminate stress", material.name),
