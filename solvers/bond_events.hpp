@@ -80,15 +80,15 @@
 ///   would leave a mechanism is not opened. Fibre modes open site by site as above. A layer's
 ///   energy factor found at an earlier event is kept as a lower bound of its later ones (a
 ///   crack shields its neighbours), and found again when it would come first: a few
-///   factorizations per event rather than one per layer. The bound is not exact: the shipped
+///   factorizations per event rather than one per layer. The bound is not exact. The shipped
 ///   crossply's runs with every layer found again at every event (uncured and cured, 0.1 mm)
-///   took the same path to the peak, where only layer cracks open, but once fibre sites broke a
-///   layer's factor fell by up to 38% from one event to the next, so the path after the peak
-///   differs: the broken bonds at the end by up to 21% ([0/90_2]s 1,153 against 1,459; dropping
-///   every kept factor after each fibre break, as an earlier rule did, gave 1,211 there, and at
-///   0.05 mm made every event after the peak find every layer's factor again). The onsets, the
-///   densities and the strengths were the same to the last digit. Brittle cracks only (not with
-///   softening).
+///   took the same path to the peak: while only layer cracks opened, a layer's factor fell from
+///   one event to the next by at most 3.5% (layers that were not the next to crack), but once
+///   fibre sites broke by up to 54%, so the path after the peak differs: the broken bonds at the
+///   end by up to 21% ([0/90_2]s 1,153 against 1,459; dropping every kept factor after each
+///   fibre break, as an earlier rule did, gave 1,211 there, and at 0.05 mm made every event
+///   after the peak find every layer's factor again). The onsets, the densities and the
+///   strengths were the same to the last digit. Brittle cracks only (not with softening).
 /// - Preload (cure stresses, issue 33). Where the model's bonds carry free offsets
 ///   (Bonds::free_offset) or EventSettings::preload prescribes non-zero values, the state at load
 ///   factor lambda is u_p + lambda u_1: u_p the equilibrium under the offsets and the preload's
