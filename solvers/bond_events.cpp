@@ -1328,8 +1328,9 @@ class EventLoop {
   // A layer's energy factor found at an earlier event is kept as a lower bound of its current
   // one: cracks elsewhere shield it (it releases less at a given load once its neighbours have
   // cracked), so a layer whose bound is no smaller than the best crack found so far is passed
-  // over, and the others are found again, in order of their bounds (lazy evaluation). Not a
-  // bound after fibre breaks (bond_events.hpp, "Cracks through a layer", says what it changes).
+  // over, and the others are found again, in order of their bounds (lazy evaluation). Not an
+  // exact bound, least of all after fibre breaks (bond_events.hpp, "Cracks through a layer",
+  // says by how much and what it changes).
   SiteCrack critical_layer_crack(const MaterialPointFailure& mp, std::vector<SiteFailure>& sites) {
     SiteCrack best;
     std::vector<std::pair<double, SiteCrack>> deferred;  // (bound, layer crack)

@@ -638,9 +638,6 @@ struct LaminateTargets {
   double onset_strain_cured = NAN;  ///< DEM, pulled from the cured state
 };
 
-// The laminate's onset, saturation and strength beside the fracture-mechanics references: its
-// results.csv rows (issue 33's names), its row of the fracture table and its curves of the crack
-// density against stress.
 // A laminate's colour in the figures: its place in the config's layups.
 int laminate_colour(const CrossplySettings& cs, const LaminateRun& run) {
   const auto found = std::find(cs.layups.begin(), cs.layups.end(), run.text);
@@ -658,6 +655,9 @@ Curve size_density_curve(const CrossplySettings& cs, const LaminateRun& run) {
   return curve;
 }
 
+// The laminate's onset, saturation and strength beside the fracture-mechanics references: its
+// results.csv rows (issue 33's names), its row of the fracture table and its curves of the crack
+// density against stress.
 template <class Row>
 void report_fracture_mechanics(const CrossplySettings& cs, const LaminateRun& run,
                                const CrackingReferences& refs, const StiffnessSamples& samples,
