@@ -289,10 +289,10 @@ class UnitLoadSolver {
       return;
     }
     Bonds& bonds = model.bonds;
-    auto set = [&](int b, const double* v) { write_bond_fields(bonds, b, v); };
     for (const EventChange& c : s.changes)
       require(c.bond >= 0 && c.bond < bonds.size(), "checkpoint: a change names no bond");
-    for (auto c = s.changes.rbegin(); c != s.changes.rend(); ++c) set(c->bond, c->before);
+    for (auto c = s.changes.rbegin(); c != s.changes.rend(); ++c)
+      write_bond_fields(bonds, c->bond, c->before);
     constraints_ = s.factored_from;
     preload_ = s.preload_factored_from;
     factor(model);
@@ -313,7 +313,7 @@ class UnitLoadSolver {
       removed.shear_stiffness = c.removed[1];
       removed.bending_stiffness = c.removed[2];
       removed.twisting_stiffness = c.removed[3];
-      set(c.bond, c.after);
+      write_bond_fields(bonds, c.bond, c.after);
       group.emplace_back(c.bond, removed);
       records.push_back(c);
     }
@@ -543,11 +543,7 @@ class UnitLoadSolver {
         system_->solve(model, constraints_.value, false);  // the unit load alone
       else
         system_->solve(model, preload_, true);  // the preload and the free offsets
-      for (int i = 0; i < n; ++i)
-        for (int c = 0; c < 3; ++c) {
-          u0_(kDofsPerParticle * i + c, column) = p.displacement(i, c);
-          u0_(kDofsPerParticle * i + 3 + c, column) = p.rotation(i, c);
-        }
+      u0_.col(column) = particle_state_vector(p);
     }
     const std::vector<int>& free = system_->free_dofs();
     free_count_ = static_cast<int>(free.size());

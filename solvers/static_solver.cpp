@@ -442,14 +442,25 @@ std::vector<PinnedDof> pin_rigid_modes(const Model& model, DofConstraints& const
   return pins;
 }
 
-Eigen::VectorXd particle_state_vector(const Particles& p) {
-  Eigen::VectorXd u(kDofsPerParticle * p.size());
-  for (int i = 0; i < p.size(); ++i)
+namespace {
+
+// A translational and a rotational field of the particles (one row each) as one vector in dof
+// order: 6 * particle + component.
+Eigen::VectorXd dof_vector(const Vector3Array& translational, const Vector3Array& rotational) {
+  const auto n = translational.rows();
+  Eigen::VectorXd v(kDofsPerParticle * n);
+  for (Eigen::Index i = 0; i < n; ++i)
     for (int c = 0; c < 3; ++c) {
-      u(kDofsPerParticle * i + c) = p.displacement(i, c);
-      u(kDofsPerParticle * i + 3 + c) = p.rotation(i, c);
+      v(kDofsPerParticle * i + c) = translational(i, c);
+      v(kDofsPerParticle * i + 3 + c) = rotational(i, c);
     }
-  return u;
+  return v;
+}
+
+}  // namespace
+
+Eigen::VectorXd particle_state_vector(const Particles& p) {
+  return dof_vector(p.displacement, p.rotation);
 }
 
 namespace {
@@ -458,13 +469,7 @@ namespace {
 Eigen::VectorXd bond_generalized_forces(Particles& p, const Bonds& bonds, double* energy) {
   const BondPass pass = compute_bond_forces(p, bonds);
   if (energy) *energy = pass.strain_energy;
-  Eigen::VectorXd f(kDofsPerParticle * p.size());
-  for (int i = 0; i < p.size(); ++i)
-    for (int c = 0; c < 3; ++c) {
-      f(kDofsPerParticle * i + c) = p.force(i, c);
-      f(kDofsPerParticle * i + 3 + c) = p.torque(i, c);
-    }
-  return f;
+  return dof_vector(p.force, p.torque);
 }
 
 // The generalized forces the bonds' free offsets put on the particles at zero displacement and
