@@ -142,6 +142,24 @@ TEST_CASE("a crack cut by hand breaks the 90° layer's bonds across its plane, a
                        Error);
 }
 
+TEST_CASE("the grips' faces are their innermost particles, where CalculiX's coupon ends") {
+  CrossPly c = crossply(2e-3, 0.5e-3, {});
+  const GripFaces one = grip_faces(c.model.particles);
+  CHECK(one.left == doctest::Approx(c.grips.x_min).epsilon(1e-12));
+  CHECK(one.right == doctest::Approx(c.grips.x_max).epsilon(1e-12));
+  // The strength test's default grips at the material point: two diameters and a diagonal bond
+  // deep, so four columns at each end and the free length six diameters shorter than the span.
+  const CouponGrips deep = assign_grips(c.model.particles, (2 + std::sqrt(2.0)) * kDiameter);
+  const GripFaces faces = grip_faces(c.model.particles);
+  CHECK(faces.left == doctest::Approx(deep.x_min + 3 * kDiameter).epsilon(1e-12));
+  CHECK(faces.right == doctest::Approx(deep.x_max - 3 * kDiameter).epsilon(1e-12));
+  CHECK(deep.left == 4 * c.grips.left);
+  for (int i = 0; i < c.model.particles.size(); ++i)
+    c.model.particles.group(i) = static_cast<int>(BoundaryGroup::kFree);
+  CHECK_THROWS_WITH_AS(grip_faces(c.model.particles), doctest::Contains("holds no particle"),
+                       Error);
+}
+
 TEST_CASE("plies with transverse shear: a uniform transverse shear holds G13 and G23's energy") {
   const Material m = load_material("eglass-my750");
   for (const char* name : {"square", "hex2d"}) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/error.hpp"
 #include "core/measurements.hpp"
@@ -41,6 +42,20 @@ CouponGrips assign_grips(Particles& p, double grip) {
   }
   require(g.left > 0 && g.right > 0, "a grip holds no particle");
   return g;
+}
+
+GripFaces grip_faces(const Particles& p) {
+  GripFaces faces{-std::numeric_limits<double>::infinity(),
+                  std::numeric_limits<double>::infinity()};
+  for (int i = 0; i < p.size(); ++i) {
+    const double x = p.reference_position(i, 0);
+    if (p.group(i) == static_cast<int>(BoundaryGroup::kLeftGrip))
+      faces.left = std::max(faces.left, x);
+    else if (p.group(i) == static_cast<int>(BoundaryGroup::kRightGrip))
+      faces.right = std::min(faces.right, x);
+  }
+  require(std::isfinite(faces.left) && std::isfinite(faces.right), "a grip holds no particle");
+  return faces;
 }
 
 DofConstraints grip_constraints(const Particles& p, double left_ux, double right_ux,

@@ -42,6 +42,16 @@ struct CouponGrips {
 /// Throws plydem::Error if the grips leave no free length or one holds no particle.
 CouponGrips assign_grips(Particles& particles, double grip_length);
 
+/// The ends of the free length that assign_grips left between the grips: the reference x of the
+/// left grip's innermost particle and of the right grip's [m]. The grips move rigidly along x, so a
+/// continuum model of the same coupon has its loaded faces here (the default grips at the material
+/// point are deeper than two diameters: strength.cpp, default_grip_length). Throws plydem::Error
+/// if a grip holds no particle.
+struct GripFaces {
+  double left = 0, right = 0;
+};
+GripFaces grip_faces(const Particles& particles);
+
 /// The grips' static constraints: the left grip's ux at `left_ux`, the right one's at `right_ux`
 /// [m], both held in z and against tilting; `clamped` also holds y and the in-plane rotation.
 DofConstraints grip_constraints(const Particles& particles, double left_ux, double right_ux,

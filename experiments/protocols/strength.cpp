@@ -543,14 +543,11 @@ struct UnitLoading {
 // grips' depth of the y edges (the frame: StrengthSettings::load).
 std::vector<bool> held_by_grips(const Particles& p, StrengthLoad load) {
   std::vector<bool> held(static_cast<std::size_t>(p.size()));
-  double depth = 0;  // the grips' depth along x, as assign_grips left it
-  const double x_min = p.reference_position.col(0).minCoeff();
-  for (int i = 0; i < p.size(); ++i) {
+  for (int i = 0; i < p.size(); ++i)
     held[static_cast<std::size_t>(i)] = p.group(i) != static_cast<int>(BoundaryGroup::kFree);
-    if (p.group(i) == static_cast<int>(BoundaryGroup::kLeftGrip))
-      depth = std::max(depth, p.reference_position(i, 0) - x_min);
-  }
   if (load != StrengthLoad::kShear) return held;
+  // The grips' depth along x, as assign_grips left it.
+  const double depth = grip_faces(p).left - p.reference_position.col(0).minCoeff();
   const double y_min = p.reference_position.col(1).minCoeff();
   const double y_max = p.reference_position.col(1).maxCoeff();
   for (int i = 0; i < p.size(); ++i) {
