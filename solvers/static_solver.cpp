@@ -308,7 +308,9 @@ std::string join(const std::vector<std::string>& items) {
 //   bonds) ties the two particles' material points at its contact (x_first + lever_first n =
 //   x_second - lever_second n); two rigid bodies tied at three or more non-collinear contact
 //   points move as one, and merging repeats until nothing merges;
-// - any other bond, or bodies left apart within one bonded cluster: false (the probe decides).
+// - a broken bond: nothing (its stiffnesses are zero);
+// - any other bond, or bodies left apart within one bonded cluster (broken bonds included, as
+//   bonded_clusters joins them): false (the probe decides).
 bool free_motions_are_rigid(const Model& model) {
   const Bonds& b = model.bonds;
   const auto& x = model.particles.reference_position;
@@ -322,6 +324,7 @@ bool free_motions_are_rigid(const Model& model) {
   for (int d = 0; d < 3; ++d)
     if (n > 0) extent = std::max(extent, x.col(d).maxCoeff() - x.col(d).minCoeff());
   for (int k = 0; k < b.size(); ++k) {
+    if (b.is_broken(k)) continue;  // no stiffness; its particles must be one body (below)
     if (!(b.normal_stiffness(k) > 0 && b.shear_stiffness(k) > 0 &&
           b.out_of_plane_shear_ratio(k) > 0))
       return false;
@@ -367,8 +370,10 @@ bool free_motions_are_rigid(const Model& model) {
       if (spread) merged |= join(pair.first, pair.second);
     }
   }
-  for (int t : point_bonds)
-    if (root(b.first(t)) != root(b.second(t))) return false;
+  // Every bond's particles, broken bonds' included: the clusters free_rigid_modes pins are
+  // joined by every bond, so a piece that broken bonds alone hold to its cluster is a mechanism.
+  for (int k = 0; k < b.size(); ++k)
+    if (root(b.first(k)) != root(b.second(k))) return false;
   return true;
 }
 

@@ -142,8 +142,11 @@ void validate(const StaticSettings& settings);
 /// Whether the bonds let each bonded cluster of `model` move freely only as a rigid body (a
 /// sufficient test from the bonds alone, see the .cpp): then, with the clusters' rigid modes
 /// prescribed, the free-free stiffness is positive definite, and PETSc skips its mechanism probe.
-/// False where it cannot tell (a bond with no normal or shear stiffness, point bonds at collinear
-/// contacts), not only where there is a mechanism.
+/// False where it cannot tell (an intact bond with no normal or shear stiffness, point bonds at
+/// collinear contacts, a piece that only broken bonds join to the rest of its cluster), not only
+/// where there is a mechanism. Broken bonds count for nothing else: a cracked coupon whose intact
+/// bonds still hold it together skips the probe (the coupled criterion's layer cracks, each
+/// solved by PETSc afresh, bond_events.hpp).
 bool free_motions_are_rigid(const Model& model);
 
 /// Wall-clock seconds of each phase (std::chrono::steady_clock).

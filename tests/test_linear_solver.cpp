@@ -9,13 +9,18 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <random>
+#include <span>
 #include <string>
+#include <vector>
 
+#include "contacts/bond_opening.hpp"
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "experiments/protocols/stiffness.hpp"
@@ -381,6 +386,10 @@ TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {
   CHECK(free_motions_are_rigid(m));
   m.bonds.normal_stiffness(2) = 0;
   CHECK_FALSE(free_motions_are_rigid(m));
+  // Broken, the middle bond leaves two rigid pieces in one bonded cluster: not rigid.
+  m.bonds.normal_stiffness(2) = 1e6;
+  open_bond(m.bonds, 2, BondState::kBrokenTension);
+  CHECK_FALSE(free_motions_are_rigid(m));
 }
 
 TEST_CASE(
@@ -395,6 +404,27 @@ TEST_CASE(
     if (!(b.bending_stiffness(k) > 0 && b.twisting_stiffness(k) > 0)) ++point_bonds;
   REQUIRE(point_bonds > 0);
   CHECK(free_motions_are_rigid(m));
+  // A broken bond has no stiffness: where intact bonds still join its particles (the events
+  // solver's cracked coupons) the laminate is one rigid body as before, and PETSc skips the probe;
+  // a crack through the whole laminate leaves two pieces that only broken bonds join: not rigid.
+  Model cracked = m;
+  const auto& x = cracked.particles.reference_position;
+  // A plane between two columns of particles near the middle.
+  std::vector<double> columns(x.col(0).begin(), x.col(0).end());
+  std::sort(columns.begin(), columns.end());
+  columns.erase(std::unique(columns.begin(), columns.end(),
+                            [](double a, double c) { return std::abs(a - c) < 1e-12; }),
+                columns.end());
+  REQUIRE(columns.size() > 2);
+  const double middle = 0.5 * (columns[columns.size() / 2 - 1] + columns[columns.size() / 2]);
+  std::vector<int> across;
+  for (int k = 0; k < b.size(); ++k)
+    if ((x(b.first(k), 0) - middle) * (x(b.second(k), 0) - middle) < 0) across.push_back(k);
+  REQUIRE(across.size() > 1);
+  open_bond(cracked.bonds, across.front(), BondState::kBrokenTension);
+  CHECK(free_motions_are_rigid(cracked));
+  open_bonds(cracked.bonds, std::span<const int>(across).subspan(1), BondState::kBrokenTension);
+  CHECK_FALSE(free_motions_are_rigid(cracked));
   // Without bending springs in the plies every pair of particles is tied at one point only: the
   // test cannot tell (each particle may spin about its single contacts), so PETSc probes.
   m.bonds.bending_stiffness.setZero();
