@@ -1,6 +1,7 @@
 #include "solvers/bond_events.hpp"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -11,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <utility>
 #include <vector>
 
@@ -20,6 +22,7 @@
 #include "core/error.hpp"
 #include "core/preloaded_failure.hpp"
 #include "core/stopwatch.hpp"
+#include "solvers/linear_solver.hpp"
 
 namespace plydem {
 
@@ -1758,6 +1761,15 @@ EventsResult run_events(Model& model, const DofConstraints& unit, const DofFlags
                       settings.preload.rows(), settings.preload.cols(), n));
   require(settings.preload.allFinite(), "events: the preload has a non-finite value");
   check_inputs(model, unit, reaction_dofs, settings.material_point.has_value());
+  static std::once_flag said_ranks;  // once a process
+  if (mpi_size() > 1)
+    std::call_once(said_ranks, [] {
+      spdlog::warn(
+          "events: the event-by-event solver runs on one rank: under mpiexec each of the {} "
+          "ranks runs it whole, the same events on every rank, and PETSc shares out only its "
+          "static solves (the models are not split across ranks)",
+          mpi_size());
+    });
   EventLoop loop(model, unit, reaction_dofs, settings, start);
   if (resume) loop.resume(*resume);
   return loop.run();

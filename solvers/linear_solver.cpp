@@ -293,6 +293,24 @@ int mpi_rank() {
 #endif
 }
 
+std::vector<char> rank_particles(const Eigen::Array<double, Eigen::Dynamic, 3>& position) {
+#ifdef PLYDEM_HAVE_PETSC
+  return petsc_rank_particles(position);
+#else
+  (void)position;
+  return {};
+#endif
+}
+
+void sum_over_ranks(double* values, int count) {
+#ifdef PLYDEM_HAVE_PETSC
+  petsc_sum_over_ranks(values, count);
+#else
+  (void)values;
+  (void)count;
+#endif
+}
+
 int mpi_size() {
 #ifdef PLYDEM_HAVE_PETSC
   return petsc_size();

@@ -95,10 +95,10 @@ void set_petsc_options(const std::string& options);
 /// PETSc and MPI for the life of a program (construct first thing in main): initializes them with
 /// the program's arguments, finalizes them at the end. Without PETSc, or without this object,
 /// there is one rank. Under `mpiexec -n N`, every rank runs the whole program on the same input
-/// (model building, assembly of the free-free matrix and right-hand sides are replicated,
-/// deterministically); each rank hands only the rows of its own slice of particles to PETSc,
-/// which distributes the matrix, the AMG hierarchy and the CG iterations, and gathers the
-/// solution back to every rank. Only rank 0 should print (is_root()).
+/// (model building and the right-hand sides are replicated, deterministically); where PETSc
+/// solves, each rank assembles only the rows of its own slice of particles (rank_particles) and
+/// hands them to PETSc, which distributes the matrix, the AMG hierarchy and the CG iterations,
+/// and gathers the solution back to every rank. Only rank 0 should print (is_root()).
 class ParallelSession {
  public:
   ParallelSession(int* argc, char*** argv);
@@ -112,6 +112,12 @@ int mpi_size();
 inline bool is_root() {
   return mpi_rank() == 0;
 }
+/// The particles whose rows of a kPetsc matrix this rank hands to PETSc (1 = its own), for a
+/// caller that assembles only those rows (StaticSystem under mpiexec); `position` holds every
+/// particle's reference position. Empty on one rank (every row is its own).
+std::vector<char> rank_particles(const Eigen::Array<double, Eigen::Dynamic, 3>& position);
+/// Every rank's `count` values summed, on every rank (nothing on one rank).
+void sum_over_ranks(double* values, int count);
 
 /// Where the unknowns of a static solve sit, for the solvers that build the rigid-body modes
 /// (kPetsc): unknown k is dof `dofs[k]` = 6 * particle + component (increasing), its value is
@@ -125,6 +131,9 @@ struct UnknownLayout {
   /// cluster move freely only as a rigid body, see free_motions_are_rigid in static_solver.cpp,
   /// and each cluster's rigid modes are prescribed); kPetsc then skips its mechanism probe.
   bool positive_definite = false;
+  /// The matrix holds only the rows of this MPI rank's particles (rank_particles) and their
+  /// transposes: kPetsc reads no others, and names no mechanism (it needs the whole matrix).
+  bool own_rows_only = false;
 };
 /// What kAuto knows of a matrix before it chooses (its factor counted in the order given), and how
 /// it is used.

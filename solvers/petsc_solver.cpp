@@ -33,6 +33,8 @@
 #include <cstdlib>
 #include <numeric>
 #include <optional>
+#include <utility>
+#include <vector>
 
 #include "core/error.hpp"
 #include "core/machine_memory.hpp"
@@ -90,6 +92,30 @@ void default_option(const char* name, const char* value) {
   PetscBool set = PETSC_FALSE;
   check(PetscOptionsHasName(nullptr, nullptr, name, &set), "options");
   if (!set) check(PetscOptionsSetValue(nullptr, name, value), "options");
+}
+
+// Each particle's slot (its block of six rows): the particles in the order of their coordinate
+// along the model's longest extent, so that a rank's block is a slice across it, whose faces (the
+// ghost rows) are the smallest, where the models' own order (ply by ply) would cut through the
+// thickness.
+std::vector<int> particle_slots(const Eigen::Array<double, Eigen::Dynamic, 3>& x) {
+  const auto items = static_cast<int>(x.rows());
+  const Eigen::RowVector3d extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
+  Eigen::Index axis = 0;
+  extent.maxCoeff(&axis);
+  std::vector<int> by_coordinate(items);
+  std::iota(by_coordinate.begin(), by_coordinate.end(), 0);
+  std::stable_sort(by_coordinate.begin(), by_coordinate.end(),
+                   [&](int a, int b) { return x(a, axis) < x(b, axis); });
+  std::vector<int> slot_of(items);
+  for (int s = 0; s < items; ++s) slot_of[by_coordinate[s]] = s;
+  return slot_of;
+}
+
+// This rank's slots among `items`: [first, end), an even share in rank order.
+std::pair<int, int> rank_slots(int items) {
+  const long rank = mpi_rank(), size = mpi_size();
+  return {static_cast<int>(rank * items / size), static_cast<int>((rank + 1) * items / size)};
 }
 
 // splitmix64: a pseudo-random value in [-1, 1] of a row, the same on every rank.
@@ -173,6 +199,13 @@ class PetscSolver final : public LinearSolver {
     check(MatCreateVecs(a_, &x_, &b_), "MatCreateVecs");
     check(VecScatterCreateToAll(x_, &to_all_, &all_), "VecScatterCreateToAll");
     if (!layout_.positive_definite && probe_finds_null_space()) {
+      if (layout_.own_rows_only)
+        throw Error(fmt::format(
+            "static solve: PETSc's probe finds the stiffness singular (the probe solve missed by "
+            "{:.3g} of its size): the free dofs form a mechanism. Naming its dofs needs the whole "
+            "matrix on one process, and each of the {} MPI ranks assembled its own rows only: "
+            "run the same on one rank (without mpiexec) to have it named",
+            probe_error_, mpi_size()));
       // The hand-written Cholesky names the zero pivots, in the order given (the particles' own,
       // with more fill than a fill-reducing one): its symbolic analysis says first whether the
       // factor fits.
@@ -259,27 +292,13 @@ class PetscSolver final : public LinearSolver {
     block_ = blocks ? 6 : 1;
     const int items = blocks ? static_cast<int>(layout_.position.rows()) : n_;
     rows_ = block_ * items;
-    // Particles take their slots in the order of their coordinate along the model's longest
-    // extent: a rank's block is then a slice across it, whose faces (the ghost rows) are the
-    // smallest, where the models' own order (ply by ply) would cut through the thickness.
-    slot_of_.resize(blocks ? items : 0);
-    if (blocks) {
-      const auto& x = layout_.position;
-      const Eigen::RowVector3d extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
-      Eigen::Index axis = 0;
-      extent.maxCoeff(&axis);
-      std::vector<int> by_coordinate(items);
-      std::iota(by_coordinate.begin(), by_coordinate.end(), 0);
-      std::stable_sort(by_coordinate.begin(), by_coordinate.end(),
-                       [&](int a, int b) { return x(a, axis) < x(b, axis); });
-      for (int s = 0; s < items; ++s) slot_of_[by_coordinate[s]] = s;
-    }
+    if (blocks) slot_of_ = particle_slots(layout_.position);
     row_of_.resize(n_);
     for (int k = 0; k < n_; ++k)
       row_of_[k] = blocks ? 6 * slot_of_[layout_.dofs[k] / 6] + layout_.dofs[k] % 6 : k;
-    const long rank = mpi_rank(), size = mpi_size();
-    first_ = block_ * static_cast<int>(rank * items / size);
-    end_ = block_ * static_cast<int>((rank + 1) * items / size);
+    const auto [first, end] = rank_slots(items);
+    first_ = block_ * first;
+    end_ = block_ * end;
   }
 
   // This rank's rows of the padded symmetric matrix, in compressed rows with global columns.
@@ -518,6 +537,22 @@ void start_petsc_session(int* argc, char*** argv) {
 void end_petsc_session() {
   if (session_initialized) PetscFinalize();
   session_initialized = false;
+}
+
+std::vector<char> petsc_rank_particles(const Eigen::Array<double, Eigen::Dynamic, 3>& position) {
+  ensure_petsc();  // MPI's ranks are known once PETSc is up (the solver would start it anyway)
+  if (petsc_size() <= 1) return {};
+  const std::vector<int> slot_of = particle_slots(position);
+  const auto [first, end] = rank_slots(static_cast<int>(position.rows()));
+  std::vector<char> own(slot_of.size(), 0);
+  for (std::size_t i = 0; i < slot_of.size(); ++i)
+    own[i] = slot_of[i] >= first && slot_of[i] < end ? 1 : 0;
+  return own;
+}
+
+void petsc_sum_over_ranks(double* values, int count) {
+  if (petsc_size() <= 1) return;
+  MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
 }
 
 void broadcast_from_root(double* values, int count) {

@@ -5,6 +5,9 @@
 
 #include <memory>
 #include <string>
+#include <vector>
+
+#include <Eigen/Dense>
 
 #include "solvers/linear_solver.hpp"
 
@@ -18,6 +21,12 @@ void insert_petsc_options(const std::string& options);
 /// started elsewhere).
 void start_petsc_session(int* argc, char*** argv);
 void end_petsc_session();
+/// The particles whose rows this rank hands to PETSc (1 = its own), `position` every particle's:
+/// its even share of them in the order of their coordinate along the longest extent; empty on
+/// one rank. Starts PETSc if it is not up.
+std::vector<char> petsc_rank_particles(const Eigen::Array<double, Eigen::Dynamic, 3>& position);
+/// Every rank's `count` values summed, on every rank (MPI_Allreduce; nothing with one rank).
+void petsc_sum_over_ranks(double* values, int count);
 /// Rank 0's `count` values to every rank of PETSC_COMM_WORLD (MPI_Bcast; nothing with one rank).
 void broadcast_from_root(double* values, int count);
 /// MPI rank and size of PETSC_COMM_WORLD; 0 and 1 before PETSc is initialized.

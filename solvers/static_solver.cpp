@@ -545,6 +545,10 @@ struct StaticSystem::Impl {
   Eigen::VectorXd s;            // Jacobi scaling of the free dofs
   BlockStiffness k;             // for the right-hand sides -K_fp u_p
   SparseMatrix a;               // lower triangle of S K_ff S
+  // Under mpiexec with PETSc: the particles whose rows this rank assembles (k and a hold only
+  // theirs whole; linear_solver.hpp, rank_particles); empty: every row.
+  std::vector<char> own;
+  Eigen::Index nonzeros = 0;  // of the whole lower triangle, every rank's share summed
   std::unique_ptr<LinearSolver> cholesky;
   std::unique_ptr<IncompleteCholeskyCg> cg_ic;
   std::unique_ptr<JacobiCg> cg_jacobi;
@@ -553,6 +557,37 @@ struct StaticSystem::Impl {
   StaticTimings setup;
   int factorizations = 0;
   mutable int solves = 0;
+
+  // The blocks (the bonds that reach the particles `own` flags, or all), the Jacobi scaling and
+  // the scaled lower triangle, and the whole triangle's entries.
+  void assemble(const Model& model) {
+    k = block_stiffness(model, order, own.empty() ? nullptr : &own);
+    // Jacobi scaling A = S K_ff S with S = diag(K_ff)^-1/2. Rotational and translational
+    // stiffnesses differ by the squared particle radius (1e-10 in SI); with a unit diagonal the
+    // factorization's pivot test means the same for both, and CG's preconditioners start better
+    // conditioned.
+    for (int f = 0; f < nf; ++f) {
+      const int i = free_dofs[f] / kDofsPerParticle, c = free_dofs[f] % kDofsPerParticle;
+      const double diagonal = k.diagonal(order.rank[i], c);
+      if (!(diagonal > 0))
+        throw Error(
+            fmt::format("static solve: nothing resists {}: every bond of the particle has zero "
+                        "stiffness in that direction; prescribe it or stiffen the bonds",
+                        dof_at(model.particles, free_dofs[f])));
+      s(f) = 1 / std::sqrt(diagonal);
+    }
+    // The lower triangle only: all that the factorizations, IC and CG read, at half the memory.
+    a = compress_lower(k, free_index, nf, s);
+    nonzeros = a.nonZeros();
+    if (!own.empty()) {  // the columns of a rank's own particles are whole, and no other rank's
+      double own_columns = 0;
+      for (int f = 0; f < nf; ++f)
+        if (own[static_cast<std::size_t>(free_dofs[f] / kDofsPerParticle)])
+          own_columns += static_cast<double>(a.outerIndexPtr()[f + 1] - a.outerIndexPtr()[f]);
+      sum_over_ranks(&own_columns, 1);
+      nonzeros = static_cast<Eigen::Index>(own_columns);
+    }
+  }
 
   template <typename Cg>
   std::unique_ptr<Cg> make_cg() const {
@@ -647,22 +682,11 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
   }
 
   m.s.resize(nf);
-  m.k = block_stiffness(model, m.order);
-  // Jacobi scaling A = S K_ff S with S = diag(K_ff)^-1/2. Rotational and translational
-  // stiffnesses differ by the squared particle radius (1e-10 in SI); with a unit diagonal the
-  // pivot test below means the same for both, and CG's preconditioners start better conditioned.
-  for (int f = 0; f < nf; ++f) {
-    const int i = m.free_dofs[f] / kDofsPerParticle, c = m.free_dofs[f] % kDofsPerParticle;
-    const double diagonal = m.k.diagonal(m.order.rank[i], c);
-    if (!(diagonal > 0))
-      throw Error(
-          fmt::format("static solve: nothing resists {}: every bond of the particle has zero "
-                      "stiffness in that direction; prescribe it or stiffen the bonds",
-                      dof_at(p, m.free_dofs[f])));
-    m.s(f) = 1 / std::sqrt(diagonal);
-  }
-  // The lower triangle only: all that the factorizations, IC and CG read, at half the memory.
-  m.a = compress_lower(m.k, m.free_index, nf, m.s);
+  // Under mpiexec, where PETSc solves (chosen here, not by kAuto's own choice later), each rank
+  // assembles the bonds that reach its own particles only: the rows it hands PETSc.
+  if (m.direct && nf > 0 && kind == LinearSolverKind::kPetsc)
+    m.own = rank_particles(p.reference_position);
+  m.assemble(model);
   m.setup.assembly = phase.seconds();
 
   phase.restart();
@@ -678,8 +702,8 @@ StaticSystem::StaticSystem(const Model& model, const DofConstraints& given,
     const double threshold = settings.pivot_tolerance * std::max(nf, 1000);
     // Where the unknowns sit, for PETSc's rigid-body near-null space.
     // The rigidity test only where PETSc may solve (it spares PETSc's mechanism probe).
-    m.cholesky->set_layout(
-        {m.free_dofs, m.s, p.reference_position, petsc_may_solve && free_motions_are_rigid(model)});
+    m.cholesky->set_layout({m.free_dofs, m.s, p.reference_position,
+                            petsc_may_solve && free_motions_are_rigid(model), !m.own.empty()});
     m.cholesky->factor(m.a, threshold);
     ++m.factorizations;
     if (!m.cholesky->zero_pivots().empty())
@@ -759,7 +783,8 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values,
   result.dofs = m.dofs;
   result.free_dofs = m.nf;
   result.prescribed_dofs = m.prescribed;
-  result.stiffness_nonzeros = m.a.nonZeros();
+  result.stiffness_nonzeros = m.nonzeros;
+  result.rank_stiffness_nonzeros = m.a.nonZeros();
   result.pinned = m.pinned;
   result.reused_factorization = m.solves > 0;
   result.factor_entries = m.cholesky ? m.cholesky->factor_entries() : 0.0;
@@ -817,9 +842,20 @@ StaticResult StaticSystem::solve(Model& model, const DofArray& values,
   require(y.allFinite(),
           "static solve: the solution is not finite (the stiffness matrix is numerically "
           "singular)");
-  const double b_norm = b.norm();
   const Eigen::VectorXd ay = m.a.selfadjointView<Eigen::Lower>() * y;
-  result.relative_residual = b_norm > 0 ? (ay - b).norm() / b_norm : ay.norm();
+  double b_norm = b.norm(), residual = (ay - b).norm();
+  if (!m.own.empty()) {  // over the rows each rank holds whole, summed over the ranks
+    double squares[2] = {0, 0};
+    for (int f = 0; f < nf; ++f)
+      if (m.own[static_cast<std::size_t>(m.free_dofs[f] / kDofsPerParticle)]) {
+        squares[0] += (ay(f) - b(f)) * (ay(f) - b(f));
+        squares[1] += b(f) * b(f);
+      }
+    sum_over_ranks(squares, 2);
+    residual = std::sqrt(squares[0]);
+    b_norm = std::sqrt(squares[1]);
+  }
+  result.relative_residual = b_norm > 0 ? residual / b_norm : residual;
 
   // The solution, and the kernel's forces at it: ~0 on free dofs, -(K u)_p on prescribed ones.
   Eigen::VectorXd u(m.dofs);

@@ -173,6 +173,9 @@ struct StaticResult {
   int free_dofs = 0;
   int prescribed_dofs = 0;              ///< pins included
   Eigen::Index stiffness_nonzeros = 0;  ///< in the lower triangle of K_ff
+  /// Of them, the entries this MPI rank assembled (under mpiexec with PETSc, the rows of its own
+  /// particles: linear_solver.hpp, rank_particles); stiffness_nonzeros on one rank.
+  Eigen::Index rank_stiffness_nonzeros = 0;
   int iterations = 0;            ///< conjugate gradient iterations (0 for kDirect but with kPetsc)
   double relative_residual = 0;  ///< |A y - b| / |b| of the scaled free-free system
   double strain_energy = 0;      ///< of the solution [J]

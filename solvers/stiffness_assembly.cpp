@@ -62,21 +62,29 @@ Eigen::MatrixXd BlockStiffness::multiply(const Eigen::MatrixXd& x) const {
   return y;
 }
 
-BlockStiffness block_stiffness(const Model& model, const EliminationOrder& order) {
+BlockStiffness block_stiffness(const Model& model, const EliminationOrder& order,
+                               const std::vector<char>* rows) {
   const int n = model.particles.size();
   const Bonds& bonds = model.bonds;
   const std::vector<int>& rank = order.rank;
+  // Whether bond b's blocks between its particles are kept (all but the diagonal ones are left
+  // out for a bond that reaches no flagged particle).
+  auto coupled = [&](int b) {
+    return !rows || (*rows)[static_cast<std::size_t>(bonds.first(b))] ||
+           (*rows)[static_cast<std::size_t>(bonds.second(b))];
+  };
   // Pattern: for each column rank, itself and the larger ranks bonded to it (compressed rows,
   // counted first: no vector per particle).
   BlockStiffness k;
   std::vector<int> begin(n + 1, 0);
   for (int b = 0; b < bonds.size(); ++b)
-    ++begin[std::min(rank[bonds.first(b)], rank[bonds.second(b)]) + 1];
+    if (coupled(b)) ++begin[std::min(rank[bonds.first(b)], rank[bonds.second(b)]) + 1];
   for (int c = 0; c < n; ++c) begin[c + 1] += begin[c] + 1;  // + 1: the diagonal block
   std::vector<int> entries(begin[n]);
   std::vector<int> cursor(begin.begin(), begin.end() - 1);
   for (int c = 0; c < n; ++c) entries[cursor[c]++] = c;
   for (int b = 0; b < bonds.size(); ++b) {
+    if (!coupled(b)) continue;
     const int ri = rank[bonds.first(b)], rj = rank[bonds.second(b)];
     entries[cursor[std::min(ri, rj)]++] = std::max(ri, rj);
   }
@@ -95,9 +103,11 @@ BlockStiffness block_stiffness(const Model& model, const EliminationOrder& order
     // B^T D B is symmetric up to rounding; make it exactly so (the solvers read one triangle).
     const Matrix12d sym = 0.5 * (full + full.transpose());
     const int r[2] = {rank[bonds.first(b)], rank[bonds.second(b)]};
+    const bool between = coupled(b);
     for (int cb = 0; cb < 2; ++cb)
       for (int rb = 0; rb < 2; ++rb) {
         if (r[rb] < r[cb]) continue;  // upper triangle: the transpose of a stored block
+        if (rb != cb && !between) continue;
         double* v = k.block(r[cb], r[rb]);
         for (int c = 0; c < 6; ++c)
           for (int i = 0; i < 6; ++i) v[6 * c + i] += sym(6 * rb + i, 6 * cb + c);

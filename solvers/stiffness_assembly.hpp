@@ -49,8 +49,13 @@ struct BlockStiffness {
 };
 
 /// Sums parallel_bond_stiffness over the bonds (each made exactly symmetric, (K + K^T) / 2) into
-/// blocks in the rank order of `order`.
-BlockStiffness block_stiffness(const Model& model, const EliminationOrder& order);
+/// blocks in the rank order of `order`. With `rows` (one flag per particle), the blocks between
+/// two particles are those of the bonds that reach a flagged particle only: the rows of the
+/// flagged particles are whole (every entry the same bits as without `rows`), the others are not,
+/// and every diagonal block is whole (the solvers scale by the diagonal). A rank's share of a
+/// distributed matrix (linear_solver.hpp, rank_particles).
+BlockStiffness block_stiffness(const Model& model, const EliminationOrder& order,
+                               const std::vector<char>* rows = nullptr);
 
 /// The lower triangle of the matrix over the dofs d with free_index[d] >= 0 (in that numbering,
 /// which must increase with the rank-ordered dof d), each entry times scale(row) scale(column).

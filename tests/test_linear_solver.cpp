@@ -506,8 +506,9 @@ TEST_CASE("the tension test's moduli with CHOLMOD equal the hand-written solver'
 }
 
 // Its own ctest entry (tests/CMakeLists.txt), run as mpiexec -n 2: each rank builds the same model
-// and hands PETSc its half of the particles' rows; the gathered solution equals the hand-written
-// Cholesky's on one process, and the tension test's moduli equal the 1-process direct ones.
+// and assembles and hands PETSc the rows of its half of the particles; the gathered solution equals
+// the hand-written Cholesky's on one process, and the tension test's moduli equal the 1-process
+// direct ones.
 TEST_CASE("PETSc on 2 MPI ranks gives the 1-process solution") {
   if (!petsc_available()) {
     plydem::test::skip("this build has no PETSc");
@@ -516,12 +517,19 @@ TEST_CASE("PETSc on 2 MPI ranks gives the 1-process solution") {
   const Model built = small_laminate();
   const DofConstraints c = grips(built, 0.4e-6);
   Model direct = built, petsc = built;
-  solve_static(direct, c, with(LinearSolverKind::kDirect));
+  const StaticResult rd = solve_static(direct, c, with(LinearSolverKind::kDirect));
   const StaticResult rp = solve_static(petsc, c, with(LinearSolverKind::kPetsc));
-  MESSAGE("rank ", mpi_rank(), " of ", mpi_size(), ": ", rp.method_name);
+  MESSAGE("rank ", mpi_rank(), " of ", mpi_size(), ": ", rp.method_name, ", assembled ",
+          rp.rank_stiffness_nonzeros, " of ", rp.stiffness_nonzeros, " entries");
   CHECK(mpi_size() == 2);
   CHECK(contains(rp.method_name, "2 ranks"));
   CHECK(relative_difference(state_of(petsc.particles), state_of(direct.particles)) < 1e-8);
+  // Each rank assembled the rows of its own half of the particles (and the diagonal blocks of
+  // all), not the whole matrix; the counts and the residual are the whole system's.
+  CHECK(rp.stiffness_nonzeros == rd.stiffness_nonzeros);
+  CHECK(rd.rank_stiffness_nonzeros == rd.stiffness_nonzeros);
+  CHECK(rp.rank_stiffness_nonzeros < 0.7 * static_cast<double>(rp.stiffness_nonzeros));
+  CHECK(rp.relative_residual < 1e-10);
 
   check_same_moduli(cross_ply_tension(LinearSolverKind::kPetsc),
                     cross_ply_tension(LinearSolverKind::kDirect), 1e-8);
