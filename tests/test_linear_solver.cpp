@@ -2,8 +2,9 @@
 // GAMG (where built) and the hand-written supernodal Cholesky give the same solutions on a ply and
 // a laminate, the same mechanism diagnosis, the same tension-test moduli; one factorization (or AMG
 // hierarchy) serves many right-hand sides exactly as fresh solves do (StaticSystem, the specimen
-// stiffness' three solves); PETSc on 2 MPI ranks gives the 1-process answer (its own ctest entry,
-// run with mpiexec -n 2); unknown solver names are clear errors.
+// stiffness' three solves); PETSc on 2 MPI ranks, each assembling its own rows, gives the
+// 1-process answer and refuses a mechanism (its own ctest entry, run with mpiexec -n 2); unknown
+// solver names are clear errors.
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
@@ -351,8 +352,11 @@ TEST_CASE("auto takes the hand-written factor of a small problem and says so") {
   CHECK(solve_static(d, c, with(LinearSolverKind::kDirect)).linear_solver_choice.empty());
 }
 
-TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {
-  // A chain without bending springs (see test_static_solver): 8 zero pivots.
+namespace {
+
+// A chain of five particles without bending springs (see test_static_solver), held at one end
+// and pulled at the other: a mechanism with 8 zero pivots.
+Model unbent_chain() {
   Model m;
   Particles& p = m.particles;
   p.resize(5);
@@ -371,9 +375,21 @@ TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {
     m.bonds.twisting_stiffness(b) = 1e-4;
     set_bond_geometry(p, m.bonds, b);
   }
+  return m;
+}
+
+DofConstraints chain_ends() {
   DofConstraints c(5);
   c.fix_particle(0);
   c.fix(4, Dof::kUx, 1e-7);
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("a mechanism is refused with the same zero pivots by every solver") {
+  Model m = unbent_chain();
+  const DofConstraints c = chain_ends();
   CHECK_FALSE(free_motions_are_rigid(m));  // so PETSc probes, and finds it
   for (LinearSolverKind kind : every_solver()) {
     CAPTURE(linear_solver_name(kind));
@@ -533,4 +549,18 @@ TEST_CASE("PETSc on 2 MPI ranks gives the 1-process solution") {
 
   check_same_moduli(cross_ply_tension(LinearSolverKind::kPetsc),
                     cross_ply_tension(LinearSolverKind::kDirect), 1e-8);
+}
+
+// Also run as mpiexec -n 2: a rank holds only its own rows, so PETSc's probe refuses the
+// mechanism without naming its dofs, and says where they are named.
+TEST_CASE("PETSc on 2 MPI ranks refuses a mechanism and says to name it on one rank") {
+  if (!petsc_available()) {
+    plydem::test::skip("this build has no PETSc");
+    return;
+  }
+  Model m = unbent_chain();
+  const std::string error =
+      error_message([&] { solve_static(m, chain_ends(), with(LinearSolverKind::kPetsc)); });
+  CHECK(contains(error, "mechanism"));
+  CHECK(contains(error, "on one rank"));
 }
