@@ -8,6 +8,8 @@
 //   plydem_kernel_bench layer --particles 10000000 --steps 200 --backend cuda   # on a GPU
 //   plydem_kernel_bench tension --cycles 200000    # the same coupon through the tension test
 //   plydem_kernel_bench table < rows.jsonl         # the table bench/run prints
+//   mpiexec -n 2 plydem_kernel_bench layer --particles 200000 --steps 300 --backend reference
+//                                     # split between 2 MPI ranks (bench/ranks prints the table)
 //
 // The layer is the Hex2D model of the paper's 0 deg E-glass/MY750 ply (0.05 mm particles, full
 // parallel bonds: normal, shear, bending and twisting, particles spinning), square, pulled by grips
@@ -17,6 +19,9 @@
 // with a check every --report-every cycles in coupon mode. `tension` times the tension test's own
 // explicit fixed-cycle pull of the coupon (`plydem tension --solver explicit --cycles N`, one
 // loading along x; building the coupon included), the figure to hold beside `coupon`.
+//
+// Under mpiexec the layer is split between the ranks (solvers/rank_exchange.hpp); rank 0 prints the
+// row, with the largest share, ghost count, exchanged bytes per cycle and peak memory of any rank.
 #include <fmt/format.h>
 #include <omp.h>
 #include <CLI/CLI.hpp>
@@ -35,12 +40,15 @@
 #include "contacts/bond_kernel.hpp"
 #include "contacts/particle_ordering.hpp"
 #include "core/error.hpp"
+#include "core/machine_memory.hpp"
 #include "core/material.hpp"
 #include "core/stopwatch.hpp"
 #include "core/units.hpp"
 #include "experiments/protocols/tension.hpp"
 #include "solvers/device_backend.hpp"
 #include "solvers/explicit_integrator.hpp"
+#include "solvers/linear_solver.hpp"
+#include "solvers/rank_exchange.hpp"
 #include "strategies/hex2d.hpp"
 
 namespace {
@@ -207,6 +215,26 @@ void unreachable_strengths(Model& model) {
   }
 }
 
+// The MPI ranks' figures of a run (the largest of any rank; on one rank its own): the particles
+// it advances and its ghosts, the bytes it receives per cycle, its peak memory, the wall time.
+nlohmann::json rank_figures(const Model& model, double seconds) {
+  const int size = mpi_size();
+  nlohmann::json r;
+  r["ranks"] = size;
+  r["seconds"] = max_over_ranks(seconds);
+  r["peak_rss_mib"] = max_over_ranks(peak_resident_bytes() / (1024.0 * 1024.0));
+  if (size > 1) {
+    const RankPartition part = partition_between_ranks(model, mpi_rank(), size);
+    const double ghosts = max_over_ranks(static_cast<double>(part.ghosts.size()));
+    r["own_per_rank"] = max_over_ranks(static_cast<double>(part.own.size()));
+    r["ghosts_per_rank"] = ghosts;
+    r["bonds_per_rank"] = max_over_ranks(static_cast<double>(part.bonds.size()));
+    // Each ghost's displacement and rotation (solvers/rank_exchange.cpp).
+    r["exchanged_bytes_per_cycle"] = 6.0 * sizeof(double) * ghosts;
+  }
+  return r;
+}
+
 // The explicit settings of the benchmark runs: the kernel on `backend`; a breakable model without
 // contacts (none would touch: no bond breaks), which the device backends do not have.
 ExplicitSettings bench_settings(const std::string& order, const std::string& backend) {
@@ -297,6 +325,7 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   r["streamed_bytes_per_particle_step"] = streamed_bytes(model, integrator.breaking());
   r.update(table);
   if (timers.is_object()) r.update(timers);
+  r.update(rank_figures(model, seconds));
   std::cout << r.dump() << "\n";
   return 0;
 }
@@ -433,6 +462,8 @@ int print_table() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const ParallelSession session(&argc, &argv);  // MPI under mpiexec: the layer split between ranks
+  if (!is_root()) std::cout.setstate(std::ios::badbit);
   CLI::App app{"plydem_kernel_bench: the explicit kernel on a hexagonal layer (see bench/run)"};
   app.require_subcommand(1);
   long particles = 10000, steps = 100, cycles = 200'000, report_every = 2000;
@@ -455,8 +486,11 @@ int main(int argc, char** argv) {
   layer->add_option("--yade-layer", yade_layer, "also write x y z radius per particle for YADE");
   layer->add_flag("--describe", describe, "print the layer's size and parameters, run nothing");
   std::string backend = "cpu";
-  const auto backends = CLI::IsMember({"cpu", "cuda", "emulation"});
-  layer->add_option("--backend", backend, "where the kernel runs: cpu, cuda, emulation")
+  const auto backends = CLI::IsMember({"cpu", "cuda", "emulation", "reference"});
+  layer
+      ->add_option("--backend", backend,
+                   "where the kernel runs: cpu, cuda, emulation, reference (under mpiexec: split "
+                   "between the ranks)")
       ->check(backends)
       ->capture_default_str();
   bool breakable = false;
@@ -478,7 +512,10 @@ int main(int argc, char** argv) {
   coupon->add_option("--api", api, "run: ExplicitIntegrator::run(); advance: advance(N) calls")
       ->check(apis)
       ->capture_default_str();
-  coupon->add_option("--backend", backend, "where the kernel runs: cpu, cuda, emulation")
+  coupon
+      ->add_option("--backend", backend,
+                   "where the kernel runs: cpu, cuda, emulation, reference (under mpiexec: split "
+                   "between the ranks)")
       ->check(backends)
       ->capture_default_str();
   coupon->add_flag("--breakable", breakable,

@@ -44,6 +44,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/machine_memory.hpp"
 #include "core/material.hpp"
 #include "core/stopwatch.hpp"
 #include "core/units.hpp"
@@ -73,14 +74,9 @@ long minor_page_faults() {
   return usage.ru_minflt;
 }
 
-// Peak resident set size of this process [MiB] (VmHWM of /proc/self/status), 0 if unavailable.
+// Peak resident set size of this process [MiB], 0 if unavailable.
 double peak_rss_mib() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
-  }
-  return 0;
+  return plydem::peak_resident_bytes() / (1024.0 * 1024.0);
 }
 
 // The tension test's static constraints with free grips (experiments/protocols/tension.cpp).

@@ -35,6 +35,18 @@ BondResponse evaluate(const Particles& p, const Bonds& bonds, int b) {
                                 row3(p.rotation, i), row3(p.displacement, j), row3(p.rotation, j));
 }
 
+// Bond b's force and moments added to its two particles.
+BondResponse add_bond_forces(Particles& p, const Bonds& bonds, int b) {
+  const BondResponse r = evaluate(p, bonds, b);
+  const int i = bonds.first(b);
+  const int j = bonds.second(b);
+  add_row3(p.force, i, r.force_on_first);
+  add_row3(p.force, j, -r.force_on_first);
+  add_row3(p.torque, i, r.torque_on_first);
+  add_row3(p.torque, j, r.torque_on_second);
+  return r;
+}
+
 }  // namespace
 
 BondParameters bond_parameters(const Bonds& bonds, int b) {
@@ -57,15 +69,37 @@ BondPass compute_bond_forces(Particles& particles, const Bonds& bonds) {
   BondPass pass;
   for (int b = 0; b < bonds.size(); ++b) {
     if (bonds.is_broken(b)) continue;
-    const BondResponse r = evaluate(particles, bonds, b);
-    const int i = bonds.first(b);
-    const int j = bonds.second(b);
-    add_row3(particles.force, i, r.force_on_first);
-    add_row3(particles.force, j, -r.force_on_first);
-    add_row3(particles.torque, i, r.torque_on_first);
-    add_row3(particles.torque, j, r.torque_on_second);
+    const BondResponse r = add_bond_forces(particles, bonds, b);
     pass.strain_energy += r.energy;
     pass.sum_force_norm += r.force_on_first.norm();
+  }
+  return pass;
+}
+
+BondPass compute_listed_bond_forces(Particles& particles, const Bonds& bonds,
+                                    std::span<const int> listed_bonds,
+                                    std::span<const int> listed_particles, std::span<double> each) {
+  require(
+      each.empty() || each.size() == 2 * listed_bonds.size(),
+      fmt::format("listed bond forces: {} values for {} bonds", each.size(), listed_bonds.size()));
+  for (int i : listed_particles)
+    for (int c = 0; c < 3; ++c) {
+      particles.force(i, c) = 0;
+      particles.torque(i, c) = 0;
+    }
+  BondPass pass;
+  for (std::size_t k = 0; k < listed_bonds.size(); ++k) {
+    const int b = listed_bonds[k];
+    if (!each.empty()) each[2 * k] = each[2 * k + 1] = 0;
+    if (bonds.is_broken(b)) continue;
+    const BondResponse r = add_bond_forces(particles, bonds, b);
+    const double norm = r.force_on_first.norm();
+    pass.strain_energy += r.energy;
+    pass.sum_force_norm += norm;
+    if (!each.empty()) {
+      each[2 * k] = r.energy;
+      each[2 * k + 1] = norm;
+    }
   }
   return pass;
 }

@@ -60,6 +60,17 @@ struct BondPass {
 /// (Bonds::is_broken) carries nothing.
 BondPass compute_bond_forces(Particles& particles, const Bonds& bonds);
 
+/// compute_bond_forces over the listed bonds only (`bonds`, increasing), after zeroing the force
+/// and torque of the listed particles only (`particles`, every end of a listed bond among them):
+/// each particle's sum runs over its listed bonds in the whole pass's order, so a particle all of
+/// whose bonds are listed gets the whole pass's bits (an MPI rank's own particles:
+/// solvers/rank_exchange.hpp). With `each` (two per listed bond), also each listed bond's energy
+/// and |F| there (zeros for a broken bond).
+BondPass compute_listed_bond_forces(Particles& particles, const Bonds& bonds,
+                                    std::span<const int> listed_bonds,
+                                    std::span<const int> listed_particles,
+                                    std::span<double> each = {});
+
 /// The bonds' strain energy at the current state [J], without touching forces (broken bonds hold
 /// none).
 double bond_strain_energy(const Particles& particles, const Bonds& bonds);

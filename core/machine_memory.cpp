@@ -83,4 +83,12 @@ MachineMemory machine_memory() {
   return m;
 }
 
+double peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return 1024.0 * std::stod(line.substr(6));  // kB
+  return 0;
+}
+
 }  // namespace plydem

@@ -22,4 +22,8 @@ struct MachineMemory {
 /// Throws plydem::Error for a PLYDEM_AVAILABLE_MEMORY that is not a positive number.
 MachineMemory machine_memory();
 
+/// This process' peak resident set size [bytes] (VmHWM of /proc/self/status), 0 where it cannot be
+/// read: the benchmarks' memory figure.
+double peak_resident_bytes();
+
 }  // namespace plydem

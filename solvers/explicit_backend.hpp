@@ -161,6 +161,9 @@ struct BackendSetup {
   bool softening = false;
   StrengthStorage strength_storage = StrengthStorage::kAutomatic;
   ParticleOrder particle_order = ParticleOrder::kAutomatic;
+  /// Under mpiexec -n N (N > 1): each rank runs its share of the particles (the reference
+  /// backend's loops, solvers/rank_exchange.hpp); false: every rank runs the whole model.
+  bool split_between_ranks = false;
 };
 
 /// The backend `kind` on `setup`. Throws plydem::Error when it cannot run here (cuda: naming why).

@@ -12,6 +12,8 @@
 #include "contacts/bond_opening.hpp"
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
+#include "solvers/linear_solver.hpp"
+#include "solvers/rank_exchange.hpp"
 
 namespace plydem {
 
@@ -143,6 +145,7 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
   setup.softening = softening_;
   setup.strength_storage = settings.strength_storage;
   setup.particle_order = settings.particle_order;
+  setup.split_between_ranks = settings.split_between_ranks && mpi_size() > 1;
   backend_ = make_kernel_backend(settings.backend, setup);
   set_prescribed_motions({});
   if (breaking_) start_breaking();
@@ -437,7 +440,7 @@ struct Estimate {
 // RunControl::on_progress (every progress_seconds), with when each was last called.
 class Hooks {
  public:
-  Hooks(const RunControl& control, Stopwatch::Clock::time_point start) : control_(control) {
+  explicit Hooks(const RunControl& control) : control_(control) {
     if (control.on_check) all_.push_back({0, 0, control.on_check});
     all_.insert(all_.end(), control.hooks.begin(), control.hooks.end());
     if (control.on_progress) {
@@ -447,7 +450,7 @@ class Hooks {
                       }});
     }
     last_cycles_.assign(all_.size(), 0);
-    last_time_.assign(all_.size(), start);
+    last_seconds_.assign(all_.size(), 0.0);
   }
 
   // The cycles of the next chunk, from `done` cycles of the run: at most the check interval and
@@ -462,19 +465,19 @@ class Hooks {
     return std::max(1L, chunk);
   }
 
-  // Calls the hooks due at this check; false if one asked to stop.
+  // Calls the hooks due at this check; false if one asked to stop. The time since a hook's last
+  // call is counted on the check's clock (RunCheck::elapsed_seconds, the same on every MPI rank,
+  // so that every rank calls the same hooks: they may gather from the ranks).
   bool call(const RunCheck& check) {
     bool go_on = true;
     for (std::size_t h = 0; h < all_.size(); ++h) {
       const RunHook& hook = all_[h];
       if (hook.every_cycles > 0 && check.run_cycles < last_cycles_[h] + hook.every_cycles) continue;
-      const auto now = Stopwatch::Clock::now();
-      if (hook.every_seconds > 0 &&
-          std::chrono::duration<double>(now - last_time_[h]).count() <= hook.every_seconds)
+      if (hook.every_seconds > 0 && check.elapsed_seconds - last_seconds_[h] <= hook.every_seconds)
         continue;
       last_cycles_[h] = check.run_cycles;
+      last_seconds_[h] = check.elapsed_seconds;
       go_on &= hook.call(check);
-      last_time_[h] = Stopwatch::Clock::now();
     }
     return go_on;
   }
@@ -483,7 +486,7 @@ class Hooks {
   const RunControl& control_;
   std::vector<RunHook> all_;
   std::vector<long> last_cycles_;
-  std::vector<Stopwatch::Clock::time_point> last_time_;
+  std::vector<double> last_seconds_;
 };
 
 }  // namespace
@@ -511,7 +514,7 @@ RunReport ExplicitIntegrator::run(const RunControl& control) {
   } finish{*this, report, start};
   report.transfer_seconds = seconds_since(start);
 
-  Hooks hooks(control, start);
+  Hooks hooks(control);
   Estimate estimate;
   while (true) {
     const long chunk = hooks.next_chunk(report.cycles);
@@ -526,7 +529,8 @@ RunReport ExplicitIntegrator::run(const RunControl& control) {
     check.cycles = cycles_;
     check.run_cycles = report.cycles;
     check.report = report.last;
-    check.elapsed_seconds = seconds_between(start, check_start);
+    // Under mpiexec the slowest rank's clock, so that every rank makes the same decisions.
+    check.elapsed_seconds = max_over_ranks(seconds_between(start, check_start));
     check.seconds_left = estimate.seconds_left(control, report, check.elapsed_seconds);
     const bool go_on = hooks.call(check);
     const Clock::time_point check_end = Clock::now();
@@ -541,7 +545,7 @@ RunReport ExplicitIntegrator::run(const RunControl& control) {
       break;
     }
     if (control.time_limit_seconds > 0 &&
-        seconds_between(start, check_end) >= control.time_limit_seconds) {
+        max_over_ranks(seconds_between(start, check_end)) >= control.time_limit_seconds) {
       report.stop = RunStop::kTimeLimit;
       break;
     }

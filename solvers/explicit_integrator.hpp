@@ -78,6 +78,12 @@ struct ExplicitSettings {
   /// code on the host) or reference. The device backends have no contacts between unbonded
   /// particles yet (a breaking run there needs `contacts` off).
   ExplicitBackend backend = ExplicitBackend::kCpu;
+  /// Under `mpiexec -n N` (N > 1), each rank runs its share of the particles and sends its border
+  /// to its neighbours every cycle (solvers/rank_exchange.hpp): the reference backend's loops, on
+  /// N ranks the same bits as the reference backend on one (the cpu backend, the default, runs as
+  /// the reference there; the device backends run on one rank only). False: every rank runs the
+  /// whole model.
+  bool split_between_ranks = true;
 };
 
 /// Throws plydem::Error naming the first setting out of range.

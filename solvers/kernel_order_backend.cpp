@@ -1,13 +1,16 @@
 #include "solvers/kernel_order_backend.hpp"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <mutex>
 
 #include "core/error.hpp"
 #include "solvers/device_backend.hpp"
+#include "solvers/linear_solver.hpp"
 
 namespace plydem {
 
@@ -445,6 +448,22 @@ std::unique_ptr<KernelBackend> make_mirrored_backend(const BackendSetup& setup,
 
 std::unique_ptr<KernelBackend> make_kernel_backend(ExplicitBackend kind,
                                                    const BackendSetup& setup) {
+  if (setup.split_between_ranks) {
+    require(kind == ExplicitBackend::kCpu || kind == ExplicitBackend::kReference,
+            fmt::format("the {} backend runs on one MPI rank only: under mpiexec the explicit "
+                        "engine splits the particles between the ranks with the cpu or reference "
+                        "backend (the reference loops on each rank)",
+                        to_string(kind)));
+    static std::once_flag said;
+    std::call_once(said, [&] {
+      spdlog::info(
+          "explicit dynamics on {} MPI ranks: each runs the reference loops over its "
+          "slice of the {} particles (the cpu backend's SIMD blocks and threads run on "
+          "one rank); the same bits as --backend reference on one rank",
+          mpi_size(), setup.model->particles.size());
+    });
+    return make_reference_backend(setup);
+  }
   switch (kind) {
     case ExplicitBackend::kReference:
       return make_reference_backend(setup);

@@ -98,7 +98,8 @@ void set_petsc_options(const std::string& options);
 /// (model building and the right-hand sides are replicated, deterministically); where PETSc
 /// solves, each rank assembles only the rows of its own slice of particles (rank_particles) and
 /// hands them to PETSc, which distributes the matrix, the AMG hierarchy and the CG iterations,
-/// and gathers the solution back to every rank. Only rank 0 should print (is_root()).
+/// and gathers the solution back to every rank. The explicit engine splits the particles between
+/// the ranks likewise (solvers/rank_exchange.hpp). Only rank 0 should print (is_root()).
 class ParallelSession {
  public:
   ParallelSession(int* argc, char*** argv);

@@ -40,6 +40,7 @@
 #include "core/machine_memory.hpp"
 #include "core/stopwatch.hpp"
 #include "core/units.hpp"
+#include "solvers/rank_exchange.hpp"
 #include "solvers/sparse_cholesky.hpp"
 
 namespace plydem {
@@ -97,19 +98,9 @@ void default_option(const char* name, const char* value) {
 // Each particle's slot (its block of six rows): the particles in the order of their coordinate
 // along the model's longest extent, so that a rank's block is a slice across it, whose faces (the
 // ghost rows) are the smallest, where the models' own order (ply by ply) would cut through the
-// thickness.
+// thickness (the explicit engine's slices are the same: solvers/rank_exchange.hpp).
 std::vector<int> particle_slots(const Eigen::Array<double, Eigen::Dynamic, 3>& x) {
-  const auto items = static_cast<int>(x.rows());
-  const Eigen::RowVector3d extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
-  Eigen::Index axis = 0;
-  extent.maxCoeff(&axis);
-  std::vector<int> by_coordinate(items);
-  std::iota(by_coordinate.begin(), by_coordinate.end(), 0);
-  std::stable_sort(by_coordinate.begin(), by_coordinate.end(),
-                   [&](int a, int b) { return x(a, axis) < x(b, axis); });
-  std::vector<int> slot_of(items);
-  for (int s = 0; s < items; ++s) slot_of[by_coordinate[s]] = s;
-  return slot_of;
+  return slots_along_longest_extent(x);
 }
 
 // This rank's slots among `items`: [first, end), an even share in rank order.

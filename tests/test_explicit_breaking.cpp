@@ -3,13 +3,15 @@
 // either end and in either particle order; softening follows its line; both ends of every bond
 // hold the same history to the bit; the fused kernel breaks the bonds the reference loop breaks,
 // at the same cycles, on any number of threads; the energy account closes; closed cracks carry
-// compression through contacts.
+// compression through contacts. On 2 MPI ranks (the "2 MPI ranks:" cases, run under mpiexec) a
+// coupon split between the ranks gives the one-rank reference run's bits, breaks and account.
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <numeric>
 #include <random>
 #include <string>
 #include <vector>
@@ -18,6 +20,7 @@
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "solvers/explicit_integrator.hpp"
+#include "solvers/linear_solver.hpp"
 #include "strategies/registry.hpp"
 #include "support/coupon_fixtures.hpp"
 #include "support/threads.hpp"
@@ -656,4 +659,128 @@ TEST_CASE("bad breaking settings are clear errors") {
   broken.bonds.tensile_strength(0) = 1e6;
   CHECK_THROWS_WITH_AS(ExplicitIntegrator(broken, ExplicitSettings{}),
                        doctest::Contains("cross-section radius"), Error);
+}
+
+// Under mpiexec -n 2 (test_explicit_breaking_mpi2): each rank runs its slice of the particles and
+// exchanges its border every cycle (solvers/rank_exchange.hpp); every rank also runs the whole
+// model with the reference loops (split_between_ranks off), the one-rank run, to compare with.
+namespace {
+
+bool same_account(const EnergyAccount& a, const EnergyAccount& b) {
+  return a.initial == b.initial && a.boundary_work == b.boundary_work &&
+         a.strain_energy == b.strain_energy && a.kinetic_energy == b.kinetic_energy &&
+         a.damping == b.damping && a.released == b.released;
+}
+
+// The coupon of the thread-count case, 1.5 x 0.5 mm at 0.05 mm, its strengths set to break it
+// (bonds of `ductility`).
+Model breakable_coupon(ExplicitSettings& settings, double speed, double ductility) {
+  Model m = small_coupon(1.5e-3, 0.5e-3, 0.05e-3);
+  settings.time_step = 0.8 * critical_time_step(m);
+  const double rate = tensile_stress_per_cycle(m, speed, settings.time_step);
+  set_strengths(m, 2500.37 * rate, 4000.37 * rate, 0.3, ductility);
+  return m;
+}
+
+// The coupon of breakable_coupon pulled for `cycles` on one rank (the whole model, the reference
+// loops) and split between the ranks (the default backend): the same bits.
+void check_split_run(double ductility, long cycles, long check_every) {
+  ExplicitSettings settings;
+  settings.backend = ExplicitBackend::kReference;
+  settings.contacts = false;  // not across ranks yet (the error is a case of its own)
+  const double speed = 0.02;
+  const Model m = breakable_coupon(settings, speed, ductility);
+  settings.split_between_ranks = false;
+  const CouponRun whole = run_coupon(m, settings, speed, cycles, check_every);
+  settings.split_between_ranks = true;
+  settings.backend = ExplicitBackend::kCpu;  // runs as the reference on N ranks
+  const CouponRun split = run_coupon(m, settings, speed, cycles, check_every);
+  REQUIRE(whole.breaks.size() > 5);
+  CHECK(same_breaks(whole.breaks, split.breaks));
+  CHECK(bitwise_equal(whole.model.particles, split.model.particles));
+  CHECK((whole.model.particles.force == split.model.particles.force).all());
+  CHECK((whole.model.bonds.damage == split.model.bonds.damage).all());
+  CHECK((whole.model.bonds.state == split.model.bonds.state).all());
+  CHECK((whole.model.bonds.normal_stiffness == split.model.bonds.normal_stiffness).all());
+  CHECK(same_account(whole.energy, split.energy));
+  CHECK(whole.worst_balance == split.worst_balance);
+}
+
+}  // namespace
+
+TEST_CASE("2 MPI ranks: a coupon pulled to failure gives the one-rank reference run's bits") {
+  REQUIRE(mpi_size() == 2);
+  check_split_run(1.0, 6000, 700);
+  // Softening bonds: the damage steps one rank decides reach the other's model.
+  check_split_run(4.0, 6000, 500);
+}
+
+TEST_CASE("2 MPI ranks: the state hooks gather and the run's report are the one-rank bits") {
+  REQUIRE(mpi_size() == 2);
+  const Model m = small_coupon(1.5e-3, 0.5e-3, 0.05e-3);
+  struct Seen {
+    std::vector<Particles> gathered;
+    std::vector<CycleReport> reports;
+    Model model;
+    std::size_t kernel_bytes = 0;
+  };
+  auto run = [&](bool split) {
+    Seen seen;
+    seen.model = m;
+    ExplicitSettings settings;
+    settings.backend = ExplicitBackend::kReference;
+    settings.split_between_ranks = split;
+    ExplicitIntegrator integrator(seen.model, settings);
+    integrator.set_prescribed_motions(pull(0.02));
+    std::vector<int> all(static_cast<std::size_t>(m.particles.size()));
+    std::iota(all.begin(), all.end(), 0);
+    RunControl control;
+    control.check_interval = 150;
+    control.tolerance = 1e-3;
+    control.max_cycles = 3000;
+    control.on_check = [&](const RunCheck& check) {
+      Particles at_forces = m.particles;
+      integrator.gather(all, at_forces, StateAt::kForces);
+      seen.gathered.push_back(at_forces);
+      seen.reports.push_back(check.report);
+      return true;
+    };
+    // A hook on the clock: the ranks agree on it, so both call it (it gathers) at the same checks.
+    control.hooks.push_back({0, 1e-4, [&](const RunCheck&) {
+                               Particles now = m.particles;
+                               integrator.gather(std::vector<int>{0, m.particles.size() - 1}, now);
+                               return true;
+                             }});
+    integrator.run(control);
+    seen.kernel_bytes = integrator.kernel_bytes();
+    return seen;
+  };
+  const Seen whole = run(false), split = run(true);
+  CHECK(whole.kernel_bytes == 0);
+  CHECK(split.kernel_bytes > 0);
+  REQUIRE(whole.gathered.size() == split.gathered.size());
+  for (std::size_t k = 0; k < whole.gathered.size(); ++k) {
+    CAPTURE(k);
+    CHECK(bitwise_equal(whole.gathered[k], split.gathered[k]));
+    CHECK((whole.gathered[k].force == split.gathered[k].force).all());
+    CHECK(whole.reports[k].strain_energy == split.reports[k].strain_energy);
+    CHECK(whole.reports[k].kinetic_energy == split.reports[k].kinetic_energy);
+    CHECK(whole.reports[k].unbalanced_force_ratio == split.reports[k].unbalanced_force_ratio);
+  }
+  CHECK(bitwise_equal(whole.model.particles, split.model.particles));
+}
+
+TEST_CASE("2 MPI ranks: what does not run across ranks says so") {
+  REQUIRE(mpi_size() == 2);
+  Model m = small_coupon(1.5e-3, 0.5e-3, 0.05e-3);
+  ExplicitSettings settings;
+  settings.backend = ExplicitBackend::kDeviceEmulation;
+  CHECK(contains(error_message([&] { ExplicitIntegrator integrator(m, settings); }),
+                 "runs on one MPI rank only"));
+  settings.backend = ExplicitBackend::kReference;
+  settings.energy_account = true;  // a breaking run: contacts by default
+  CHECK(contains(error_message([&] { ExplicitIntegrator integrator(m, settings); }),
+                 "contacts between unbonded particles do not run across MPI ranks yet"));
+  settings.contacts = false;
+  CHECK_NOTHROW(ExplicitIntegrator(m, settings));
 }

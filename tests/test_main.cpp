@@ -2,12 +2,15 @@
 //  - a run in which a case skipped for want of an external tool (plydem::test::skip) and nothing
 //    failed exits with 77, which ctest reports as skipped rather than passed;
 //  - a run whose filters match no test case fails: a ctest entry that names its cases
-//    (tests/CMakeLists.txt, plydem_test_part) cannot pass by running nothing.
+//    (tests/CMakeLists.txt, plydem_test_part) cannot pass by running nothing;
+//  - under mpiexec it starts MPI (and PETSc) first, as the plydem program does (ParallelSession),
+//    so that the cases run on 2 ranks (plydem_mpi2_cases) see every rank.
 #define DOCTEST_CONFIG_IMPLEMENT
 #include <doctest/doctest.h>
 
 #include <iostream>
 
+#include "solvers/linear_solver.hpp"
 #include "support/test_support.hpp"
 
 namespace {
@@ -39,6 +42,7 @@ struct CaseCounter : doctest::IReporter {
 DOCTEST_REGISTER_LISTENER("plydem_case_counter", 1, CaseCounter);
 
 int main(int argc, char** argv) {
+  const plydem::ParallelSession session(&argc, &argv);
   doctest::Context context(argc, argv);
   const int result = context.run();
   if (context.shouldExit() || result != 0) return result;

@@ -1,0 +1,85 @@
+#pragma once
+/// \file
+/// The explicit engine across MPI ranks (issue 36): under `mpiexec -n N` each rank owns a slice of
+/// the particles (the static solve's slices, rank_particles in solvers/linear_solver.hpp: an even
+/// share in the order of the reference coordinate along the model's longest extent) and runs the
+/// reference loops (solvers/reference_backend.cpp) over its own particles and the bonds that reach
+/// them. The particles at the other end of those bonds are its ghosts: after every cycle their
+/// owners send their displacements and rotations through a PETSc star forest (PetscSF), the only
+/// communication of a plain cycle. A bond across a cut is computed, and decided by the failure
+/// law, on both of its ranks from the same bits, so they agree as threads do.
+///
+/// What the run loop reads between cycles (the reports' sums, the gathered state, a particle's
+/// state, the damage steps) is collected from the owners in the one-rank order (each particle's
+/// and bond's value from its owner, then summed in model order), so that a run on N ranks gives
+/// the bits of the one-rank reference run. Every rank holds the whole model still (models built in
+/// parts are the next step), and every rank must call these collectives in the same order: the
+/// run loop and the experiments are replicated and deterministic (the run loop's clock is agreed,
+/// max_over_ranks).
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/model.hpp"
+
+namespace plydem {
+
+/// How a model's particles and bonds are shared between the ranks (the same on every rank).
+struct RankPartition {
+  int rank = 0, size = 1;
+  std::vector<int> owner;   ///< per particle: the rank that advances it
+  std::vector<int> own;     ///< this rank's particles, increasing
+  std::vector<int> ghosts;  ///< other ranks' particles a bond reaches from an own one, increasing
+  /// own and ghosts merged, increasing: the particles whose forces this rank sums
+  std::vector<int> local;
+  /// The bonds that reach an own particle, increasing: computed and decided here.
+  std::vector<int> bonds;
+  /// This rank's particles that are other ranks' ghosts (its border), increasing: what it sends.
+  std::vector<int> border;
+  /// Per ghost: its index in its owner's border (where the owner sends it from).
+  std::vector<int> ghost_source;
+  /// The listed bonds whose first particle is own (each bond has exactly one such rank: it logs
+  /// the bond's damage steps and adds its energy to the report).
+  std::vector<char> logs_bond;
+  /// Bytes of the lists.
+  std::size_t bytes() const;
+};
+
+/// Each item's slot in the order of its coordinate along the longest extent of `x` (stable: ties
+/// keep their order): the order in which the ranks' slices are cut, an even share each.
+std::vector<int> slots_along_longest_extent(const Eigen::Array<double, Eigen::Dynamic, 3>& x);
+
+/// The partition of `model` on this rank of `size` (rank_particles' slices: the same on every rank
+/// for the same model). Throws plydem::Error for a model with fewer particles than ranks.
+RankPartition partition_between_ranks(const Model& model, int rank, int size);
+
+/// The ghost exchange and the run loop's collectives for one partition.
+class RankExchange {
+ public:
+  virtual ~RankExchange() = default;
+  /// The ghosts' displacement and rotation from their owners, into `particles`.
+  virtual void update_ghosts(Particles& particles) = 0;
+  /// Every rank's `mine` (its values in the order of its own items), concatenated in rank order
+  /// on every rank; `counts` gets each rank's number of doubles.
+  virtual std::vector<double> gather_all(std::span<const double> mine,
+                                         std::vector<int>& counts) const = 0;
+  /// Every rank's bytes, concatenated in rank order on every rank.
+  virtual std::vector<char> gather_bytes(std::span<const char> mine) const = 0;
+  /// `value` as rank `root` has it, on every rank.
+  virtual double broadcast(double value, int root) const = 0;
+  /// The largest of every rank's `value`.
+  virtual double max_over_ranks(double value) const = 0;
+  /// Bytes this rank receives per cycle (its ghosts' state).
+  virtual std::size_t ghost_bytes_per_cycle() const = 0;
+};
+
+/// The exchange of `partition` over PETSC_COMM_WORLD. Throws plydem::Error in a plydem built
+/// without PETSc (which has one rank).
+std::unique_ptr<RankExchange> make_rank_exchange(const RankPartition& partition);
+
+/// The largest of every rank's `value` (itself on one rank): the run loop's agreed clock.
+double max_over_ranks(double value);
+
+}  // namespace plydem
