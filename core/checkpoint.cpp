@@ -1,6 +1,7 @@
 #include "core/checkpoint.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <bit>
 #include <cstdio>
@@ -275,8 +276,10 @@ void write_checkpoint(const std::filesystem::path& file, const CheckpointHeader&
   const std::uint64_t length = body.size();
   const std::uint64_t checksum = fnv1a64(body);
   const std::uint32_t version = kCheckpointVersion;
+  // A temporary of this process' own: under mpiexec every rank writes the same state to the same
+  // file, and each rename replaces it whole.
   std::filesystem::path temporary = file;
-  temporary += ".tmp";
+  temporary += fmt::format(".{}.tmp", static_cast<long>(getpid()));
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     require(out.good(), fmt::format("cannot write checkpoint {}: cannot open {}", file.string(),

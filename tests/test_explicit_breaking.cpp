@@ -6,6 +6,7 @@
 // compression through contacts. On 2 MPI ranks (the "2 MPI ranks:" cases, run under mpiexec) a
 // coupon split between the ranks gives the one-rank reference run's bits, breaks and account.
 #include <doctest/doctest.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -21,6 +22,7 @@
 #include "core/material.hpp"
 #include "solvers/explicit_integrator.hpp"
 #include "solvers/linear_solver.hpp"
+#include "solvers/rank_exchange.hpp"
 #include "strategies/registry.hpp"
 #include "support/coupon_fixtures.hpp"
 #include "support/threads.hpp"
@@ -707,6 +709,65 @@ void check_split_run(double ductility, long cycles, long check_every) {
 }
 
 }  // namespace
+
+TEST_CASE(
+    "the partition between ranks: each particle owned once, every bond computed by its ends' "
+    "ranks, "
+    "each ghost sent from its owner's border") {
+  const Model m = small_coupon(1.5e-3, 0.5e-3, 0.05e-3);
+  const int n = m.particles.size();
+  for (int size : {1, 2, 3, 5}) {
+    CAPTURE(size);
+    std::vector<RankPartition> parts;
+    for (int r = 0; r < size; ++r) parts.push_back(partition_between_ranks(m, r, size));
+    std::vector<int> owned(static_cast<std::size_t>(n), 0), logged(m.bonds.size(), 0);
+    for (int r = 0; r < size; ++r) {
+      const RankPartition& part = parts[static_cast<std::size_t>(r)];
+      CHECK(part.owner == parts[0].owner);  // the same on every rank
+      // Even shares (slices along x, the longest extent: checked below).
+      CHECK(std::abs(static_cast<int>(part.own.size()) - n / size) <= 1);
+      for (int i : part.own) ++owned[static_cast<std::size_t>(i)];
+      for (std::size_t k = 0; k < part.bonds.size(); ++k) {
+        const int b = part.bonds[k], i = m.bonds.first(b), j = m.bonds.second(b);
+        CHECK((part.owner[static_cast<std::size_t>(i)] == r ||
+               part.owner[static_cast<std::size_t>(j)] == r));
+        if (part.logs_bond[k]) ++logged[static_cast<std::size_t>(b)];
+      }
+      for (std::size_t g = 0; g < part.ghosts.size(); ++g) {
+        const int i = part.ghosts[g], from = part.owner[static_cast<std::size_t>(i)];
+        CHECK(from != r);
+        const RankPartition& source = parts[static_cast<std::size_t>(from)];
+        REQUIRE(part.ghost_source[g] < static_cast<int>(source.border.size()));
+        CHECK(source.border[static_cast<std::size_t>(part.ghost_source[g])] == i);
+      }
+    }
+    CHECK(std::all_of(owned.begin(), owned.end(), [](int c) { return c == 1; }));
+    CHECK(std::all_of(logged.begin(), logged.end(), [](int c) { return c == 1; }));
+    // A bond reaches a rank's list exactly where one of its ends is the rank's own.
+    for (int b = 0; b < m.bonds.size(); ++b) {
+      const int a = parts[0].owner[static_cast<std::size_t>(m.bonds.first(b))];
+      const int c = parts[0].owner[static_cast<std::size_t>(m.bonds.second(b))];
+      for (int r = 0; r < size; ++r) {
+        const std::vector<int>& listed = parts[static_cast<std::size_t>(r)].bonds;
+        CHECK(std::binary_search(listed.begin(), listed.end(), b) == (r == a || r == c));
+      }
+    }
+    // No particle of the last rank lies left of one of the first.
+    if (size > 1) {
+      double right_of_rank0 = -1e300, left_of_last = 1e300;
+      for (int i = 0; i < n; ++i) {
+        const double x = m.particles.reference_position(i, 0);
+        const int owner = parts[0].owner[static_cast<std::size_t>(i)];
+        if (owner == 0) right_of_rank0 = std::max(right_of_rank0, x);
+        if (owner == size - 1) left_of_last = std::min(left_of_last, x);
+      }
+      CHECK(right_of_rank0 <= left_of_last);
+    }
+  }
+  CHECK(contains(
+      error_message([&] { partition_between_ranks(m, 0, n + 1); }),
+      fmt::format("a model of {} particles cannot be shared between {} MPI ranks", n, n + 1)));
+}
 
 TEST_CASE("2 MPI ranks: a coupon pulled to failure gives the one-rank reference run's bits") {
   REQUIRE(mpi_size() == 2);
