@@ -63,6 +63,11 @@ void validate(const ExplicitSettings& settings) {
           "the strength storage is no StrengthStorage");
 }
 
+bool runs_reference_loops(const ExplicitSettings& settings) {
+  return settings.backend == ExplicitBackend::kReference ||
+         (settings.split_between_ranks && mpi_size() > 1);
+}
+
 namespace {
 
 // The bonds' intact stiffnesses (the arrays hold 1 - damage times them; unknown, 0, for a bond

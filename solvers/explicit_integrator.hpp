@@ -89,6 +89,11 @@ struct ExplicitSettings {
 /// Throws plydem::Error naming the first setting out of range.
 void validate(const ExplicitSettings& settings);
 
+/// Whether a run with `settings` here runs the reference backend's loops: the reference backend,
+/// or any run split between MPI ranks (ExplicitSettings::split_between_ranks under mpiexec). Such
+/// runs give the same bits on any number of ranks, and a checkpoint of one continues on another.
+bool runs_reference_loops(const ExplicitSettings& settings);
+
 /// What one cycle measured, at the displacements the forces were computed from.
 struct CycleReport {
   double strain_energy = 0;  ///< [J]

@@ -1,14 +1,17 @@
 // The full virtual tension test of the paper's 0 deg E-glass/MY750 lamina (200 x 19 particles,
 // 10 x 0.83 x 0.2 mm) against classical lamination theory computed here from the engineering
-// constants.
+// constants. On 2 MPI ranks (the "2 MPI ranks:" case, run under mpiexec) the explicit test split
+// between the ranks gives the bits of the one-rank reference run.
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "core/material.hpp"
 #include "experiments/protocols/stiffness.hpp"
 #include "experiments/protocols/tension.hpp"
+#include "solvers/linear_solver.hpp"
 #include "strategies/registry.hpp"
 #include "support/test_support.hpp"
 
@@ -128,4 +131,32 @@ TEST_CASE("an explicit loading too fast to be quasi-static is measured and flagg
   const TensionResult exact = TensionTest(settings).run();
   CHECK(std::abs(slow.dem.Ex / exact.dem.Ex - 1) < 0.02);
   CHECK(std::abs(fast.dem.Ex / exact.dem.Ex - 1) > 0.02);
+}
+
+// Under mpiexec -n 2 (test_tension_mpi2): the explicit tension test split between the ranks
+// (solvers/rank_exchange.hpp) against the same test run whole on every rank by the reference loops.
+TEST_CASE("2 MPI ranks: the explicit tension test gives the one-rank reference run's bits") {
+  REQUIRE(mpi_size() == 2);
+  TensionSettings settings;
+  settings.coupon.material = load_material("eglass-my750");
+  settings.coupon.length = 1.2e-3;
+  settings.coupon.width = 0.4e-3;
+  settings.solver = TensionSolver::kExplicit;
+  settings.explicit_settings.backend = ExplicitBackend::kReference;
+  settings.explicit_settings.split_between_ranks = false;
+  const TensionResult whole = TensionTest(settings).run();
+  settings.explicit_settings.split_between_ranks = true;
+  const TensionResult split = TensionTest(settings).run();
+  CHECK(whole.dem.Ex == split.dem.Ex);
+  CHECK(whole.dem.Ey == split.dem.Ey);
+  CHECK(whole.dem.nu_xy == split.dem.nu_xy);
+  CHECK(whole.dem.nu_yx == split.dem.nu_yx);
+  for (const auto& [a, b] :
+       {std::pair{&whole.along_x, &split.along_x}, std::pair{&whole.along_y, &split.along_y}}) {
+    CHECK(a->strain == b->strain);
+    CHECK(a->lateral_strain == b->lateral_strain);
+    CHECK(a->stress == b->stress);
+    CHECK(a->cycles == b->cycles);
+    CHECK(a->final_ratio == b->final_ratio);
+  }
 }
