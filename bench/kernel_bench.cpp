@@ -225,12 +225,11 @@ nlohmann::json rank_figures(const Model& model, double seconds) {
   r["peak_rss_mib"] = max_over_ranks(peak_resident_bytes() / (1024.0 * 1024.0));
   if (size > 1) {
     const RankPartition part = partition_between_ranks(model, mpi_rank(), size);
-    const double ghosts = max_over_ranks(static_cast<double>(part.ghosts.size()));
     r["own_per_rank"] = max_over_ranks(static_cast<double>(part.own.size()));
-    r["ghosts_per_rank"] = ghosts;
+    r["ghosts_per_rank"] = max_over_ranks(static_cast<double>(part.ghosts.size()));
     r["bonds_per_rank"] = max_over_ranks(static_cast<double>(part.bonds.size()));
-    // Each ghost's displacement and rotation (solvers/rank_exchange.cpp).
-    r["exchanged_bytes_per_cycle"] = 6.0 * sizeof(double) * ghosts;
+    r["exchanged_bytes_per_cycle"] =
+        max_over_ranks(static_cast<double>(part.received_bytes_per_cycle()));
   }
   return r;
 }

@@ -63,9 +63,12 @@ void validate(const ExplicitSettings& settings) {
           "the strength storage is no StrengthStorage");
 }
 
+bool splits_between_ranks(const ExplicitSettings& settings) {
+  return settings.split_between_ranks && mpi_size() > 1;
+}
+
 bool runs_reference_loops(const ExplicitSettings& settings) {
-  return settings.backend == ExplicitBackend::kReference ||
-         (settings.split_between_ranks && mpi_size() > 1);
+  return settings.backend == ExplicitBackend::kReference || splits_between_ranks(settings);
 }
 
 namespace {
@@ -150,7 +153,7 @@ ExplicitIntegrator::ExplicitIntegrator(Model& model, const ExplicitSettings& set
   setup.softening = softening_;
   setup.strength_storage = settings.strength_storage;
   setup.particle_order = settings.particle_order;
-  setup.split_between_ranks = settings.split_between_ranks && mpi_size() > 1;
+  setup.split_between_ranks = splits_between_ranks(settings);
   backend_ = make_kernel_backend(settings.backend, setup);
   set_prescribed_motions({});
   if (breaking_) start_breaking();

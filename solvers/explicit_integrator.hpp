@@ -89,6 +89,10 @@ struct ExplicitSettings {
 /// Throws plydem::Error naming the first setting out of range.
 void validate(const ExplicitSettings& settings);
 
+/// Whether a run with `settings` here is split between MPI ranks (split_between_ranks, under
+/// mpiexec with more than one rank).
+bool splits_between_ranks(const ExplicitSettings& settings);
+
 /// Whether a run with `settings` here runs the reference backend's loops: the reference backend,
 /// or any run split between MPI ranks (ExplicitSettings::split_between_ranks under mpiexec). Such
 /// runs give the same bits on any number of ranks, and a checkpoint of one continues on another.

@@ -95,18 +95,13 @@ void default_option(const char* name, const char* value) {
   if (!set) check(PetscOptionsSetValue(nullptr, name, value), "options");
 }
 
-// Each particle's slot (its block of six rows): the particles in the order of their coordinate
-// along the model's longest extent, so that a rank's block is a slice across it, whose faces (the
+// Each particle's slot (its block of six rows) is its place along the model's longest extent
+// (slots_along_longest_extent), so that a rank's block is a slice across it, whose faces (the
 // ghost rows) are the smallest, where the models' own order (ply by ply) would cut through the
-// thickness (the explicit engine's slices are the same: solvers/rank_exchange.hpp).
-std::vector<int> particle_slots(const Eigen::Array<double, Eigen::Dynamic, 3>& x) {
-  return slots_along_longest_extent(x);
-}
-
-// This rank's slots among `items`: [first, end), an even share in rank order.
+// thickness; a rank's slots are its even share (slots_of_rank), the explicit engine's slices too
+// (solvers/rank_exchange.hpp).
 std::pair<int, int> rank_slots(int items) {
-  const long rank = mpi_rank(), size = mpi_size();
-  return {static_cast<int>(rank * items / size), static_cast<int>((rank + 1) * items / size)};
+  return slots_of_rank(mpi_rank(), mpi_size(), items);
 }
 
 // splitmix64: a pseudo-random value in [-1, 1] of a row, the same on every rank.
@@ -283,7 +278,7 @@ class PetscSolver final : public LinearSolver {
     block_ = blocks ? 6 : 1;
     const int items = blocks ? static_cast<int>(layout_.position.rows()) : n_;
     rows_ = block_ * items;
-    if (blocks) slot_of_ = particle_slots(layout_.position);
+    if (blocks) slot_of_ = slots_along_longest_extent(layout_.position);
     row_of_.resize(n_);
     for (int k = 0; k < n_; ++k)
       row_of_[k] = blocks ? 6 * slot_of_[layout_.dofs[k] / 6] + layout_.dofs[k] % 6 : k;
@@ -533,7 +528,7 @@ void end_petsc_session() {
 std::vector<char> petsc_rank_particles(const Eigen::Array<double, Eigen::Dynamic, 3>& position) {
   ensure_petsc();  // MPI's ranks are known once PETSc is up (the solver would start it anyway)
   if (petsc_size() <= 1) return {};
-  const std::vector<int> slot_of = particle_slots(position);
+  const std::vector<int> slot_of = slots_along_longest_extent(position);
   const auto [first, end] = rank_slots(static_cast<int>(position.rows()));
   std::vector<char> own(slot_of.size(), 0);
   for (std::size_t i = 0; i < slot_of.size(); ++i)

@@ -32,6 +32,11 @@ std::vector<int> slots_along_longest_extent(const Eigen::Array<double, Eigen::Dy
   return slot_of;
 }
 
+std::pair<int, int> slots_of_rank(int rank, int size, int items) {
+  return {static_cast<int>(static_cast<long>(rank) * items / size),
+          static_cast<int>(static_cast<long>(rank + 1) * items / size)};
+}
+
 std::size_t RankPartition::bytes() const {
   return sizeof(int) * (owner.size() + own.size() + ghosts.size() + local.size() + bonds.size() +
                         border.size() + ghost_source.size()) +
@@ -50,36 +55,33 @@ RankPartition partition_between_ranks(const Model& model, int rank, int size) {
   RankPartition part;
   part.rank = rank;
   part.size = size;
-  // Slot s is rank r's for r n / size <= s < (r + 1) n / size (the static solve's rank_slots).
+  // The static solve's slices (petsc_solver.cpp numbers its rows by the same slots).
   const std::vector<int> slot_of = slots_along_longest_extent(p.reference_position);
   std::vector<int> owner_of_slot(static_cast<std::size_t>(n));
   for (int r = 0; r < size; ++r) {
-    const long first = static_cast<long>(r) * n / size, end = static_cast<long>(r + 1) * n / size;
-    for (long s = first; s < end; ++s) owner_of_slot[static_cast<std::size_t>(s)] = r;
+    const auto [first, end] = slots_of_rank(r, size, n);
+    for (int s = first; s < end; ++s) owner_of_slot[static_cast<std::size_t>(s)] = r;
   }
   part.owner.resize(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i)
     part.owner[static_cast<std::size_t>(i)] =
         owner_of_slot[static_cast<std::size_t>(slot_of[static_cast<std::size_t>(i)])];
-  std::vector<char> ghost(static_cast<std::size_t>(n), 0);
+  // This rank's bonds and ghosts, and every rank's border from the whole model's bonds (every
+  // rank holds them): a particle is on its owner's border where a bond joins it to another rank's
+  // particle; its index there, counted in increasing order on its owner, is where the owner sends
+  // it from.
+  std::vector<char> ghost(static_cast<std::size_t>(n), 0),
+      on_border(static_cast<std::size_t>(n), 0);
   auto owner = [&](int i) { return part.owner[static_cast<std::size_t>(i)]; };
   for (int b = 0; b < bonds.size(); ++b) {
     const int i = bonds.first(b), j = bonds.second(b);
+    if (owner(i) != owner(j))
+      on_border[static_cast<std::size_t>(i)] = on_border[static_cast<std::size_t>(j)] = 1;
     if (owner(i) != rank && owner(j) != rank) continue;
     part.bonds.push_back(b);
     part.logs_bond.push_back(owner(i) == rank ? 1 : 0);
     if (owner(i) != rank) ghost[static_cast<std::size_t>(i)] = 1;
     if (owner(j) != rank) ghost[static_cast<std::size_t>(j)] = 1;
-  }
-  // Every rank's border from the whole model's bonds (every rank holds them): a particle is on
-  // its owner's border where a bond joins it to another rank's particle; its index there, counted
-  // in increasing order on its owner, is where the owner sends it from.
-  std::vector<char> on_border(static_cast<std::size_t>(n), 0);
-  for (int b = 0; b < bonds.size(); ++b) {
-    const int i = bonds.first(b), j = bonds.second(b);
-    if (owner(i) == owner(j)) continue;
-    on_border[static_cast<std::size_t>(i)] = 1;
-    on_border[static_cast<std::size_t>(j)] = 1;
   }
   std::vector<int> border_index(static_cast<std::size_t>(n), -1);
   std::vector<int> next(static_cast<std::size_t>(size), 0);
@@ -110,19 +112,19 @@ void check_petsc(PetscErrorCode code, const char* what) {
   if (code != 0) throw Error(fmt::format("PETSc failed in {} (error {})", what, code));
 }
 
-// The ghosts' displacement and rotation travel as one unit of six doubles per particle: the roots
-// are a rank's particles that are some other rank's ghosts (its border), packed in increasing
-// order; the leaves its own ghosts, increasing.
-constexpr int kGhostWidth = 6;
+// The ghosts' displacement and rotation travel as one unit of kGhostValues doubles per particle:
+// the roots are a rank's particles that are some other rank's ghosts (its border), packed in
+// increasing order; the leaves its own ghosts, increasing.
+constexpr int kGhostWidth = kGhostValues;
 
-// Every rank's `mine` concatenated in rank order on every rank (MPI_Allgatherv), `counts` each
-// rank's number of values.
+// Every rank's `mine` concatenated in rank order on every rank (MPI_Allgatherv), `starts` where
+// each rank's values begin.
 template <class T>
 std::vector<T> gather_from_ranks(std::span<const T> mine, MPI_Datatype type,
-                                 std::vector<int>& counts) {
+                                 std::vector<std::size_t>& starts) {
   int size = 1;
   check_mpi(MPI_Comm_size(PETSC_COMM_WORLD, &size), "MPI_Comm_size");
-  counts.assign(static_cast<std::size_t>(size), 0);
+  std::vector<int> counts(static_cast<std::size_t>(size), 0);
   const int count = static_cast<int>(mine.size());
   check_mpi(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, PETSC_COMM_WORLD),
             "MPI_Allgather");
@@ -132,6 +134,7 @@ std::vector<T> gather_from_ranks(std::span<const T> mine, MPI_Datatype type,
   check_mpi(MPI_Allgatherv(mine.data(), count, type, all.data(), counts.data(), offsets.data(),
                            type, PETSC_COMM_WORLD),
             "MPI_Allgatherv");
+  starts.assign(offsets.begin(), offsets.end());
   return all;
 }
 
@@ -185,24 +188,18 @@ class PetscRankExchange final : public RankExchange {
   }
 
   std::vector<double> gather_all(std::span<const double> mine,
-                                 std::vector<int>& counts) const override {
-    return gather_from_ranks(mine, MPI_DOUBLE, counts);
+                                 std::vector<std::size_t>& starts) const override {
+    return gather_from_ranks(mine, MPI_DOUBLE, starts);
   }
 
   std::vector<char> gather_bytes(std::span<const char> mine) const override {
-    std::vector<int> counts;
-    return gather_from_ranks(mine, MPI_CHAR, counts);
+    std::vector<std::size_t> starts;
+    return gather_from_ranks(mine, MPI_CHAR, starts);
   }
 
   double broadcast(double value, int root) const override {
     check_mpi(MPI_Bcast(&value, 1, MPI_DOUBLE, root, PETSC_COMM_WORLD), "MPI_Bcast");
     return value;
-  }
-
-  double max_over_ranks(double value) const override { return plydem::max_over_ranks(value); }
-
-  std::size_t ghost_bytes_per_cycle() const override {
-    return sizeof(double) * kGhostWidth * part_.ghosts.size();
   }
 
  private:

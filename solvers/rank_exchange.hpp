@@ -20,11 +20,15 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/model.hpp"
 
 namespace plydem {
+
+/// The values a ghost's owner sends it every cycle: its displacement and rotation.
+inline constexpr int kGhostValues = 6;
 
 /// How a model's particles and bonds are shared between the ranks (the same on every rank).
 struct RankPartition {
@@ -45,11 +49,18 @@ struct RankPartition {
   std::vector<char> logs_bond;
   /// Bytes of the lists.
   std::size_t bytes() const;
+  /// Bytes this rank receives per cycle (its ghosts' state).
+  std::size_t received_bytes_per_cycle() const {
+    return sizeof(double) * kGhostValues * ghosts.size();
+  }
 };
 
 /// Each item's slot in the order of its coordinate along the longest extent of `x` (stable: ties
 /// keep their order): the order in which the ranks' slices are cut, an even share each.
 std::vector<int> slots_along_longest_extent(const Eigen::Array<double, Eigen::Dynamic, 3>& x);
+
+/// Rank `rank`'s slots [first, end) of `items`, `size` ranks: an even share in rank order.
+std::pair<int, int> slots_of_rank(int rank, int size, int items);
 
 /// The partition of `model` on this rank of `size` (rank_particles' slices: the same on every rank
 /// for the same model). Throws plydem::Error for a model with fewer particles than ranks.
@@ -62,17 +73,13 @@ class RankExchange {
   /// The ghosts' displacement and rotation from their owners, into `particles`.
   virtual void update_ghosts(Particles& particles) = 0;
   /// Every rank's `mine` (its values in the order of its own items), concatenated in rank order
-  /// on every rank; `counts` gets each rank's number of doubles.
+  /// on every rank; `starts` gets where each rank's values begin.
   virtual std::vector<double> gather_all(std::span<const double> mine,
-                                         std::vector<int>& counts) const = 0;
+                                         std::vector<std::size_t>& starts) const = 0;
   /// Every rank's bytes, concatenated in rank order on every rank.
   virtual std::vector<char> gather_bytes(std::span<const char> mine) const = 0;
   /// `value` as rank `root` has it, on every rank.
   virtual double broadcast(double value, int root) const = 0;
-  /// The largest of every rank's `value`.
-  virtual double max_over_ranks(double value) const = 0;
-  /// Bytes this rank receives per cycle (its ghosts' state).
-  virtual std::size_t ghost_bytes_per_cycle() const = 0;
 };
 
 /// The exchange of `partition` over PETSC_COMM_WORLD. Throws plydem::Error in a plydem built

@@ -166,6 +166,7 @@ class ReferenceBackend final : public KernelBackend {
   void cycle(bool report, long number, const CycleStep& step, CycleBatch& batch);
   void apply_contacts(UnbondedContacts& contacts, double dt);
   void decide_bond(long number, int b, bool logs, std::vector<SlotEvent>& events);
+  void set_damage(int b, double d);
   template <bool kReport>
   void advance_all(const CycleStep& step, double (&sums)[kParticlePartials]);
   template <bool kReport>
@@ -267,13 +268,17 @@ void ReferenceBackend::decide_bond(long number, int b, bool logs, std::vector<Sl
   if (logs)
     events.push_back(
         damage_event(b, number, u, bonds.damage(b), intact, du, dtheta, n, displacement));
-  if (!u.broken) {
-    bonds.damage(b) = u.damage;
-    bonds.normal_stiffness(b) = (1.0 - u.damage) * intact.normal;
-    bonds.shear_stiffness(b) = (1.0 - u.damage) * intact.shear;
-    bonds.bending_stiffness(b) = (1.0 - u.damage) * intact.bending;
-    bonds.twisting_stiffness(b) = (1.0 - u.damage) * intact.twisting;
-  }
+  if (!u.broken) set_damage(b, u.damage);
+}
+
+// Bond b at damage d: its stiffnesses 1 - d times its intact ones.
+void ReferenceBackend::set_damage(int b, double d) {
+  Bonds& bonds = model_.bonds;
+  bonds.damage(b) = d;
+  bonds.normal_stiffness(b) = (1.0 - d) * history_.intact[0](b);
+  bonds.shear_stiffness(b) = (1.0 - d) * history_.intact[1](b);
+  bonds.bending_stiffness(b) = (1.0 - d) * history_.intact[2](b);
+  bonds.twisting_stiffness(b) = (1.0 - d) * history_.intact[3](b);
 }
 
 // Every particle's update (advance_particle, one particle at a time; on N ranks the own ones),
@@ -352,7 +357,7 @@ struct SharedEvent {
 
 void ReferenceBackend::share_events(std::vector<SlotEvent>& events) {
   // Most cycles decide nothing anywhere: one reduction says so.
-  if (exchange_->max_over_ranks(static_cast<double>(events.size())) == 0) return;
+  if (max_over_ranks(static_cast<double>(events.size())) == 0) return;
   std::vector<SharedEvent> mine(events.size());
   for (std::size_t e = 0; e < events.size(); ++e)
     mine[e] = {events[e], history_.kappa(events[e].bond)};
@@ -371,13 +376,8 @@ void ReferenceBackend::share_events(std::vector<SlotEvent>& events) {
                         owner[static_cast<std::size_t>(bonds.second(b))] == part_->rank;
     if (listed || shared.event.broken) continue;  // a break is the run loop's (log_break)
     // A damage step decided on other ranks: this rank's model gets it too.
-    const double d = shared.event.damage_after;
     history_.kappa(b) = shared.kappa;
-    bonds.damage(b) = d;
-    bonds.normal_stiffness(b) = (1.0 - d) * history_.intact[0](b);
-    bonds.shear_stiffness(b) = (1.0 - d) * history_.intact[1](b);
-    bonds.bending_stiffness(b) = (1.0 - d) * history_.intact[2](b);
-    bonds.twisting_stiffness(b) = (1.0 - d) * history_.intact[3](b);
+    set_damage(b, shared.event.damage_after);
   }
 }
 
@@ -389,11 +389,8 @@ void ReferenceBackend::share_report(double (&sums)[kParticlePartials]) {
   for (std::size_t k = 0; k < part_->bonds.size(); ++k)
     if (part_->logs_bond[k])
       logged.insert(logged.end(), {bond_values_[2 * k], bond_values_[2 * k + 1]});
-  std::vector<int> counts;
-  const std::vector<double> bond_all = exchange_->gather_all(logged, counts);
-  std::vector<std::size_t> at(counts.size(), 0);
-  for (std::size_t r = 1; r < counts.size(); ++r)
-    at[r] = at[r - 1] + static_cast<std::size_t>(counts[r - 1]);
+  std::vector<std::size_t> at;  // each rank's next value
+  const std::vector<double> bond_all = exchange_->gather_all(logged, at);
   // The one-rank pass's order: bond by bond, broken bonds left out.
   double energy = 0, norm = 0;
   for (int b = 0; b < bonds.size(); ++b) {
@@ -405,10 +402,7 @@ void ReferenceBackend::share_report(double (&sums)[kParticlePartials]) {
     }
     next += 2;
   }
-  const std::vector<double> particle_all = exchange_->gather_all(particle_values_, counts);
-  at.assign(counts.size(), 0);
-  for (std::size_t r = 1; r < counts.size(); ++r)
-    at[r] = at[r - 1] + static_cast<std::size_t>(counts[r - 1]);
+  const std::vector<double> particle_all = exchange_->gather_all(particle_values_, at);
   double totals[kWidth] = {};
   for (std::size_t i = 0; i < owner.size(); ++i) {
     std::size_t& next = at[static_cast<std::size_t>(owner[i])];
@@ -431,11 +425,8 @@ void share_particle_rows(const RankPartition& part, const RankExchange& exchange
       mine.resize(mine.size() + static_cast<std::size_t>(width));
       pack(i, mine.data() + mine.size() - width);
     }
-  std::vector<int> counts;
-  const std::vector<double> all = exchange.gather_all(mine, counts);
-  std::vector<std::size_t> at(counts.size(), 0);
-  for (std::size_t r = 1; r < counts.size(); ++r)
-    at[r] = at[r - 1] + static_cast<std::size_t>(counts[r - 1]);
+  std::vector<std::size_t> at;  // each rank's next value
+  const std::vector<double> all = exchange.gather_all(mine, at);
   for (int i : particles) {
     std::size_t& next = at[static_cast<std::size_t>(part.owner[static_cast<std::size_t>(i)])];
     unpack(i, all.data() + next);
