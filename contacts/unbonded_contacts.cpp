@@ -14,12 +14,12 @@ namespace plydem {
 void ContactSettings::validate() const {
   require(std::isfinite(skin) && skin > 0,
           fmt::format("the contact skin must be finite and > 0, got {}", skin));
-  require(check_interval >= 1,
-          fmt::format("the contact check interval must be at least one cycle, got {}",
-                      check_interval));
-  require(std::isfinite(friction) && friction >= 0,
-          fmt::format("the contact friction coefficient must be finite and >= 0, got {}",
-                      friction));
+  require(
+      check_interval >= 1,
+      fmt::format("the contact check interval must be at least one cycle, got {}", check_interval));
+  require(
+      std::isfinite(friction) && friction >= 0,
+      fmt::format("the contact friction coefficient must be finite and >= 0, got {}", friction));
 }
 
 namespace {
@@ -123,9 +123,10 @@ void UnbondedContacts::add_broken_bond(int b) {
   require(b >= 0 && b < bond_first_.size(), fmt::format("contacts: no bond {}", b));
   const UnbondedContact c = broken_pair(b);
   const std::uint64_t k = key(c.first, c.second);
-  const auto at = std::lower_bound(
-      contacts_.begin(), contacts_.end(), k,
-      [&](const UnbondedContact& a, std::uint64_t value) { return key(a.first, a.second) < value; });
+  const auto at = std::lower_bound(contacts_.begin(), contacts_.end(), k,
+                                   [&](const UnbondedContact& a, std::uint64_t value) {
+                                     return key(a.first, a.second) < value;
+                                   });
   if (at != contacts_.end() && key(at->first, at->second) == k) return;  // already a candidate
   contacts_.insert(at, c);
 }

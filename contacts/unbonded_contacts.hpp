@@ -59,14 +59,14 @@ struct ContactSettings {
 
 /// One candidate pair and its history.
 struct UnbondedContact {
-  int first = 0, second = 0;  ///< model particles (the broken bond's first and second, or i < j)
-  int bond = -1;              ///< the broken bond between them, or -1
+  int first = 0, second = 0;     ///< model particles (the broken bond's first and second, or i < j)
+  int bond = -1;                 ///< the broken bond between them, or -1
   double branch[3] = {0, 0, 0};  ///< reference X_second - X_first [m]
   double distance = 0;           ///< D, the centre distance at which they touch [m]
-  double lever_first = 0, lever_second = 0;  ///< [m]
+  double lever_first = 0, lever_second = 0;          ///< [m]
   double normal_stiffness = 0, shear_stiffness = 0;  ///< k_n, k_s [N/m]
-  double spring[3] = {0, 0, 0};  ///< s [m]
-  double overlap = 0;            ///< delta at the last pass, 0 if apart [m]
+  double spring[3] = {0, 0, 0};                      ///< s [m]
+  double overlap = 0;                                ///< delta at the last pass, 0 if apart [m]
 };
 
 /// A particle state in some numbering: component c of particle k at [c][k].
@@ -142,15 +142,15 @@ class UnbondedContacts {
   ContactSettings settings_;
   std::vector<int> index_;  // model particle -> array index
   int particles_ = 0;
-  Vector3Array reference_position_;   // model order
-  Eigen::ArrayXd radius_;             // model order
+  Vector3Array reference_position_;  // model order
+  Eigen::ArrayXd radius_;            // model order
   double min_radius_ = 0;
   Eigen::ArrayXd particle_normal_, particle_shear_;  // mean intact k_n, k_s per particle
   // The model's bonds, as far as contacts need them.
   Eigen::ArrayXi bond_first_, bond_second_;
   Eigen::ArrayXd bond_length_, bond_lever_first_, bond_lever_second_;
   Eigen::ArrayXd intact_normal_, intact_shear_;
-  std::vector<std::uint64_t> bonded_;  // sorted keys of every pair with a bond row
+  std::vector<std::uint64_t> bonded_;      // sorted keys of every pair with a bond row
   std::vector<UnbondedContact> contacts_;  // sorted by key
   std::vector<int> touched_;
   Vector3Array searched_at_;  // displacements at the last search, model order

@@ -31,10 +31,10 @@
 /// site's bonds opened (before bonds the kernels broke: the last check's state, within
 /// check_cycles of the break, so that a brittle coupon's peak is not the state after its cascade),
 /// and a sample every cycles_to_failure / 200 cycles after the first of them; load_factor = the
-/// prescribed motion so far over the unit's, reaction = minus the bonds' forces on the reaction dofs. The run
-/// stops "failed" when after the peak the reaction falls below stop_fraction of the peak, "past the
-/// peak" when the load factor passes past_peak_travel times the peak's, and at "cycle limit" after
-/// max_cycles.
+/// prescribed motion so far over the unit's, reaction = minus the bonds' forces on the reaction
+/// dofs. The run stops "failed" when after the peak the reaction falls below stop_fraction of the
+/// peak, "past the peak" when the load factor passes past_peak_travel times the peak's, and at
+/// "cycle limit" after max_cycles.
 
 #include <functional>
 #include <optional>

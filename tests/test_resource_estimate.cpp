@@ -4,8 +4,8 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <optional>
 #include <numbers>
+#include <optional>
 #include <string>
 
 #include "core/error.hpp"
