@@ -217,14 +217,14 @@ void unreachable_strengths(Model& model) {
 
 // The MPI ranks' figures of a run (the largest of any rank; on one rank its own): the particles
 // it advances and its ghosts, the bytes it receives per cycle, its peak memory, the wall time.
-nlohmann::json rank_figures(const Model& model, double seconds) {
+nlohmann::json rank_figures(const ExplicitIntegrator& integrator, double seconds) {
   const int size = mpi_size();
   nlohmann::json r;
   r["ranks"] = size;
   r["seconds"] = max_over_ranks(seconds);
   r["peak_rss_mib"] = max_over_ranks(peak_resident_bytes() / (1024.0 * 1024.0));
-  if (size > 1) {
-    const RankPartition part = partition_between_ranks(model, mpi_rank(), size);
+  if (const RankPartition* split = integrator.rank_partition()) {
+    const RankPartition& part = *split;
     r["own_per_rank"] = max_over_ranks(static_cast<double>(part.own.size()));
     r["ghosts_per_rank"] = max_over_ranks(static_cast<double>(part.ghosts.size()));
     r["bonds_per_rank"] = max_over_ranks(static_cast<double>(part.bonds.size()));
@@ -324,7 +324,7 @@ int run_layer(long particles, long steps, int threads, const std::string& order,
   r["streamed_bytes_per_particle_step"] = streamed_bytes(model, integrator.breaking());
   r.update(table);
   if (timers.is_object()) r.update(timers);
-  r.update(rank_figures(model, seconds));
+  r.update(rank_figures(integrator, seconds));
   std::cout << r.dump() << "\n";
   return 0;
 }

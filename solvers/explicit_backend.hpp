@@ -34,6 +34,8 @@
 
 namespace plydem {
 
+struct RankPartition;
+
 /// Velocities imposed on every particle of a boundary group, or on one particle. A component whose
 /// `fix_*` flag is false stays free.
 struct PrescribedMotion {
@@ -150,6 +152,8 @@ class KernelBackend {
 
   virtual AccountArrays account() const = 0;
   virtual void set_account(const AccountArrays& account) = 0;
+  /// On N ranks, how the particles are shared (solvers/rank_exchange.hpp); null on one.
+  virtual const RankPartition* partition() const { return nullptr; }
 };
 
 /// What a backend is built on: the model (which outlives it), the bonds' history (the run loop's,

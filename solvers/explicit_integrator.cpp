@@ -68,7 +68,7 @@ bool splits_between_ranks(const ExplicitSettings& settings) {
 }
 
 bool runs_reference_loops(const ExplicitSettings& settings) {
-  return settings.backend == ExplicitBackend::kReference || splits_between_ranks(settings);
+  return settings.backend == ExplicitBackend::kReference;
 }
 
 namespace {

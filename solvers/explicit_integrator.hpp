@@ -79,10 +79,9 @@ struct ExplicitSettings {
   /// particles yet (a breaking run there needs `contacts` off).
   ExplicitBackend backend = ExplicitBackend::kCpu;
   /// Under `mpiexec -n N` (N > 1), each rank runs its share of the particles and sends its border
-  /// to its neighbours every cycle (solvers/rank_exchange.hpp): the reference backend's loops, on
-  /// N ranks the same bits as the reference backend on one (the cpu backend, the default, runs as
-  /// the reference there; the device backends run on one rank only). False: every rank runs the
-  /// whole model.
+  /// to its neighbours every cycle (solvers/rank_exchange.hpp): the cpu backend's blocks or the
+  /// reference backend's loops, on N ranks the same bits as that backend on one (the device
+  /// backends run on one rank only). False: every rank runs the whole model.
   bool split_between_ranks = true;
 };
 
@@ -93,9 +92,9 @@ void validate(const ExplicitSettings& settings);
 /// mpiexec with more than one rank).
 bool splits_between_ranks(const ExplicitSettings& settings);
 
-/// Whether a run with `settings` here runs the reference backend's loops: the reference backend,
-/// or any run split between MPI ranks (ExplicitSettings::split_between_ranks under mpiexec). Such
-/// runs give the same bits on any number of ranks, and a checkpoint of one continues on another.
+/// Whether a run with `settings` runs the reference backend's loops (else the fused kernel of
+/// the cpu and device backends). A run gives the same bits on any number of ranks, split or not,
+/// so a checkpoint continues on any number of ranks with the loops it was written by.
 bool runs_reference_loops(const ExplicitSettings& settings);
 
 /// What one cycle measured, at the displacements the forces were computed from.
@@ -303,6 +302,9 @@ class ExplicitIntegrator {
   /// Bytes the backend holds for the run (its state, the gather lists, the bond types, the
   /// renumbering), or 0 for the reference backend. The model's own arrays are not counted.
   std::size_t kernel_bytes() const;
+  /// Under mpiexec, how the run is split between the ranks (solvers/rank_exchange.hpp); null
+  /// where it is not split.
+  const RankPartition* rank_partition() const { return backend_->partition(); }
   /// Which backend runs the cycles.
   ExplicitBackend backend() const { return settings_.backend; }
 

@@ -260,28 +260,31 @@ std::array<BondEnd, 2> KernelOrderBackend::bond_ends(int bond) const {
 
 void KernelOrderBackend::store_bonds(Bonds& bonds, Eigen::ArrayXd& kappa) const {
   if (!breaking_) return;
+  write_bonds(bonds, kappa, [&](int b) { return KernelOrderBackend::bond_ends(b); });
+}
+
+void KernelOrderBackend::write_bonds(
+    Bonds& bonds, Eigen::ArrayXd& kappa,
+    const std::function<std::array<BondEnd, 2>(int)>& ends_of) const {
   const GatherBonds& g = bonds_;
+  const bool soft = g.softening();
   for (int b = 0; b < bonds.size(); ++b) {
-    const std::array<std::int64_t, 2> cells = g.bond_cells(b);
-    if (cells[0] < 0) continue;  // broken before the table was built
-    const auto first = static_cast<std::size_t>(cells[0]);
-    const auto second = static_cast<std::size_t>(cells[1]);
-    const bool soft = g.softening();
-    const bool agree = g.holds(first) == g.holds(second) && g.holds(first) == !bonds.is_broken(b) &&
-                       (!soft || (g.slot_damage()[first] == g.slot_damage()[second] &&
-                                  g.slot_kappa()[first] == g.slot_kappa()[second]));
+    if (g.bond_cells(b)[0] < 0) continue;  // broken before the table was built
+    const std::array<BondEnd, 2> ends = ends_of(b);
+    const bool agree =
+        ends[0].holds == ends[1].holds && ends[0].holds == !bonds.is_broken(b) &&
+        (!soft || (ends[0].damage == ends[1].damage && ends[0].kappa == ends[1].kappa));
     if (!agree) {
       throw Error(fmt::format(
           "internal error: the two ends of bond {} disagree in the kernel (held {} and {}, "
           "damage {:.17g} and {:.17g}, kappa {:.17g} and {:.17g}, model state {})",
-          b, g.holds(first), g.holds(second), soft ? g.slot_damage()[first] : 0.0,
-          soft ? g.slot_damage()[second] : 0.0, soft ? g.slot_kappa()[first] : 1.0,
-          soft ? g.slot_kappa()[second] : 1.0, bonds.state(b)));
+          b, ends[0].holds, ends[1].holds, ends[0].damage, ends[1].damage, ends[0].kappa,
+          ends[1].kappa, bonds.state(b)));
     }
-    if (!soft || !g.holds(first)) continue;
-    const double damage = g.slot_damage()[first];
+    if (!soft || !ends[0].holds) continue;
+    const double damage = ends[0].damage;
     bonds.damage(b) = damage;
-    kappa(b) = g.slot_kappa()[first];
+    kappa(b) = ends[0].kappa;
     bonds.normal_stiffness(b) = (1.0 - damage) * history_.intact[0](b);
     bonds.shear_stiffness(b) = (1.0 - damage) * history_.intact[1](b);
     bonds.bending_stiffness(b) = (1.0 - damage) * history_.intact[2](b);
@@ -452,17 +455,17 @@ std::unique_ptr<KernelBackend> make_kernel_backend(ExplicitBackend kind,
     require(kind == ExplicitBackend::kCpu || kind == ExplicitBackend::kReference,
             fmt::format("the {} backend runs on one MPI rank only: under mpiexec the explicit "
                         "engine splits the particles between the ranks with the cpu or reference "
-                        "backend (the reference loops on each rank)",
+                        "backend",
                         to_string(kind)));
     static std::once_flag said;
     std::call_once(said, [&] {
       spdlog::info(
-          "explicit dynamics on {} MPI ranks: each runs the reference loops over its "
-          "slice of the {} particles (the cpu backend's SIMD blocks and threads run on "
-          "one rank); the same bits as --backend reference on one rank",
-          mpi_size(), setup.model->particles.size());
+          "explicit dynamics on {} MPI ranks: each runs the {} backend over its slice of the {} "
+          "particles; the same bits as that backend on one rank",
+          mpi_size(), to_string(kind), setup.model->particles.size());
     });
-    return make_reference_backend(setup);
+    if (kind == ExplicitBackend::kReference) return make_reference_backend(setup);
+    return make_cpu_backend(setup);
   }
   switch (kind) {
     case ExplicitBackend::kReference:

@@ -13,6 +13,7 @@
 /// agree to the bit.
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,10 @@ class KernelOrderBackend : public KernelBackend {
   /// from the per-particle partials (block partials in lane order, then blocks in order; the same
   /// order a device reduces them in).
   void store_report(CycleBatch& batch, bool reduce);
+  /// store_bonds() with each bond's two ends as `ends_of(bond)` gives them (the kernel's own, or
+  /// on N ranks each end's from the rank that steps it).
+  void write_bonds(Bonds& bonds, Eigen::ArrayXd& kappa,
+                   const std::function<std::array<BondEnd, 2>(int)>& ends_of) const;
 
   Model& model_;
   BondHistory& history_;

@@ -37,35 +37,61 @@ std::pair<int, int> slots_of_rank(int rank, int size, int items) {
           static_cast<int>(static_cast<long>(rank + 1) * items / size)};
 }
 
+std::string no_contacts_across_ranks(int size) {
+  return fmt::format(
+      "contacts between unbonded particles do not run across MPI ranks yet ({} ranks here): run "
+      "without them (the explicit settings' contacts off; the strength test's material point "
+      "turns them off) or on one rank",
+      size);
+}
+
 std::size_t RankPartition::bytes() const {
   return sizeof(int) * (owner.size() + own.size() + ghosts.size() + local.size() + bonds.size() +
                         border.size() + ghost_source.size()) +
          logs_bond.size();
 }
 
-RankPartition partition_between_ranks(const Model& model, int rank, int size) {
-  const Particles& p = model.particles;
-  const Bonds& bonds = model.bonds;
-  const int n = p.size();
-  require(size >= 1 && rank >= 0 && rank < size,
-          fmt::format("rank {} of {} ranks does not exist", rank, size));
+std::vector<int> slice_owners(const Model& model, int size) {
+  const int n = model.particles.size();
+  require(size >= 1, fmt::format("{} MPI ranks cannot share a model", size));
   require(n >= size, fmt::format("a model of {} particles cannot be shared between {} MPI ranks: "
                                  "run it on at most {} ranks",
                                  n, size, n));
-  RankPartition part;
-  part.rank = rank;
-  part.size = size;
   // The static solve's slices (petsc_solver.cpp numbers its rows by the same slots).
-  const std::vector<int> slot_of = slots_along_longest_extent(p.reference_position);
+  const std::vector<int> slot_of = slots_along_longest_extent(model.particles.reference_position);
   std::vector<int> owner_of_slot(static_cast<std::size_t>(n));
   for (int r = 0; r < size; ++r) {
     const auto [first, end] = slots_of_rank(r, size, n);
     for (int s = first; s < end; ++s) owner_of_slot[static_cast<std::size_t>(s)] = r;
   }
-  part.owner.resize(static_cast<std::size_t>(n));
+  std::vector<int> owner(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i)
-    part.owner[static_cast<std::size_t>(i)] =
+    owner[static_cast<std::size_t>(i)] =
         owner_of_slot[static_cast<std::size_t>(slot_of[static_cast<std::size_t>(i)])];
+  return owner;
+}
+
+RankPartition partition_between_ranks(const Model& model, int rank, int size) {
+  require(size >= 1 && rank >= 0 && rank < size,
+          fmt::format("rank {} of {} ranks does not exist", rank, size));
+  return partition_with_owners(model, slice_owners(model, size), rank, size);
+}
+
+RankPartition partition_with_owners(const Model& model, std::vector<int> owners, int rank,
+                                    int size) {
+  const Bonds& bonds = model.bonds;
+  const int n = model.particles.size();
+  require(size >= 1 && rank >= 0 && rank < size,
+          fmt::format("rank {} of {} ranks does not exist", rank, size));
+  require(static_cast<int>(owners.size()) == n &&
+              std::all_of(owners.begin(), owners.end(), [&](int r) { return r >= 0 && r < size; }),
+          fmt::format("the owners of a partition between {} ranks must name a rank for each of "
+                      "the {} particles",
+                      size, n));
+  RankPartition part;
+  part.rank = rank;
+  part.size = size;
+  part.owner = std::move(owners);
   // This rank's bonds and ghosts, and every rank's border from the whole model's bonds (every
   // rank holds them): a particle is on its owner's border where a bond joins it to another rank's
   // particle; its index there, counted in increasing order on its owner, is where the owner sends
@@ -99,6 +125,29 @@ RankPartition partition_between_ranks(const Model& model, int rank, int size) {
     if (owner(i) == rank || ghost[static_cast<std::size_t>(i)]) part.local.push_back(i);
   }
   return part;
+}
+
+void RankExchange::update_ghosts(Particles& p) {
+  const RankPartition& part = partition();
+  std::span<double> out = border_rows();
+  for (std::size_t k = 0; k < part.border.size(); ++k) {
+    double* row = out.data() + kGhostValues * k;
+    const int i = part.border[k];
+    for (int c = 0; c < 3; ++c) {
+      row[c] = p.displacement(i, c);
+      row[3 + c] = p.rotation(i, c);
+    }
+  }
+  send_border();
+  const std::span<const double> in = ghost_rows();
+  for (std::size_t g = 0; g < part.ghosts.size(); ++g) {
+    const double* row = in.data() + kGhostValues * g;
+    const int i = part.ghosts[g];
+    for (int c = 0; c < 3; ++c) {
+      p.displacement(i, c) = row[c];
+      p.rotation(i, c) = row[3 + c];
+    }
+  }
 }
 
 #ifdef PLYDEM_HAVE_PETSC
@@ -163,28 +212,22 @@ class PetscRankExchange final : public RankExchange {
     PetscSFDestroy(&sf_);
   }
 
-  void update_ghosts(Particles& p) override {
-    for (std::size_t k = 0; k < part_.border.size(); ++k) {
-      double* row = root_buffer_.data() + kGhostWidth * k;
-      const int i = part_.border[k];
-      for (int c = 0; c < 3; ++c) {
-        row[c] = p.displacement(i, c);
-        row[3 + c] = p.rotation(i, c);
-      }
-    }
+  std::span<double> border_rows() override { return root_buffer_; }
+  std::span<const double> ghost_rows() const override { return leaf_buffer_; }
+
+  void send_border() override {
     check_petsc(
         PetscSFBcastBegin(sf_, unit_, root_buffer_.data(), leaf_buffer_.data(), MPI_REPLACE),
         "PetscSFBcastBegin");
     check_petsc(PetscSFBcastEnd(sf_, unit_, root_buffer_.data(), leaf_buffer_.data(), MPI_REPLACE),
                 "PetscSFBcastEnd");
-    for (std::size_t g = 0; g < part_.ghosts.size(); ++g) {
-      const double* row = leaf_buffer_.data() + kGhostWidth * g;
-      const int i = part_.ghosts[g];
-      for (int c = 0; c < 3; ++c) {
-        p.displacement(i, c) = row[c];
-        p.rotation(i, c) = row[3 + c];
-      }
-    }
+  }
+
+  bool any_rank(bool mine) const override {
+    int value = mine ? 1 : 0;
+    check_mpi(MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_INT, MPI_LOR, PETSC_COMM_WORLD),
+              "MPI_Allreduce");
+    return value != 0;
   }
 
   std::vector<double> gather_all(std::span<const double> mine,
@@ -201,6 +244,8 @@ class PetscRankExchange final : public RankExchange {
     check_mpi(MPI_Bcast(&value, 1, MPI_DOUBLE, root, PETSC_COMM_WORLD), "MPI_Bcast");
     return value;
   }
+
+  const RankPartition& partition() const override { return part_; }
 
  private:
   const RankPartition& part_;

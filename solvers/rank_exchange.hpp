@@ -2,20 +2,22 @@
 /// \file
 /// The explicit engine across MPI ranks (issue 36): under `mpiexec -n N` each rank owns a slice of
 /// the particles (the static solve's slices, rank_particles in solvers/linear_solver.hpp: an even
-/// share in the order of the reference coordinate along the model's longest extent) and runs the
-/// reference loops (solvers/reference_backend.cpp) over its own particles and the bonds that reach
-/// them. The particles at the other end of those bonds are its ghosts: after every cycle their
-/// owners send their displacements and rotations through a PETSc star forest (PetscSF), the only
+/// share in the order of the reference coordinate along the model's longest extent; the cpu
+/// backend gives each of its blocks of eight to the rank whose slice holds its first particle) and
+/// runs its backend over its own particles and the bonds that reach them: the reference loops
+/// (solvers/reference_backend.cpp) or the cpu backend's blocks (solvers/cpu_backend.cpp). The
+/// particles at the other end of those bonds are its ghosts: after every cycle their owners send
+/// their displacements and rotations through a PETSc star forest (PetscSF), the only
 /// communication of a plain cycle. A bond across a cut is computed, and decided by the failure
 /// law, on both of its ranks from the same bits, so they agree as threads do.
 ///
 /// What the run loop reads between cycles (the reports' sums, the gathered state, a particle's
-/// state, the damage steps) is collected from the owners in the one-rank order (each particle's
-/// and bond's value from its owner, then summed in model order), so that a run on N ranks gives
-/// the bits of the one-rank reference run. Every rank holds the whole model still (models built in
-/// parts are the next step), and every rank must call these collectives in the same order: the
-/// run loop and the experiments are replicated and deterministic (the run loop's clock is agreed,
-/// max_over_ranks).
+/// state, the damage steps) is collected from the owners in the one-rank order (each particle's,
+/// bond's or block's value from its owner, then summed in the one-rank order), so that a run on N
+/// ranks gives the bits of the same backend's one-rank run. Every rank holds the whole model still
+/// (models built in parts are the next step), and every rank must call these collectives in the
+/// same order: the run loop and the experiments are replicated and deterministic (the run loop's
+/// clock is agreed, max_over_ranks).
 #include <cstddef>
 #include <memory>
 #include <span>
@@ -62,16 +64,37 @@ std::vector<int> slots_along_longest_extent(const Eigen::Array<double, Eigen::Dy
 /// Rank `rank`'s slots [first, end) of `items`, `size` ranks: an even share in rank order.
 std::pair<int, int> slots_of_rank(int rank, int size, int items);
 
-/// The partition of `model` on this rank of `size` (rank_particles' slices: the same on every rank
-/// for the same model). Throws plydem::Error for a model with fewer particles than ranks.
+/// Per particle of `model`, the rank of `size` whose slice holds it (rank_particles' slices: an
+/// even share along the longest extent, the same on every rank for the same model). Throws
+/// plydem::Error for a model with fewer particles than ranks.
+std::vector<int> slice_owners(const Model& model, int size);
+
+/// The partition of `model` on this rank of `size` by slice_owners(). Throws plydem::Error for a
+/// model with fewer particles than ranks.
 RankPartition partition_between_ranks(const Model& model, int rank, int size);
+
+/// The partition of `model` on this rank of `size` with `owner` (per particle, a rank; a rank may
+/// own none): its bonds, ghosts and border. Throws plydem::Error for an owner list of the wrong
+/// length or naming no rank.
+RankPartition partition_with_owners(const Model& model, std::vector<int> owner, int rank, int size);
 
 /// The ghost exchange and the run loop's collectives for one partition.
 class RankExchange {
  public:
   virtual ~RankExchange() = default;
-  /// The ghosts' displacement and rotation from their owners, into `particles`.
-  virtual void update_ghosts(Particles& particles) = 0;
+  /// The partition it exchanges for.
+  virtual const RankPartition& partition() const = 0;
+  /// The ghosts' displacement and rotation from their owners, into `particles` (the model's
+  /// arrays: border_rows() packed from them, send_border(), ghost_rows() unpacked into them).
+  void update_ghosts(Particles& particles);
+  /// What this rank sends: kGhostValues per border particle, in the order of partition().border.
+  virtual std::span<double> border_rows() = 0;
+  /// Every rank's border_rows() to the ranks whose ghosts they are, into ghost_rows().
+  virtual void send_border() = 0;
+  /// What this rank received: kGhostValues per ghost, in the order of partition().ghosts.
+  virtual std::span<const double> ghost_rows() const = 0;
+  /// Whether `mine` is true on any rank (on every rank).
+  virtual bool any_rank(bool mine) const = 0;
   /// Every rank's `mine` (its values in the order of its own items), concatenated in rank order
   /// on every rank; `starts` gets where each rank's values begin.
   virtual std::vector<double> gather_all(std::span<const double> mine,
@@ -82,9 +105,33 @@ class RankExchange {
   virtual double broadcast(double value, int root) const = 0;
 };
 
+/// Every rank's values of its own particles among `particles` (`width` per particle, packed by
+/// `pack(i, row)` in the order of `particles`), unpacked by `unpack(i, row)` in that order on every
+/// rank: each listed particle's row from its owner.
+template <class Pack, class Unpack>
+void share_particle_rows(const RankPartition& part, const RankExchange& exchange,
+                         std::span<const int> particles, int width, Pack pack, Unpack unpack) {
+  std::vector<double> mine;
+  for (int i : particles)
+    if (part.owner[static_cast<std::size_t>(i)] == part.rank) {
+      mine.resize(mine.size() + static_cast<std::size_t>(width));
+      pack(i, mine.data() + mine.size() - width);
+    }
+  std::vector<std::size_t> at;  // each rank's next value
+  const std::vector<double> all = exchange.gather_all(mine, at);
+  for (int i : particles) {
+    std::size_t& next = at[static_cast<std::size_t>(part.owner[static_cast<std::size_t>(i)])];
+    unpack(i, all.data() + next);
+    next += static_cast<std::size_t>(width);
+  }
+}
+
 /// The exchange of `partition` over PETSC_COMM_WORLD. Throws plydem::Error in a plydem built
 /// without PETSc (which has one rank).
 std::unique_ptr<RankExchange> make_rank_exchange(const RankPartition& partition);
+
+/// Why contacts between unbonded particles do not run on `size` ranks, and what to do.
+std::string no_contacts_across_ranks(int size);
 
 /// The largest of every rank's `value` (itself on one rank): the run loop's agreed clock.
 double max_over_ranks(double value);

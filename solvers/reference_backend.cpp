@@ -59,12 +59,7 @@ class ReferenceBackend final : public KernelBackend {
 
   bool supports_contacts(std::string* why) const override {
     if (!part_) return true;
-    if (why)
-      *why = fmt::format(
-          "contacts between unbonded particles do not run across MPI ranks yet ({} ranks here): "
-          "run without them (the explicit settings' contacts off; the strength test's material "
-          "point turns them off) or on one rank",
-          part_->size);
+    if (why) *why = no_contacts_across_ranks(part_->size);
     return false;
   }
   void load() override {}
@@ -157,6 +152,7 @@ class ReferenceBackend final : public KernelBackend {
     return a;
   }
   void set_account(const AccountArrays& a) override { account_ = a; }
+  const RankPartition* partition() const override { return part_.get(); }
 
  private:
   // The per-particle columns share_own_rows() sends: the state (displacement, rotation, velocity,
@@ -412,26 +408,6 @@ void ReferenceBackend::share_report(double (&sums)[kParticlePartials]) {
   sums[0] = energy;
   sums[1] = norm;
   for (int w = 0; w < kWidth; ++w) sums[2 + w] = totals[w];
-}
-
-// Every rank's values of its particles (`width` per particle, packed by `pack` in the order of
-// `particles` where this rank owns them), unpacked by `unpack` in that order on every rank.
-template <class Pack, class Unpack>
-void share_particle_rows(const RankPartition& part, const RankExchange& exchange,
-                         std::span<const int> particles, int width, Pack pack, Unpack unpack) {
-  std::vector<double> mine;
-  for (int i : particles)
-    if (part.owner[static_cast<std::size_t>(i)] == part.rank) {
-      mine.resize(mine.size() + static_cast<std::size_t>(width));
-      pack(i, mine.data() + mine.size() - width);
-    }
-  std::vector<std::size_t> at;  // each rank's next value
-  const std::vector<double> all = exchange.gather_all(mine, at);
-  for (int i : particles) {
-    std::size_t& next = at[static_cast<std::size_t>(part.owner[static_cast<std::size_t>(i)])];
-    unpack(i, all.data() + next);
-    next += static_cast<std::size_t>(width);
-  }
 }
 
 // The 12 state values of particle i: displacement, rotation, velocity, angular velocity.

@@ -684,18 +684,18 @@ Model breakable_coupon(ExplicitSettings& settings, double speed, double ductilit
   return m;
 }
 
-// The coupon of breakable_coupon pulled for `cycles` on one rank (the whole model, the reference
-// loops) and split between the ranks (the default backend): the same bits.
-void check_split_run(double ductility, long cycles, long check_every) {
+// The coupon of breakable_coupon pulled for `cycles` by `backend` on one rank (the whole model)
+// and split between the ranks: the same bits.
+void check_split_run(ExplicitBackend backend, double ductility, long cycles, long check_every) {
+  CAPTURE(to_string(backend));
   ExplicitSettings settings;
-  settings.backend = ExplicitBackend::kReference;
+  settings.backend = backend;
   settings.contacts = false;  // not across ranks yet (the error is a case of its own)
   const double speed = 0.02;
   const Model m = breakable_coupon(settings, speed, ductility);
   settings.split_between_ranks = false;
   const CouponRun whole = run_coupon(m, settings, speed, cycles, check_every);
   settings.split_between_ranks = true;
-  settings.backend = ExplicitBackend::kCpu;  // runs as the reference on N ranks
   const CouponRun split = run_coupon(m, settings, speed, cycles, check_every);
   REQUIRE(whole.breaks.size() > 5);
   CHECK(same_breaks(whole.breaks, split.breaks));
@@ -769,11 +769,14 @@ TEST_CASE(
       fmt::format("a model of {} particles cannot be shared between {} MPI ranks", n, n + 1)));
 }
 
-TEST_CASE("2 MPI ranks: a coupon pulled to failure gives the one-rank reference run's bits") {
+TEST_CASE("2 MPI ranks: a coupon pulled to failure gives the one-rank run's bits") {
   REQUIRE(mpi_size() == 2);
-  check_split_run(1.0, 6000, 700);
-  // Softening bonds: the damage steps one rank decides reach the other's model.
-  check_split_run(4.0, 6000, 500);
+  for (ExplicitBackend backend : {ExplicitBackend::kReference, ExplicitBackend::kCpu}) {
+    check_split_run(backend, 1.0, 6000, 700);
+    // Softening bonds: the damage steps one rank decides reach the other's model (reference),
+    // each end's slot is stepped by its particle's rank (cpu).
+    check_split_run(backend, 4.0, 6000, 500);
+  }
 }
 
 TEST_CASE("2 MPI ranks: the state hooks gather and the run's report are the one-rank bits") {
@@ -785,50 +788,55 @@ TEST_CASE("2 MPI ranks: the state hooks gather and the run's report are the one-
     Model model;
     std::size_t kernel_bytes = 0;
   };
-  auto run = [&](bool split) {
-    Seen seen;
-    seen.model = m;
-    ExplicitSettings settings;
-    settings.backend = ExplicitBackend::kReference;
-    settings.split_between_ranks = split;
-    ExplicitIntegrator integrator(seen.model, settings);
-    integrator.set_prescribed_motions(pull(0.02));
-    std::vector<int> all(static_cast<std::size_t>(m.particles.size()));
-    std::iota(all.begin(), all.end(), 0);
-    RunControl control;
-    control.check_interval = 150;
-    control.tolerance = 1e-3;
-    control.max_cycles = 3000;
-    control.on_check = [&](const RunCheck& check) {
-      Particles at_forces = m.particles;
-      integrator.gather(all, at_forces, StateAt::kForces);
-      seen.gathered.push_back(at_forces);
-      seen.reports.push_back(check.report);
-      return true;
+  for (ExplicitBackend backend : {ExplicitBackend::kReference, ExplicitBackend::kCpu}) {
+    CAPTURE(to_string(backend));
+    auto run = [&](bool split) {
+      Seen seen;
+      seen.model = m;
+      ExplicitSettings settings;
+      settings.backend = backend;
+      settings.split_between_ranks = split;
+      ExplicitIntegrator integrator(seen.model, settings);
+      integrator.set_prescribed_motions(pull(0.02));
+      std::vector<int> all(static_cast<std::size_t>(m.particles.size()));
+      std::iota(all.begin(), all.end(), 0);
+      RunControl control;
+      control.check_interval = 150;
+      control.tolerance = 1e-3;
+      control.max_cycles = 3000;
+      control.on_check = [&](const RunCheck& check) {
+        Particles at_forces = m.particles;
+        integrator.gather(all, at_forces, StateAt::kForces);
+        seen.gathered.push_back(at_forces);
+        seen.reports.push_back(check.report);
+        return true;
+      };
+      // A hook on the clock: the ranks agree on it, so both call it (it gathers) at the same
+      // checks.
+      control.hooks.push_back(
+          {0, 1e-4, [&](const RunCheck&) {
+             Particles now = m.particles;
+             integrator.gather(std::vector<int>{0, m.particles.size() - 1}, now);
+             return true;
+           }});
+      integrator.run(control);
+      seen.kernel_bytes = integrator.kernel_bytes();
+      return seen;
     };
-    // A hook on the clock: the ranks agree on it, so both call it (it gathers) at the same checks.
-    control.hooks.push_back({0, 1e-4, [&](const RunCheck&) {
-                               Particles now = m.particles;
-                               integrator.gather(std::vector<int>{0, m.particles.size() - 1}, now);
-                               return true;
-                             }});
-    integrator.run(control);
-    seen.kernel_bytes = integrator.kernel_bytes();
-    return seen;
-  };
-  const Seen whole = run(false), split = run(true);
-  CHECK(whole.kernel_bytes == 0);
-  CHECK(split.kernel_bytes > 0);
-  REQUIRE(whole.gathered.size() == split.gathered.size());
-  for (std::size_t k = 0; k < whole.gathered.size(); ++k) {
-    CAPTURE(k);
-    CHECK(bitwise_equal(whole.gathered[k], split.gathered[k]));
-    CHECK((whole.gathered[k].force == split.gathered[k].force).all());
-    CHECK(whole.reports[k].strain_energy == split.reports[k].strain_energy);
-    CHECK(whole.reports[k].kinetic_energy == split.reports[k].kinetic_energy);
-    CHECK(whole.reports[k].unbalanced_force_ratio == split.reports[k].unbalanced_force_ratio);
+    const Seen whole = run(false), split = run(true);
+    // On N ranks a backend holds the partition besides (the reference none else).
+    CHECK(split.kernel_bytes > whole.kernel_bytes);
+    REQUIRE(whole.gathered.size() == split.gathered.size());
+    for (std::size_t k = 0; k < whole.gathered.size(); ++k) {
+      CAPTURE(k);
+      CHECK(bitwise_equal(whole.gathered[k], split.gathered[k]));
+      CHECK((whole.gathered[k].force == split.gathered[k].force).all());
+      CHECK(whole.reports[k].strain_energy == split.reports[k].strain_energy);
+      CHECK(whole.reports[k].kinetic_energy == split.reports[k].kinetic_energy);
+      CHECK(whole.reports[k].unbalanced_force_ratio == split.reports[k].unbalanced_force_ratio);
+    }
+    CHECK(bitwise_equal(whole.model.particles, split.model.particles));
   }
-  CHECK(bitwise_equal(whole.model.particles, split.model.particles));
 }
 
 TEST_CASE("2 MPI ranks: what does not run across ranks says so") {
@@ -840,6 +848,9 @@ TEST_CASE("2 MPI ranks: what does not run across ranks says so") {
                  "runs on one MPI rank only"));
   settings.backend = ExplicitBackend::kReference;
   settings.energy_account = true;  // a breaking run: contacts by default
+  CHECK(contains(error_message([&] { ExplicitIntegrator integrator(m, settings); }),
+                 "contacts between unbonded particles do not run across MPI ranks yet"));
+  settings.backend = ExplicitBackend::kCpu;
   CHECK(contains(error_message([&] { ExplicitIntegrator integrator(m, settings); }),
                  "contacts between unbonded particles do not run across MPI ranks yet"));
   settings.contacts = false;
