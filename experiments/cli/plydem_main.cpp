@@ -34,6 +34,8 @@
 #include <iostream>
 #include <optional>
 
+#include <unistd.h>
+
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "core/progress.hpp"
@@ -324,7 +326,7 @@ int run_strength(const StrengthCommand& c, const std::string& command_line) {
   } else {
     std::cout << plydem::format_strength_table(result, settings);
   }
-  if (!out_dir.empty()) {
+  if (!out_dir.empty() && plydem::is_root()) {  // under mpiexec rank 0 writes the files
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     write_strength_report(result, settings, c.settings->edge_number("angle"), out_dir, command_line,
@@ -431,6 +433,29 @@ int print_settings(const SettingsCommand& c) {
   return 0;
 }
 
+// Under mpiexec every rank runs the experiment and writes its files as it goes: rank 0 into the
+// folder asked for, each other rank into a scratch folder of its own (removed when the command
+// ends), so that no two processes write one file at once.
+class RankOutputFolder {
+ public:
+  explicit RankOutputFolder(const std::string& requested) : path_(requested) {
+    if (plydem::is_root()) return;
+    scratch_ = std::filesystem::temp_directory_path() /
+               fmt::format("plydem-rank{}-{}", plydem::mpi_rank(), ::getpid());
+    path_ = scratch_ / "results";
+  }
+  ~RankOutputFolder() {
+    std::error_code ignored;
+    if (!scratch_.empty()) std::filesystem::remove_all(scratch_, ignored);
+  }
+  RankOutputFolder(const RankOutputFolder&) = delete;
+  RankOutputFolder& operator=(const RankOutputFolder&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_, scratch_;
+};
+
 int run_config_command(RunCommand& c, const RunSettingsOptions& run_options) {
   if (c.list) {
     const std::filesystem::path folder = plydem::default_experiments_folder();
@@ -444,7 +469,8 @@ int run_config_command(RunCommand& c, const RunSettingsOptions& run_options) {
                   "plydem run needs an experiment config (e.g. experiments/table4.toml) or "
                   "--list");
   c.options.config = c.config;
-  c.options.out_dir = c.out;
+  const RankOutputFolder folder(c.out);
+  c.options.out_dir = folder.path();
   c.options.run_settings = [&run_options](plydem::RunSettings& s) { run_options.apply(s); };
   const plydem::RunSummary summary = plydem::run_experiment(c.options);
   log_build_statistics();
