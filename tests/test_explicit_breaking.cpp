@@ -767,6 +767,17 @@ TEST_CASE(
   CHECK(contains(
       error_message([&] { partition_between_ranks(m, 0, n + 1); }),
       fmt::format("a model of {} particles cannot be shared between {} MPI ranks", n, n + 1)));
+  // Owners given (the cpu backend's blocks): a rank may own none; every particle needs a rank.
+  const RankPartition idle = partition_with_owners(m, std::vector<int>(n, 0), 1, 2);
+  CHECK(idle.own.empty());
+  CHECK(idle.ghosts.empty());
+  CHECK(idle.bonds.empty());
+  CHECK(contains(error_message([&] { partition_with_owners(m, std::vector<int>(n - 1, 0), 0, 2); }),
+                 "must name a rank for each of"));
+  CHECK(contains(error_message([&] { partition_with_owners(m, std::vector<int>(n, 2), 0, 2); }),
+                 "must name a rank for each of"));
+  CHECK(contains(error_message([&] { partition_with_owners(m, std::vector<int>(n, 0), 2, 2); }),
+                 "rank 2 of 2 ranks does not exist"));
 }
 
 TEST_CASE("2 MPI ranks: a coupon pulled to failure gives the one-rank run's bits") {
