@@ -265,7 +265,7 @@ class CpuBackend final : public KernelOrderBackend {
   const RankPartition* partition() const override { return split_ ? &split_->part : nullptr; }
 
  private:
-  BlockPass block_pass(const KernelView& a, const CycleStep& step) const;
+  BlockPass block_pass(const KernelView& a, const CycleStep& step);
   // The contacts' pass at the state of buffer `parity`, into the contact arrays.
   void apply_contacts(UnbondedContacts& contacts, int parity, double dt);
 
@@ -297,10 +297,10 @@ void CpuBackend::apply_contacts(UnbondedContacts& contacts, int parity, double d
   for (int i : contacts.touched()) contact_block_[static_cast<std::size_t>(i / lanes::kCount)] = 1;
 }
 
-BlockPass CpuBackend::block_pass(const KernelView& a, const CycleStep& step) const {
+BlockPass CpuBackend::block_pass(const KernelView& a, const CycleStep& step) {
   BlockPass args;
   args.a = &a;
-  args.bonds = const_cast<GatherBonds*>(&bonds_);  // the step clears slots through it
+  args.bonds = &bonds_;  // the step clears slots through it
   args.dt = step.dt;
   args.alpha = step.alpha;
   if (breaking_) {
