@@ -222,19 +222,16 @@ void step_listed_blocks(int mode, const BlockPass& b, bool report, const std::ve
 constexpr int kMinBlocksPerThread = 32;
 
 // How the blocks are shared between the MPI ranks (file comment): the partition of the model's
-// particles (each particle owned by its block's rank), the exchange, and the kernel indices of the
-// border and the ghosts.
+// particles (each particle owned by its block's rank), the exchange, and the blocks' owners.
 struct BlockSplit {
   RankPartition part;
   std::unique_ptr<RankExchange> exchange;
   std::vector<int> block_owner;  // per block
   std::vector<int> own_blocks;   // increasing
-  std::vector<int> border, ghosts;
-  std::vector<int> all;  // 0 .. particles - 1
+  std::vector<int> all;          // 0 .. particles - 1
 
   std::size_t bytes() const {
-    return part.bytes() + sizeof(int) * (block_owner.size() + own_blocks.size() + border.size() +
-                                         ghosts.size() + all.size());
+    return part.bytes() + sizeof(int) * (block_owner.size() + own_blocks.size() + all.size());
   }
 };
 
@@ -268,6 +265,9 @@ class CpuBackend final : public KernelOrderBackend {
   BlockPass block_pass(const KernelView& a, const CycleStep& step);
   // The contacts' pass at the state of buffer `parity`, into the contact arrays.
   void apply_contacts(UnbondedContacts& contacts, int parity, double dt);
+  // After a batch that began at buffer `first_parity` and ran `ran` of `cycles` cycles: the
+  // current buffer, and the batch with the threads' damage steps (the report not yet stored).
+  CycleBatch finish_batch(int first_parity, long cycles, long ran, bool report_last);
 
   // On N ranks:
   void split_between_ranks();
@@ -278,7 +278,7 @@ class CpuBackend final : public KernelOrderBackend {
   void share_events(std::vector<SlotEvent>& events) const;
   // The model's forces from the owners, and the sums of every block in block order.
   void store_split_report(CycleBatch& batch);
-  // The 12 state values of kernel particle j, buffer `buffer` (pack_state's order).
+  // The 12 state values of kernel particle j, buffer `buffer` (unpack_particle_state's order).
   void pack_kernel_state(int j, int buffer, double* row) const;
 
   std::vector<std::vector<SlotEvent>> thread_events_;
@@ -367,17 +367,22 @@ CycleBatch CpuBackend::run_cycles(long cycles, bool report_last, const CycleStep
       }
     }
   }
+  CycleBatch batch = finish_batch(first_parity, cycles, ran, report_last);
+  if (batch.reported) store_report(batch, true);
+  return batch;
+}
+
+CycleBatch CpuBackend::finish_batch(int first_parity, long cycles, long ran, bool report_last) {
   parity_ = static_cast<int>((first_parity + ran) & 1);
   CycleBatch batch;
   batch.cycles = ran;
   batch.reported = report_last && ran == cycles;
-  if (breaking) {
+  if (breaking_) {
     for (auto& thread : thread_events_) {
       batch.events.insert(batch.events.end(), thread.begin(), thread.end());
       thread.clear();
     }
   }
-  if (batch.reported) store_report(batch, true);
   return batch;
 }
 
@@ -398,8 +403,6 @@ void CpuBackend::split_between_ranks() {
   s.exchange = make_rank_exchange(s.part);
   for (int b = 0; b < blocks_; ++b)
     if (s.block_owner[static_cast<std::size_t>(b)] == s.part.rank) s.own_blocks.push_back(b);
-  for (int i : s.part.border) s.border.push_back(position_[static_cast<std::size_t>(i)]);
-  for (int i : s.part.ghosts) s.ghosts.push_back(position_[static_cast<std::size_t>(i)]);
   s.all.resize(static_cast<std::size_t>(particles_));
   std::iota(s.all.begin(), s.all.end(), 0);
 }
@@ -446,42 +449,30 @@ CycleBatch CpuBackend::run_split_cycles(long cycles, bool report_last, const Cyc
       break;
     }
   }
-  parity_ = static_cast<int>((first_parity + ran) & 1);
-  CycleBatch batch;
-  batch.cycles = ran;
-  batch.reported = report_last && ran == cycles;
-  if (breaking) {
-    for (auto& thread : thread_events_) {
-      batch.events.insert(batch.events.end(), thread.begin(), thread.end());
-      thread.clear();
-    }
-    if (stopped) share_events(batch.events);  // no rank has any otherwise
-  }
+  CycleBatch batch = finish_batch(first_parity, cycles, ran, report_last);
+  if (stopped) share_events(batch.events);  // no rank has any otherwise
   if (batch.reported) store_split_report(batch);
   return batch;
 }
 
 void CpuBackend::exchange_ghosts(int buffer) {
-  RankExchange& exchange = *split_->exchange;
-  const std::span<double> out = exchange.border_rows();
-  for (std::size_t k = 0; k < split_->border.size(); ++k) {
-    const auto j = static_cast<std::size_t>(split_->border[k]);
-    double* row = out.data() + kGhostValues * k;
-    for (int c = 0; c < 3; ++c) {
-      row[c] = arrays_.displacement[buffer][c].data()[j];
-      row[3 + c] = arrays_.rotation[buffer][c].data()[j];
-    }
-  }
-  exchange.send_border();
-  const std::span<const double> in = exchange.ghost_rows();
-  for (std::size_t g = 0; g < split_->ghosts.size(); ++g) {
-    const auto j = static_cast<std::size_t>(split_->ghosts[g]);
-    const double* row = in.data() + kGhostValues * g;
-    for (int c = 0; c < 3; ++c) {
-      arrays_.displacement[buffer][c].data()[j] = row[c];
-      arrays_.rotation[buffer][c].data()[j] = row[3 + c];
-    }
-  }
+  auto& u = arrays_.displacement[buffer];
+  auto& theta = arrays_.rotation[buffer];
+  split_->exchange->update_ghosts(
+      [&](int i, double* row) {
+        const auto j = static_cast<std::size_t>(position_[static_cast<std::size_t>(i)]);
+        for (int c = 0; c < 3; ++c) {
+          row[c] = u[c].data()[j];
+          row[3 + c] = theta[c].data()[j];
+        }
+      },
+      [&](int i, const double* row) {
+        const auto j = static_cast<std::size_t>(position_[static_cast<std::size_t>(i)]);
+        for (int c = 0; c < 3; ++c) {
+          u[c].data()[j] = row[c];
+          theta[c].data()[j] = row[3 + c];
+        }
+      });
 }
 
 void CpuBackend::share_events(std::vector<SlotEvent>& events) const {
@@ -533,16 +524,6 @@ void CpuBackend::pack_kernel_state(int j, int buffer, double* row) const {
     row[3 + c] = arrays_.rotation[buffer][c].data()[k];
     row[6 + c] = arrays_.velocity[c].data()[k];
     row[9 + c] = arrays_.angular_velocity[c].data()[k];
-  }
-}
-
-// The 12 state values of a row into particle i of `into`.
-void unpack_particle_state(Particles& into, int i, const double* row) {
-  for (int c = 0; c < 3; ++c) {
-    into.displacement(i, c) = row[c];
-    into.rotation(i, c) = row[3 + c];
-    into.velocity(i, c) = row[6 + c];
-    into.angular_velocity(i, c) = row[9 + c];
   }
 }
 

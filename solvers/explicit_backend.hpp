@@ -165,8 +165,8 @@ struct BackendSetup {
   bool softening = false;
   StrengthStorage strength_storage = StrengthStorage::kAutomatic;
   ParticleOrder particle_order = ParticleOrder::kAutomatic;
-  /// Under mpiexec -n N (N > 1): each rank runs its share of the particles (the reference
-  /// backend's loops, solvers/rank_exchange.hpp); false: every rank runs the whole model.
+  /// Under mpiexec -n N (N > 1): each rank runs its share of the particles (the cpu and
+  /// reference backends, solvers/rank_exchange.hpp); false: every rank runs the whole model.
   bool split_between_ranks = false;
 };
 

@@ -67,10 +67,6 @@ bool splits_between_ranks(const ExplicitSettings& settings) {
   return settings.split_between_ranks && mpi_size() > 1;
 }
 
-bool runs_reference_loops(const ExplicitSettings& settings) {
-  return settings.backend == ExplicitBackend::kReference;
-}
-
 namespace {
 
 // The bonds' intact stiffnesses (the arrays hold 1 - damage times them; unknown, 0, for a bond

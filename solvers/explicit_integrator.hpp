@@ -92,11 +92,6 @@ void validate(const ExplicitSettings& settings);
 /// mpiexec with more than one rank).
 bool splits_between_ranks(const ExplicitSettings& settings);
 
-/// Whether a run with `settings` runs the reference backend's loops (else the fused kernel of
-/// the cpu and device backends). A run gives the same bits on any number of ranks, split or not,
-/// so a checkpoint continues on any number of ranks with the loops it was written by.
-bool runs_reference_loops(const ExplicitSettings& settings);
-
 /// What one cycle measured, at the displacements the forces were computed from.
 struct CycleReport {
   double strain_energy = 0;  ///< [J]

@@ -127,27 +127,29 @@ RankPartition partition_with_owners(const Model& model, std::vector<int> owners,
   return part;
 }
 
+void unpack_particle_state(Particles& into, int i, const double* row) {
+  for (int c = 0; c < 3; ++c) {
+    into.displacement(i, c) = row[c];
+    into.rotation(i, c) = row[3 + c];
+    into.velocity(i, c) = row[6 + c];
+    into.angular_velocity(i, c) = row[9 + c];
+  }
+}
+
 void RankExchange::update_ghosts(Particles& p) {
-  const RankPartition& part = partition();
-  std::span<double> out = border_rows();
-  for (std::size_t k = 0; k < part.border.size(); ++k) {
-    double* row = out.data() + kGhostValues * k;
-    const int i = part.border[k];
-    for (int c = 0; c < 3; ++c) {
-      row[c] = p.displacement(i, c);
-      row[3 + c] = p.rotation(i, c);
-    }
-  }
-  send_border();
-  const std::span<const double> in = ghost_rows();
-  for (std::size_t g = 0; g < part.ghosts.size(); ++g) {
-    const double* row = in.data() + kGhostValues * g;
-    const int i = part.ghosts[g];
-    for (int c = 0; c < 3; ++c) {
-      p.displacement(i, c) = row[c];
-      p.rotation(i, c) = row[3 + c];
-    }
-  }
+  update_ghosts(
+      [&](int i, double* row) {
+        for (int c = 0; c < 3; ++c) {
+          row[c] = p.displacement(i, c);
+          row[3 + c] = p.rotation(i, c);
+        }
+      },
+      [&](int i, const double* row) {
+        for (int c = 0; c < 3; ++c) {
+          p.displacement(i, c) = row[c];
+          p.rotation(i, c) = row[3 + c];
+        }
+      });
 }
 
 #ifdef PLYDEM_HAVE_PETSC
@@ -212,17 +214,6 @@ class PetscRankExchange final : public RankExchange {
     PetscSFDestroy(&sf_);
   }
 
-  std::span<double> border_rows() override { return root_buffer_; }
-  std::span<const double> ghost_rows() const override { return leaf_buffer_; }
-
-  void send_border() override {
-    check_petsc(
-        PetscSFBcastBegin(sf_, unit_, root_buffer_.data(), leaf_buffer_.data(), MPI_REPLACE),
-        "PetscSFBcastBegin");
-    check_petsc(PetscSFBcastEnd(sf_, unit_, root_buffer_.data(), leaf_buffer_.data(), MPI_REPLACE),
-                "PetscSFBcastEnd");
-  }
-
   bool any_rank(bool mine) const override {
     int value = mine ? 1 : 0;
     check_mpi(MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_INT, MPI_LOR, PETSC_COMM_WORLD),
@@ -246,6 +237,18 @@ class PetscRankExchange final : public RankExchange {
   }
 
   const RankPartition& partition() const override { return part_; }
+
+ protected:
+  std::span<double> border_rows() override { return root_buffer_; }
+  std::span<const double> ghost_rows() const override { return leaf_buffer_; }
+
+  void send_border() override {
+    check_petsc(
+        PetscSFBcastBegin(sf_, unit_, root_buffer_.data(), leaf_buffer_.data(), MPI_REPLACE),
+        "PetscSFBcastBegin");
+    check_petsc(PetscSFBcastEnd(sf_, unit_, root_buffer_.data(), leaf_buffer_.data(), MPI_REPLACE),
+                "PetscSFBcastEnd");
+  }
 
  private:
   const RankPartition& part_;

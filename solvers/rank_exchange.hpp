@@ -84,15 +84,22 @@ class RankExchange {
   virtual ~RankExchange() = default;
   /// The partition it exchanges for.
   virtual const RankPartition& partition() const = 0;
-  /// The ghosts' displacement and rotation from their owners, into `particles` (the model's
-  /// arrays: border_rows() packed from them, send_border(), ghost_rows() unpacked into them).
+  /// The ghosts' displacement and rotation from their owners, wherever a backend keeps them:
+  /// `pack(i, row)` writes border particle i's kGhostValues into `row`, `unpack(i, row)` reads
+  /// ghost i's from it (model indices).
+  template <class Pack, class Unpack>
+  void update_ghosts(Pack pack, Unpack unpack) {
+    const RankPartition& part = partition();
+    const std::span<double> out = border_rows();
+    for (std::size_t k = 0; k < part.border.size(); ++k)
+      pack(part.border[k], out.data() + kGhostValues * k);
+    send_border();
+    const std::span<const double> in = ghost_rows();
+    for (std::size_t g = 0; g < part.ghosts.size(); ++g)
+      unpack(part.ghosts[g], in.data() + kGhostValues * g);
+  }
+  /// update_ghosts() into the model's own arrays.
   void update_ghosts(Particles& particles);
-  /// What this rank sends: kGhostValues per border particle, in the order of partition().border.
-  virtual std::span<double> border_rows() = 0;
-  /// Every rank's border_rows() to the ranks whose ghosts they are, into ghost_rows().
-  virtual void send_border() = 0;
-  /// What this rank received: kGhostValues per ghost, in the order of partition().ghosts.
-  virtual std::span<const double> ghost_rows() const = 0;
   /// Whether `mine` is true on any rank (on every rank).
   virtual bool any_rank(bool mine) const = 0;
   /// Every rank's `mine` (its values in the order of its own items), concatenated in rank order
@@ -103,6 +110,14 @@ class RankExchange {
   virtual std::vector<char> gather_bytes(std::span<const char> mine) const = 0;
   /// `value` as rank `root` has it, on every rank.
   virtual double broadcast(double value, int root) const = 0;
+
+ protected:
+  /// What this rank sends: kGhostValues per border particle, in the order of partition().border.
+  virtual std::span<double> border_rows() = 0;
+  /// Every rank's border_rows() to the ranks whose ghosts they are, into ghost_rows().
+  virtual void send_border() = 0;
+  /// What this rank received: kGhostValues per ghost, in the order of partition().ghosts.
+  virtual std::span<const double> ghost_rows() const = 0;
 };
 
 /// Every rank's values of its own particles among `particles` (`width` per particle, packed by
@@ -125,6 +140,10 @@ void share_particle_rows(const RankPartition& part, const RankExchange& exchange
     next += static_cast<std::size_t>(width);
   }
 }
+
+/// The 12 state values share_particle_rows() sends for a particle (displacement, rotation,
+/// velocity, angular velocity), from `row` into particle i of `into`.
+void unpack_particle_state(Particles& into, int i, const double* row);
 
 /// The exchange of `partition` over PETSC_COMM_WORLD. Throws plydem::Error in a plydem built
 /// without PETSc (which has one rank).

@@ -421,15 +421,6 @@ void pack_state(const Vector3Array& u, const Vector3Array& theta, const Particle
   }
 }
 
-void unpack_state(Particles& into, int i, const double* row) {
-  for (int c = 0; c < 3; ++c) {
-    into.displacement(i, c) = row[c];
-    into.rotation(i, c) = row[3 + c];
-    into.velocity(i, c) = row[6 + c];
-    into.angular_velocity(i, c) = row[9 + c];
-  }
-}
-
 void ReferenceBackend::share_own_rows(Columns columns) {
   Particles& p = model_.particles;
   std::vector<int> all(static_cast<std::size_t>(p.size()));
@@ -438,7 +429,7 @@ void ReferenceBackend::share_own_rows(Columns columns) {
     share_particle_rows(
         *part_, *exchange_, all, 12,
         [&](int i, double* row) { pack_state(p.displacement, p.rotation, p, i, row); },
-        [&](int i, const double* row) { unpack_state(p, i, row); });
+        [&](int i, const double* row) { unpack_particle_state(p, i, row); });
     return;
   }
   share_particle_rows(
@@ -465,7 +456,7 @@ void ReferenceBackend::gather_from_owners(std::span<const int> particles, Partic
   share_particle_rows(
       *part_, *exchange_, particles, 12,
       [&](int i, double* row) { pack_state(u, theta, p, i, row); },
-      [&](int i, const double* row) { unpack_state(into, i, row); });
+      [&](int i, const double* row) { unpack_particle_state(into, i, row); });
 }
 
 AccountArrays ReferenceBackend::shared_account() const {

@@ -83,9 +83,9 @@ CheckpointHeader tension_checkpoint_header(const TensionSettings& s) {
   h.add("damping", exact(e.local_damping));
   h.add("safety", exact(e.safety_factor));
   h.add("time_step", exact(e.time_step));
-  // Split between MPI ranks the loops are the reference's: such a checkpoint continues on any
-  // number of ranks, or on one with --backend reference, and a fused one only with the fused.
-  h.add("kernel", runs_reference_loops(e) ? "reference" : "fused");
+  // A run gives the same bits on any number of MPI ranks, so a checkpoint continues on any number
+  // of ranks with the kernel that wrote it, the reference loops or the fused kernel.
+  h.add("kernel", e.backend == ExplicitBackend::kReference ? "reference" : "fused");
   h.add("particle_order", fmt::format("{}", static_cast<int>(e.particle_order)));
   h.add("energy_account", e.energy_account ? "true" : "false");
   h.add("contacts", e.contacts ? "true" : "false");
